@@ -1,0 +1,55 @@
+//! `triquint fk Q1 Q2 Q3`: platform position for slider positions (mm).
+
+use clap::Args;
+use nalgebra::Vector3;
+use serde_json::json;
+use triquint_shared::Robot;
+use triquint_shared::kinematics::Pose;
+
+use super::{finite, fmt_triple};
+use crate::exit::{CliError, CliResult};
+
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct FkArgs {
+    /// Slider 1 height (mm).
+    pub q1: String,
+    /// Slider 2 height (mm).
+    pub q2: String,
+    /// Slider 3 height (mm).
+    pub q3: String,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &FkArgs, robot: &Robot) -> CliResult {
+    let q_mm = Vector3::new(
+        finite("Q1", &args.q1)?,
+        finite("Q2", &args.q2)?,
+        finite("Q3", &args.q3)?,
+    );
+    let pose = Pose::from_joints(&robot.model::<f64>(), q_mm / 1000.0).map_err(|e| {
+        CliError::bad_input(format!(
+            "joints ({}, {}, {}) mm have no valid pose: {e}",
+            q_mm.x, q_mm.y, q_mm.z
+        ))
+    })?;
+    let r_mm = pose.r * 1000.0;
+    if args.json {
+        println!(
+            "{}",
+            json!({"joints_mm": q_mm.as_slice(), "position_mm": r_mm.as_slice()})
+        );
+    } else {
+        println!(
+            "joints (mm)    {}",
+            fmt_triple(["q1", "q2", "q3"], &q_mm, 3)
+        );
+        println!(
+            "position (mm)  {}",
+            fmt_triple(["x ", "y ", "z "], &r_mm, 3)
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,55 @@
+//! `triquint ik X Y Z`: slider positions for a platform position (mm).
+
+use clap::Args;
+use nalgebra::Vector3;
+use serde_json::json;
+use triquint_shared::Robot;
+use triquint_shared::kinematics::Pose;
+
+use super::{finite, fmt_triple};
+use crate::exit::{CliError, CliResult};
+
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct IkArgs {
+    /// Platform x (mm).
+    pub x: String,
+    /// Platform y (mm).
+    pub y: String,
+    /// Platform z (mm).
+    pub z: String,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
+    let r_mm = Vector3::new(
+        finite("X", &args.x)?,
+        finite("Y", &args.y)?,
+        finite("Z", &args.z)?,
+    );
+    let pose = Pose::from_cartesian(&robot.model::<f64>(), r_mm / 1000.0).map_err(|e| {
+        CliError::bad_input(format!(
+            "position ({}, {}, {}) mm is outside the workspace: {e}",
+            r_mm.x, r_mm.y, r_mm.z
+        ))
+    })?;
+    let q_mm = pose.q * 1000.0;
+    if args.json {
+        println!(
+            "{}",
+            json!({"position_mm": r_mm.as_slice(), "joints_mm": q_mm.as_slice()})
+        );
+    } else {
+        println!(
+            "position (mm)  {}",
+            fmt_triple(["x ", "y ", "z "], &r_mm, 3)
+        );
+        println!(
+            "joints (mm)    {}",
+            fmt_triple(["q1", "q2", "q3"], &q_mm, 3)
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,39 @@
+//! `triquint torque --q .. --qd .. --qdd ..`: inverse-dynamics motor torques.
+
+use clap::Args;
+use serde_json::json;
+use triquint_shared::{Robot, dynamics};
+
+use super::{fmt_triple, parse_triple};
+use crate::exit::{CliError, CliResult};
+
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct TorqueArgs {
+    /// Joint positions Q1,Q2,Q3 (m).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q: String,
+    /// Joint velocities V1,V2,V3 (m/s).
+    #[arg(long, allow_hyphen_values = true)]
+    pub qd: String,
+    /// Joint accelerations A1,A2,A3 (m/s²).
+    #[arg(long, allow_hyphen_values = true)]
+    pub qdd: String,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &TorqueArgs, robot: &Robot) -> CliResult {
+    let q = parse_triple("--q", &args.q)?;
+    let qd = parse_triple("--qd", &args.qd)?;
+    let qdd = parse_triple("--qdd", &args.qdd)?;
+    let tau = dynamics::torque(&robot.model::<f64>(), &q, &qd, &qdd)
+        .map_err(|e| CliError::bad_input(format!("--q {}: {e}", args.q)))?;
+    if args.json {
+        println!("{}", json!({"torque_nm": tau.as_slice()}));
+    } else {
+        println!("torque (N·m)   {}", fmt_triple(["τ1", "τ2", "τ3"], &tau, 6));
+    }
+    Ok(())
+}

@@ -1,0 +1,5 @@
+//! Host side of triquint: job files, the planner, plan checks and reports.
+
+pub mod cli;
+pub mod exit;
+pub mod robot_file;

@@ -1,0 +1,50 @@
+//! `triquint`: plan, check and run minimum-jerk trajectories for a 3-PUU robot.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use triquint_host::cli;
+use triquint_host::exit::CliResult;
+use triquint_host::robot_file::load_robot;
+
+#[derive(Parser, Debug)]
+#[command(name = "triquint", version, about, propagate_version = true)]
+struct Cli {
+    /// Machine parameters overriding the paper's Table 1 (TOML, SI units).
+    #[arg(long, global = true, value_name = "FILE.toml")]
+    robot: Option<PathBuf>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Slider positions (mm) for a platform position (mm).
+    Ik(cli::ik::IkArgs),
+    /// Platform position (mm) for slider positions (mm), closed form.
+    Fk(cli::fk::FkArgs),
+    /// Motor torques (N·m) for joint positions, velocities, accelerations (SI).
+    Torque(cli::torque::TorqueArgs),
+    /// Run a plan on the in-process virtual hardware.
+    Simulate(cli::simulate::SimulateArgs),
+}
+
+fn run(cli: Cli) -> CliResult {
+    match &cli.command {
+        Command::Ik(a) => cli::ik::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Fk(a) => cli::fk::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Torque(a) => cli::torque::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Simulate(a) => cli::simulate::run(a),
+    }
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("triquint: error: {e}");
+            ExitCode::from(e.status as u8)
+        }
+    }
+}

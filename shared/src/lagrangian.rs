@@ -1,0 +1,147 @@
+//! An independent Lagrangian formulation of the same machine, in f64.
+//!
+//! It shares no algebra with [`crate::dynamics`]: energies are written body by
+//! body (strut centre-of-mass velocity plus the rod's angular velocity
+//! ω = d × ḋ / l²), the Cartesian mass matrix M(r) comes from the kinetic
+//! energy by polarisation, and its derivatives by central differences.
+//! Lagrange's equations in the platform coordinates r give Q = M r̈ + Ṁ ṙ −
+//! ½ ∂(ṙᵀMṙ)/∂r + ∇V, and virtual work maps Q to joint forces: F = J⁻ᵀ Q.
+//!
+//! Used to cross-check the drives' feedforward and, with deliberately different
+//! parameters, as the plant model of the virtual hardware.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::Model;
+use crate::kinematics::{KinematicsError, Pose};
+
+/// Kinetic energy (J) of the whole machine at a pose with joint velocities `qd`.
+pub fn kinetic_energy(m: &Model<f64>, pose: &Pose<f64>, qd: &Vector3<f64>) -> f64 {
+    let rd = pose.cartesian_velocity(qd);
+    let mut t = 0.5 * m.platform_mass * rd.norm_squared();
+    for i in 0..3 {
+        let slider_v = Vector3::new(0.0, 0.0, qd[i]);
+        // Strut: centre-of-mass translation plus rotation about the centre.
+        let v_c = (rd + slider_v) * 0.5;
+        let d = pose.struts[i];
+        let d_rate = rd - slider_v;
+        let omega = d.cross(&d_rate) / m.l2;
+        let i_perp = m.strut_mass * m.l2 / 12.0;
+        t += 0.5 * m.strut_mass * v_c.norm_squared() + 0.5 * i_perp * omega.norm_squared();
+        t += 0.5 * m.slider_mass * qd[i] * qd[i];
+        let rotor_rate = m.ratio * qd[i];
+        t += 0.5 * m.rotor_inertia * rotor_rate * rotor_rate;
+    }
+    t
+}
+
+/// Potential energy (J), zero at z = 0: platform, sliders, and strut centres.
+pub fn potential_energy(m: &Model<f64>, pose: &Pose<f64>) -> f64 {
+    let z = pose.r.z;
+    let mut v = m.platform_mass * z;
+    for i in 0..3 {
+        v += m.slider_mass * pose.q[i] + m.strut_mass * 0.5 * (z + pose.q[i]);
+    }
+    v * m.gravity
+}
+
+/// Cartesian mass matrix M(r): T = ½ ṙᵀ M ṙ, by polarisation of the kinetic energy.
+pub fn mass_matrix(m: &Model<f64>, pose: &Pose<f64>) -> Matrix3<f64> {
+    let energy = |rd: Vector3<f64>| kinetic_energy(m, pose, &pose.joint_velocity(&rd));
+    let e = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let diag = e.map(energy);
+    Matrix3::from_fn(|a, b| {
+        if a == b {
+            2.0 * diag[a]
+        } else {
+            energy(e[a] + e[b]) - diag[a] - diag[b]
+        }
+    })
+}
+
+/// Step of the central differences (m): truncation ~h², round-off ~ε/h, both < 1e-9.
+const H: f64 = 2e-5;
+
+fn mass_matrix_at(m: &Model<f64>, r: Vector3<f64>) -> Result<Matrix3<f64>, KinematicsError> {
+    Ok(mass_matrix(m, &Pose::from_cartesian(m, r)?))
+}
+
+/// Velocity- and gravity-dependent generalised force n(r, ṙ) in Cartesian
+/// coordinates: Ṁṙ − ½ ∂(ṙᵀMṙ)/∂r + ∇V.
+fn bias_force(
+    m: &Model<f64>,
+    r: Vector3<f64>,
+    rd: Vector3<f64>,
+) -> Result<Vector3<f64>, KinematicsError> {
+    // Ṁ ṙ: M differentiated along ṙ.
+    let m_dot = (mass_matrix_at(m, r + rd * H)? - mass_matrix_at(m, r - rd * H)?) / (2.0 * H);
+    let mut n = m_dot * rd;
+    for k in 0..3 {
+        let mut e = Vector3::zeros();
+        e[k] = H;
+        let quad = |r: Vector3<f64>| -> Result<f64, KinematicsError> {
+            Ok(rd.dot(&(mass_matrix_at(m, r)? * rd)))
+        };
+        let v = |r: Vector3<f64>| -> Result<f64, KinematicsError> {
+            Ok(potential_energy(m, &Pose::from_cartesian(m, r)?))
+        };
+        n[k] +=
+            -0.5 * (quad(r + e)? - quad(r - e)?) / (2.0 * H) + (v(r + e)? - v(r - e)?) / (2.0 * H);
+    }
+    Ok(n)
+}
+
+/// Motor torques (N·m) by the Lagrangian route.
+pub fn inverse_dynamics(
+    m: &Model<f64>,
+    q: &Vector3<f64>,
+    qd: &Vector3<f64>,
+    qdd: &Vector3<f64>,
+) -> Result<Vector3<f64>, KinematicsError> {
+    let pose = Pose::from_joints(m, *q)?;
+    let rd = pose.cartesian_velocity(qd);
+    let rdd = pose.cartesian_acceleration(&rd, qd, qdd);
+    let q_r = mass_matrix(m, &pose) * rdd + bias_force(m, pose.r, rd)?;
+    // Virtual work: F·δq = Q·δr with δr = G δq, so F = Gᵀ Q.
+    Ok(pose.platform_jacobian().tr_mul(&q_r) / m.ratio)
+}
+
+/// Joint accelerations (m/s²) under motor torques `tau` (N·m) and `external`
+/// joint forces (N, e.g. friction): M r̈ + n = Jᵀ F with F = (2π/p) τ + external.
+pub fn forward_dynamics(
+    m: &Model<f64>,
+    q: &Vector3<f64>,
+    qd: &Vector3<f64>,
+    tau: &Vector3<f64>,
+    external: &Vector3<f64>,
+) -> Result<Vector3<f64>, KinematicsError> {
+    let pose = Pose::from_joints(m, *q)?;
+    let rd = pose.cartesian_velocity(qd);
+    let force = tau * m.ratio + external;
+    let mass = mass_matrix(m, &pose);
+    let rhs = pose.jacobian().tr_mul(&force) - bias_force(m, pose.r, rd)?;
+    let rdd = mass
+        .cholesky()
+        .ok_or(KinematicsError::Singular)?
+        .solve(&rhs);
+    Ok(pose.joint_acceleration(&rd, &rdd, qd))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Robot;
+
+    #[test]
+    fn forward_dynamics_inverts_inverse_dynamics() {
+        let m = Robot::default().model::<f64>();
+        let q = Pose::from_cartesian(&m, Vector3::new(0.02, -0.03, 0.62))
+            .unwrap()
+            .q;
+        let qd = Vector3::new(0.1, -0.2, 0.05);
+        let qdd = Vector3::new(0.5, 0.3, -0.8);
+        let tau = inverse_dynamics(&m, &q, &qd, &qdd).unwrap();
+        let back = forward_dynamics(&m, &q, &qd, &tau, &Vector3::zeros()).unwrap();
+        assert!((back - qdd).norm() < 1e-6, "{back} vs {qdd}");
+    }
+}
