@@ -26,6 +26,8 @@ enum Command {
     Fk(cli::fk::FkArgs),
     /// Motor torques (N·m) for joint positions, velocities, accelerations (SI).
     Torque(cli::torque::TorqueArgs),
+    /// Tables and plots of a plan (like the paper's Tables 4/5/7/8, Figures 10/12).
+    Report(cli::report::ReportArgs),
     /// Run a plan on the in-process virtual hardware.
     Simulate(cli::simulate::SimulateArgs),
 }
@@ -35,6 +37,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Ik(a) => cli::ik::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Fk(a) => cli::fk::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Torque(a) => cli::torque::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Report(a) => cli::report::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
     }
 }

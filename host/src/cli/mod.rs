@@ -2,6 +2,7 @@
 
 pub mod fk;
 pub mod ik;
+pub mod report;
 pub mod simulate;
 pub mod torque;
 

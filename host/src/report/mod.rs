@@ -1,0 +1,1 @@
+//! Plan reports: the paper's tables and figures, as text and SVG.

@@ -1,0 +1,1 @@
+//! Minimal SVG line charts for plans and simulation results.
