@@ -13,9 +13,11 @@
 //! The lower end A_i moves with slider i (δA_i = δq_i e_z), the upper end B_i
 //! with the platform (δB_i = G δq, G = ∂r/∂q), which gives, with ez = e_z:
 //!
+//! ```text
 //! F = Gᵀ[(m_p + m_s) r̈ + (m_s/6) Σq̈_i ez + (m_p + 3m_s/2) g ez]
 //!   + m_q(q̈ + g) + (m_s/6)(2q̈ + r̈_z) + (m_s/2) g        (per axis)
 //! τ_i = F_i p/(2π) + I_rot (2π/p) q̈_i
+//! ```
 //!
 //! Positive torque drives its slider up (+z).
 

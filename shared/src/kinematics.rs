@@ -6,6 +6,9 @@
 //! joint to the platform's joint (|d_i| = l). The platform is above the
 //! sliders, so d_iz > 0 in every valid pose.
 
+// `!(x > bound)` is deliberate throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 use crate::{Model, Real, c};
