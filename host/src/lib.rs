@@ -2,6 +2,8 @@
 
 pub mod cli;
 pub mod exit;
+pub mod job;
+pub mod planner;
 pub mod report;
 pub mod robot_file;
 pub mod svg;

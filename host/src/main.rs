@@ -26,6 +26,10 @@ enum Command {
     Fk(cli::fk::FkArgs),
     /// Motor torques (N·m) for joint positions, velocities, accelerations (SI).
     Torque(cli::torque::TorqueArgs),
+    /// Plan a job: globally min-max-jerk C3 quintic joint trajectory.
+    Plan(cli::plan::PlanArgs),
+    /// Re-verify a plan: interpolation, C3, rest at the ends, every limit.
+    Check(cli::check::CheckArgs),
     /// Tables and plots of a plan (like the paper's Tables 4/5/7/8, Figures 10/12).
     Report(cli::report::ReportArgs),
     /// Run a plan on the in-process virtual hardware.
@@ -37,6 +41,8 @@ fn run(cli: Cli) -> CliResult {
         Command::Ik(a) => cli::ik::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Fk(a) => cli::fk::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Torque(a) => cli::torque::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Plan(a) => cli::plan::run(a),
+        Command::Check(a) => cli::check::run(a),
         Command::Report(a) => cli::report::run(a),
         Command::Simulate(a) => cli::simulate::run(a),
     }

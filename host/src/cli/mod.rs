@@ -1,8 +1,10 @@
 //! One module per `triquint` subcommand.
 
+pub mod check;
 pub mod fk;
 pub mod ik;
 pub mod report;
+pub mod plan;
 pub mod simulate;
 pub mod torque;
 

@@ -1,0 +1,41 @@
+//! `triquint check PLAN.json`: independent re-verification of a plan.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::exit::{CliError, CliResult};
+use crate::planner::verify;
+use crate::report::load_plan;
+
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// Plan file written by `triquint plan`.
+    pub plan: PathBuf,
+}
+
+pub fn run(args: &CheckArgs) -> CliResult {
+    let plan = load_plan(&args.plan)?;
+    let rows = verify::check(&plan)
+        .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display())))?;
+    println!("{:<42} {:>14} {:>14}  result", "check", "value", "bound");
+    for r in &rows {
+        println!(
+            "{:<42} {:>14.6e} {:>14.6e}  {}",
+            r.what,
+            r.value,
+            r.bound,
+            if r.ok { "ok" } else { "VIOLATED" }
+        );
+    }
+    let failed = rows.iter().filter(|r| !r.ok).count();
+    if failed > 0 {
+        return Err(CliError::violation(format!(
+            "{}: {failed} of {} checks failed",
+            args.plan.display(),
+            rows.len()
+        )));
+    }
+    println!("all {} checks hold", rows.len());
+    Ok(())
+}

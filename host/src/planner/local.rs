@@ -1,0 +1,577 @@
+//! The planning problem for fixed knots, and its two solvers:
+//!
+//! - [`Problem::inner`]: intervals h fixed. Min-max jerk over the knot
+//!   velocities/accelerations is a linear program; the jerk, acceleration and
+//!   velocity of a segment are polynomials in time, so their extrema are known
+//!   in closed form, and cutting planes are added at them until the LP's bound
+//!   equals the exact continuous-time maximum. Torque limits are linearised
+//!   in (q, q̇, q̈) at sampled local maxima and re-linearised until they hold.
+//! - [`Problem::local_search`]: h free. A trust-region sequential linear
+//!   program over (x, h): each step solves the LP linearised in h at the
+//!   current point, and the step is accepted on the exact merit of the inner
+//!   problem at the new intervals.
+//!
+//! Limits other than jerk enter with one elastic variable σ (relative
+//! violation), priced by a large weight, so every LP is feasible and an
+//! infeasible job is recognised by σ > 0 at the optimum.
+
+use nalgebra::{DMatrix, DVector, Vector3};
+use triquint_shared::kinematics::Pose;
+use triquint_shared::{Limits, Model, dynamics};
+
+use super::lp::Lp;
+use super::spline::{Affine, Knots};
+use crate::report::extrema::{argmax_abs_on_interval, derivative, eval, roots_in};
+
+/// Which limited quantity a constraint or a violation concerns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Quantity {
+    Velocity,
+    Acceleration,
+    Jerk,
+    Torque,
+}
+
+impl Quantity {
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Velocity => "velocity",
+            Quantity::Acceleration => "acceleration",
+            Quantity::Jerk => "jerk",
+            Quantity::Torque => "torque",
+        }
+    }
+}
+
+/// Torque samples per segment while searching (the final solve uses more).
+const TORQUE_SAMPLES: usize = 48;
+/// Fraction of a limit above which a local extremum gets a constraint.
+const CUT_THRESHOLD: f64 = 0.5;
+/// Relative tolerance of the cutting-plane loop.
+const TOL: f64 = 1e-9;
+const MAX_INNER_ROUNDS: usize = 25;
+
+/// One planning problem: knots, limits, dynamics and the time budget.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    pub knots: Knots,
+    pub limits: Limits,
+    pub model: Model<f64>,
+    pub total_time: f64,
+    pub h_min: f64,
+    /// Price of one unit of relative limit violation, in m/s³.
+    pub weight: f64,
+    /// Torque samples per segment where local maxima get constraints.
+    pub torque_samples: usize,
+}
+
+/// A candidate plan: intervals, knot derivatives, and its exact figures.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    pub h: Vec<f64>,
+    pub x: [Vec<f64>; 3],
+    /// Exact continuous-time max |jerk| over all joints (m/s³).
+    pub jerk: f64,
+    /// Largest relative violation of the velocity, acceleration and torque limits (0 if none).
+    pub violation: f64,
+    /// The quantity with the largest violation, or the closest to its limit.
+    pub binding: Quantity,
+    pub lp_solves: u64,
+}
+
+impl Solution {
+    pub fn merit(&self, weight: f64) -> f64 {
+        self.jerk + weight * self.violation
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cut {
+    q: Quantity,
+    /// Joint (or, for torque, motor axis).
+    j: usize,
+    k: usize,
+    u: f64,
+}
+
+/// Exact figures of a point, and where the extrema are.
+struct Figures {
+    jerk: f64,
+    violation: f64,
+    binding: Quantity,
+    cuts: Vec<Cut>,
+}
+
+/// Terms of one LP row built from affine forms.
+#[derive(Default)]
+struct RowBuilder {
+    terms: Vec<(usize, f64)>,
+    /// Value of the row's affine expression with all LP variables at zero.
+    constant: f64,
+}
+
+impl RowBuilder {
+    /// Σ scale·row.
+    fn combine(parts: &[(f64, &RowBuilder)]) -> RowBuilder {
+        let mut out = RowBuilder::default();
+        for &(scale, row) in parts {
+            out.terms.extend(row.terms.iter().map(|&(c, v)| (c, scale * v)));
+            out.constant += scale * row.constant;
+        }
+        out
+    }
+
+    /// The row plus coef·(variable col).
+    fn plus(mut self, col: usize, coef: f64) -> RowBuilder {
+        self.terms.push((col, coef));
+        self
+    }
+
+    /// Adds scale·(an affine form of joint j on segment k), linearised at x0.
+    fn add(&mut self, scale: f64, f: &Affine, x0: &[f64], x_off: usize, dh_col: Option<usize>) {
+        let mut c = f.value;
+        for &(v, a) in f.dx() {
+            self.terms.push((x_off + v, scale * a));
+            c -= a * x0[v];
+        }
+        if let Some(col) = dh_col {
+            self.terms.push((col, scale * f.dh));
+        }
+        self.constant += scale * c;
+    }
+}
+
+impl Problem {
+    fn nv(&self) -> usize {
+        self.knots.vars()
+    }
+
+    fn nseg(&self) -> usize {
+        self.knots.segments()
+    }
+
+    fn limit(&self, q: Quantity) -> f64 {
+        match q {
+            Quantity::Velocity => self.limits.velocity,
+            Quantity::Acceleration => self.limits.acceleration,
+            Quantity::Jerk => self.limits.jerk,
+            Quantity::Torque => self.limits.torque,
+        }
+    }
+
+    /// Joint positions, velocities, accelerations at (segment k, u) as affine forms.
+    fn motion_forms(&self, h: &[f64], x: &[Vec<f64>; 3], k: usize, u: f64) -> [[Affine; 3]; 3] {
+        [0, 1, 2].map(|j| [0, 1, 2].map(|r| self.knots.functional(&x[j], j, k, u, r, h[k])))
+    }
+
+    /// Motor torques at (segment k, u), or None outside the workspace.
+    fn torque_at(&self, f: &[[Affine; 3]; 3]) -> Option<Vector3<f64>> {
+        let v = |r: usize| Vector3::new(f[0][r].value, f[1][r].value, f[2][r].value);
+        dynamics::torque(&self.model, &v(0), &v(1), &v(2)).ok()
+    }
+
+    /// Exact figures of (h, x) and the cut points at its local extrema.
+    fn figures(&self, h: &[f64], x: &[Vec<f64>; 3], torque_samples: usize) -> Figures {
+        let mut fig = Figures {
+            jerk: 0.0,
+            violation: 0.0,
+            binding: Quantity::Jerk,
+            cuts: Vec::new(),
+        };
+        let mut closest = f64::NEG_INFINITY;
+        let mut note = |fig: &mut Figures, q: Quantity, value: f64| {
+            let rel = value / self.limit(q) - 1.0;
+            if rel > closest {
+                closest = rel;
+                fig.binding = q;
+            }
+            fig.violation = fig.violation.max(rel);
+        };
+        for k in 0..self.nseg() {
+            let hk = h[k];
+            for j in 0..3 {
+                let c = self.knots.coefficients(&x[j], j, k, hk);
+                let vel = derivative(&c);
+                let acc = derivative(&vel);
+                let jerk = derivative(&acc);
+                fig.jerk = fig.jerk.max(argmax_abs_on_interval(&jerk, 0.0, hk).1);
+                for (q, poly, rate) in [
+                    (Quantity::Velocity, &vel, &acc),
+                    (Quantity::Acceleration, &acc, &jerk),
+                ] {
+                    let lim = self.limit(q);
+                    let mut best: f64 = 0.0;
+                    let ts = roots_in(rate, 0.0, hk);
+                    for t in ts.into_iter().chain([0.0, hk]) {
+                        let v = eval(poly, t).abs();
+                        best = best.max(v);
+                        if v >= CUT_THRESHOLD * lim {
+                            fig.cuts.push(Cut { q, j, k, u: t / hk });
+                        }
+                    }
+                    note(&mut fig, q, best);
+                }
+            }
+            // Torque on a grid; cuts at each axis's local maxima of |τ|.
+            let taus: Vec<Vector3<f64>> = (0..=torque_samples)
+                .map(|i| {
+                    let u = i as f64 / torque_samples as f64;
+                    let f = self.motion_forms(h, x, k, u);
+                    self.torque_at(&f)
+                        .unwrap_or(Vector3::repeat(f64::INFINITY))
+                })
+                .collect();
+            let lim = self.limits.torque;
+            for axis in 0..3 {
+                let a = |i: usize| taus[i][axis].abs();
+                let mut best: f64 = 0.0;
+                for i in 0..=torque_samples {
+                    best = best.max(a(i));
+                    let left = i == 0 || a(i) >= a(i - 1);
+                    let right = i == torque_samples || a(i) >= a(i + 1);
+                    if left && right && a(i) >= CUT_THRESHOLD * lim {
+                        let u = i as f64 / torque_samples as f64;
+                        fig.cuts.push(Cut { q: Quantity::Torque, j: axis, k, u });
+                    }
+                }
+                note(&mut fig, Quantity::Torque, best);
+            }
+        }
+        fig.violation = fig.violation.max(0.0);
+        fig
+    }
+
+    /// Builds the LP at (h, x) with these cuts; `trust` = Some(Δ) lets h move by
+    /// at most Δ·h_k (linearised), None keeps h fixed.
+    fn build(&self, h: &[f64], x: &[Vec<f64>; 3], cuts: &[Cut], trust: Option<f64>) -> Lp {
+        let nv = self.nv();
+        let nseg = self.nseg();
+        let dh0 = 3 * nv;
+        let s_col = dh0 + if trust.is_some() { nseg } else { 0 };
+        let sigma = s_col + 1;
+        let lambda0 = sigma + 1;
+        let mut lp = Lp::new(lambda0 + 6 * nseg);
+        lp.cost[s_col] = 1.0;
+        lp.cost[sigma] = self.weight;
+        let dh_col = |k: usize| trust.map(|_| dh0 + k);
+
+        // C3 at interior knots and zero jerk at both ends.
+        for j in 0..3 {
+            for (a, b) in self.jerk_conditions() {
+                let mut row = RowBuilder::default();
+                for (scale, (k, u)) in [(1.0, a), (-1.0, b.unwrap_or((0, f64::NAN)))] {
+                    if u.is_nan() {
+                        continue;
+                    }
+                    let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
+                    row.add(scale, &f, &x[j], j * nv, dh_col(k));
+                }
+                lp.equal(&row.terms, -row.constant);
+            }
+        }
+
+        // |jerk| ≤ s on every whole segment, exactly: s ∓ J(u) is a quadratic
+        // in u that must be ≥ 0 on [0, 1], which holds iff it equals
+        // σ₀(u) + λ u(1 − u) with σ₀ a sum of squares (a 2×2 PSD matrix, i.e.
+        // a 3-dimensional second-order cone) and λ ≥ 0 (Markov–Lukács).
+        for j in 0..3 {
+            for k in 0..nseg {
+                let at = |u: f64| {
+                    let mut row = RowBuilder::default();
+                    let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
+                    row.add(1.0, &f, &x[j], j * nv, dh_col(k));
+                    row
+                };
+                let (j0, jm, j1) = (at(0.0), at(0.5), at(1.0));
+                // Power coefficients of J(u) from its values at 0, ½, 1.
+                let c0 = RowBuilder::combine(&[(1.0, &j0)]);
+                let c1 = RowBuilder::combine(&[(-3.0, &j0), (4.0, &jm), (-1.0, &j1)]);
+                let c2 = RowBuilder::combine(&[(2.0, &j0), (-4.0, &jm), (2.0, &j1)]);
+                for (n, sign) in [1.0, -1.0].into_iter().enumerate() {
+                    let lam = lambda0 + 6 * k + 2 * j + n;
+                    lp.at_most(&[(lam, -1.0)], 0.0);
+                    // p(u) = s − sign·J(u): p0 = s − sign c0, p1 = −sign c1, p2 = −sign c2.
+                    let p0 = RowBuilder::combine(&[(-sign, &c0)]).plus(s_col, 1.0);
+                    let p1 = RowBuilder::combine(&[(-sign, &c1)]);
+                    let p2 = RowBuilder::combine(&[(-sign, &c2)]);
+                    let t = RowBuilder::combine(&[(1.0, &p0), (1.0, &p2)]).plus(lam, 1.0);
+                    let a = RowBuilder::combine(&[(1.0, &p1)]).plus(lam, -1.0);
+                    let b = RowBuilder::combine(&[(1.0, &p0), (-1.0, &p2)]).plus(lam, -1.0);
+                    lp.second_order_cone([
+                        (&t.terms, t.constant),
+                        (&a.terms, a.constant),
+                        (&b.terms, b.constant),
+                    ]);
+                }
+            }
+        }
+
+        for cut in cuts {
+            let mut row = RowBuilder::default();
+            match cut.q {
+                Quantity::Torque => {
+                    let f = self.motion_forms(h, x, cut.k, cut.u);
+                    let Some(grad) = self.torque_gradient(&f, cut.j) else {
+                        continue;
+                    };
+                    for j in 0..3 {
+                        for r in 0..3 {
+                            row.add(grad.1[j][r], &f[j][r], &x[j], j * nv, dh_col(cut.k));
+                        }
+                    }
+                    // Affine part: τ0 − Σ ∂τ·D0 + Σ ∂τ·D(x, δh).
+                    let lin0: f64 = (0..3)
+                        .flat_map(|j| (0..3).map(move |r| (j, r)))
+                        .map(|(j, r)| grad.1[j][r] * f[j][r].value)
+                        .sum();
+                    row.constant += grad.0 - lin0;
+                }
+                q => {
+                    let r = match q {
+                        Quantity::Velocity => 1,
+                        Quantity::Acceleration => 2,
+                        _ => 3,
+                    };
+                    let f = self.knots.functional(&x[cut.j], cut.j, cut.k, cut.u, r, h[cut.k]);
+                    row.add(1.0, &f, &x[cut.j], cut.j * nv, dh_col(cut.k));
+                }
+            }
+            for sign in [1.0, -1.0] {
+                let mut terms: Vec<(usize, f64)> =
+                    row.terms.iter().map(|&(c, v)| (c, sign * v)).collect();
+                if cut.q == Quantity::Jerk {
+                    terms.push((s_col, -1.0));
+                    lp.at_most(&terms, -sign * row.constant);
+                } else {
+                    let lim = self.limit(cut.q);
+                    terms.push((sigma, -lim));
+                    lp.at_most(&terms, lim - sign * row.constant);
+                }
+            }
+        }
+        lp.at_most(&[(sigma, -1.0)], 0.0);
+
+        if let Some(delta) = trust {
+            let slack = self.total_time - h.iter().sum::<f64>();
+            let all: Vec<(usize, f64)> = (0..nseg).map(|k| (dh0 + k, 1.0)).collect();
+            lp.at_most(&all, slack.max(0.0));
+            for (k, &hk) in h.iter().enumerate() {
+                lp.at_most(&[(dh0 + k, 1.0)], delta * hk);
+                lp.at_most(&[(dh0 + k, -1.0)], (delta * hk).min(hk - self.h_min).max(0.0));
+            }
+        }
+        lp
+    }
+
+    /// (segment, u) pairs whose jerks must match: C3 at interior knots, zero at the ends.
+    fn jerk_conditions(&self) -> Vec<((usize, f64), Option<(usize, f64)>)> {
+        let nseg = self.nseg();
+        let mut out = vec![((0, 0.0), None), ((nseg - 1, 1.0), None)];
+        out.extend((1..nseg).map(|k| ((k - 1, 1.0), Some((k, 0.0)))));
+        out
+    }
+
+    /// τ_axis and ∂τ_axis/∂(q_j, q̇_j, q̈_j) at a point.
+    #[allow(clippy::type_complexity)]
+    fn torque_gradient(&self, f: &[[Affine; 3]; 3], axis: usize) -> Option<(f64, [[f64; 3]; 3])> {
+        let base = [0, 1, 2].map(|r| Vector3::new(f[0][r].value, f[1][r].value, f[2][r].value));
+        let tau = |s: &[Vector3<f64>; 3]| {
+            dynamics::torque(&self.model, &s[0], &s[1], &s[2]).ok().map(|t| t[axis])
+        };
+        let t0 = tau(&base)?;
+        let mut grad = [[0.0; 3]; 3];
+        for (j, row) in grad.iter_mut().enumerate() {
+            for (r, g) in row.iter_mut().enumerate() {
+                // Torque is affine in q̈ and quadratic in q̇: central differences are exact there.
+                let e = if r == 0 { 1e-6 } else { 1e-3 };
+                let mut plus = base;
+                plus[r][j] += e;
+                let mut minus = base;
+                minus[r][j] -= e;
+                *g = (tau(&plus)? - tau(&minus)?) / (2.0 * e);
+            }
+        }
+        Some((t0, grad))
+    }
+
+    /// Projects each joint's x onto the C3 / end-jerk equalities exactly (least change).
+    fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
+        let nv = self.nv();
+        let conds = self.jerk_conditions();
+        for (j, xj) in x.iter_mut().enumerate() {
+            let mut e = DMatrix::<f64>::zeros(conds.len(), nv);
+            let mut r = DVector::<f64>::zeros(conds.len());
+            for (row, (a, b)) in conds.iter().enumerate() {
+                for (scale, (k, u)) in [(1.0, *a), (-1.0, b.unwrap_or((0, f64::NAN)))] {
+                    if u.is_nan() {
+                        continue;
+                    }
+                    let f = self.knots.functional(xj, j, k, u, 3, h[k]);
+                    r[row] += scale * f.value;
+                    for &(v, c) in f.dx() {
+                        e[(row, v)] += scale * c;
+                    }
+                }
+            }
+            let gram = &e * e.transpose();
+            if let Some(chol) = gram.cholesky() {
+                let corr = e.transpose() * chol.solve(&r);
+                for (v, dv) in xj.iter_mut().zip(corr.iter()) {
+                    *v -= dv;
+                }
+            }
+        }
+    }
+
+    fn unpack(&self, sol: &[f64]) -> [Vec<f64>; 3] {
+        let nv = self.nv();
+        [0, 1, 2].map(|j| sol[j * nv..(j + 1) * nv].to_vec())
+    }
+
+    /// Exact min-max-jerk knot derivatives for fixed intervals (cutting planes).
+    /// `x0` is where torque is first linearised (zeros will do).
+    pub fn inner(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<Solution> {
+        let mut x = x0.clone();
+        let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
+        let mut solves = 0;
+        for _ in 0..MAX_INNER_ROUNDS {
+            let lp = self.build(h, &x, &cuts, None);
+            let sol = lp.solve().ok()?;
+            solves += 1;
+            let s_lp = sol[3 * self.nv()];
+            let sigma_lp = sol[3 * self.nv() + 1];
+            let prev = x.clone();
+            x = self.unpack(&sol);
+            self.project(h, &mut x);
+            let fig = self.figures(h, &x, self.torque_samples);
+            let moved = x
+                .iter()
+                .zip(&prev)
+                .flat_map(|(a, b)| a.iter().zip(b))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let scale = x.iter().flatten().map(|v| v.abs()).fold(1e-3, f64::max);
+            let exact = fig.jerk <= s_lp * (1.0 + TOL) + 1e-12
+                && fig.violation <= sigma_lp + TOL
+                && (fig.binding != Quantity::Torque || moved <= 1e-9 * scale);
+            if exact || solves == MAX_INNER_ROUNDS as u64 {
+                return Some(Solution {
+                    h: h.to_vec(),
+                    x,
+                    jerk: fig.jerk,
+                    violation: fig.violation,
+                    binding: fig.binding,
+                    lp_solves: solves,
+                });
+            }
+            for c in fig.cuts {
+                if !cuts.iter().any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9) {
+                    cuts.push(c);
+                }
+            }
+        }
+        None
+    }
+
+    /// Trust-region SLP over (x, h) from `start`, with Σh ≤ total_time: each
+    /// step solves the problem linearised in h at the current point (x is
+    /// exact there), restores C3 at the new intervals by projection, and is
+    /// accepted on the exact merit. Stops when a step gains less than
+    /// `rel_tol` of the merit (three times running) or the region collapses.
+    pub fn local_search(&self, start: &Solution, max_iter: usize, rel_tol: f64) -> Solution {
+        let nv = self.nv();
+        let nseg = self.nseg();
+        let nd = 3 * nv + nseg;
+        let mut cur = start.clone();
+        let mut delta = 0.25;
+        let mut solves = 0;
+        let mut stalled = 0;
+        for _ in 0..max_iter {
+            let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
+            let lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
+            solves += 1;
+            let Ok(sol) = lp.solve() else {
+                delta *= 0.25;
+                if delta < 1e-7 {
+                    break;
+                }
+                continue;
+            };
+            let merit = cur.merit(self.weight);
+            let predicted = sol[nd] + self.weight * sol[nd + 1];
+            let gain = merit - predicted;
+            if gain <= 1e-10 * merit {
+                break;
+            }
+            let h_new: Vec<f64> = (0..nseg)
+                .map(|k| (cur.h[k] + sol[3 * nv + k]).max(self.h_min))
+                .collect();
+            let mut x_new = self.unpack(&sol);
+            self.project(&h_new, &mut x_new);
+            let f = self.figures(&h_new, &x_new, self.torque_samples);
+            let cand = Solution {
+                h: h_new,
+                x: x_new,
+                jerk: f.jerk,
+                violation: f.violation,
+                binding: f.binding,
+                lp_solves: 0,
+            };
+            let actual = merit - cand.merit(self.weight);
+            let rho = actual / gain;
+            let at_edge = (0..nseg).any(|k| sol[3 * nv + k].abs() >= 0.99 * delta * cur.h[k]);
+            if rho > 0.1 {
+                stalled = if actual < rel_tol * merit { stalled + 1 } else { 0 };
+                cur = cand;
+                if rho > 0.5 && at_edge {
+                    delta = (delta * 2.0).min(0.5);
+                } else if rho < 0.25 {
+                    delta *= 0.5;
+                }
+            } else {
+                delta *= 0.25;
+            }
+            if stalled >= 3 || delta < 1e-7 {
+                break;
+            }
+        }
+        // Polish: the exact optimum for the final intervals.
+        if let Some(polished) = self.inner(&cur.h, &cur.x) {
+            solves += polished.lp_solves;
+            if polished.merit(self.weight) <= cur.merit(self.weight) {
+                cur = polished;
+            }
+        }
+        cur.lp_solves = start.lp_solves + solves;
+        cur
+    }
+
+    /// Zero knot derivatives: the start of the first inner solve.
+    pub fn zero_x(&self) -> [Vec<f64>; 3] {
+        [0, 1, 2].map(|_| vec![0.0; self.nv()])
+    }
+}
+
+/// The knots, limits and weight of a problem with the robot's model.
+pub fn problem(knots: Knots, limits: &Limits, model: Model<f64>, total_time: f64) -> Problem {
+    Problem {
+        h_min: 1e-3,
+        torque_samples: TORQUE_SAMPLES,
+        weight: 1e3 * limits.jerk.max(1.0),
+        knots,
+        limits: limits.clone(),
+        model,
+        total_time,
+    }
+}
+
+/// Knots from joint positions, checked reachable.
+pub fn knots_from(points: &[Vector3<f64>], model: &Model<f64>) -> Result<Knots, (usize, String)> {
+    let mut q = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        let pose = Pose::from_cartesian(model, *p).map_err(|e| (i, e.to_string()))?;
+        q.push([pose.q.x, pose.q.y, pose.q.z]);
+    }
+    Ok(Knots { q })
+}
+

@@ -1,0 +1,180 @@
+//! A small sparse linear program with optional second-order cones, solved by
+//! Clarabel (interior point).
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+
+/// minimise costᵀx subject to equality rows (Σ a x = b) and inequality rows (Σ a x ≤ b).
+#[derive(Debug, Default)]
+pub struct Lp {
+    pub vars: usize,
+    pub cost: Vec<f64>,
+    eq: Rows,
+    ineq: Rows,
+    /// Three rows per second-order cone: (t, a, b) with ‖(a, b)‖ ≤ t.
+    soc: Rows,
+}
+
+/// Primal and dual solution; `z` is ordered as the rows: equalities,
+/// inequalities, cones.
+#[derive(Debug, Clone)]
+pub struct LpSolution {
+    pub x: Vec<f64>,
+    pub z: Vec<f64>,
+}
+
+#[derive(Debug, Default)]
+struct Rows {
+    row: Vec<usize>,
+    col: Vec<usize>,
+    val: Vec<f64>,
+    rhs: Vec<f64>,
+}
+
+impl Rows {
+    fn push(&mut self, terms: &[(usize, f64)], rhs: f64) {
+        let r = self.rhs.len();
+        for &(c, v) in terms {
+            if v != 0.0 {
+                self.row.push(r);
+                self.col.push(c);
+                self.val.push(v);
+            }
+        }
+        self.rhs.push(rhs);
+    }
+}
+
+/// The LP has no solution (or the solver gave up).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LpFailure(pub SolverStatus);
+
+impl Lp {
+    pub fn new(vars: usize) -> Self {
+        Self {
+            vars,
+            cost: vec![0.0; vars],
+            ..Self::default()
+        }
+    }
+
+    pub fn equal(&mut self, terms: &[(usize, f64)], rhs: f64) {
+        self.eq.push(terms, rhs);
+    }
+
+    pub fn at_most(&mut self, terms: &[(usize, f64)], rhs: f64) {
+        self.ineq.push(terms, rhs);
+    }
+
+    /// ‖(L₂, L₃)‖ ≤ L₁ for affine L_i = terms_i·x + constant_i.
+    pub fn second_order_cone(&mut self, rows: [(&[(usize, f64)], f64); 3]) {
+        for (terms, constant) in rows {
+            // Clarabel's cone rows are b − A x: A = −terms, b = constant.
+            let neg: Vec<(usize, f64)> = terms.iter().map(|&(c, v)| (c, -v)).collect();
+            self.soc.push(&neg, constant);
+        }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.eq.rhs.len() + self.ineq.rhs.len() + self.soc.rhs.len()
+    }
+
+    /// Triplets of the constraint matrix in the solver's row order.
+    fn triplets(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let neq = self.eq.rhs.len();
+        let nineq = self.ineq.rhs.len();
+        let rows = self
+            .eq
+            .row
+            .iter()
+            .copied()
+            .chain(self.ineq.row.iter().map(|r| r + neq))
+            .chain(self.soc.row.iter().map(|r| r + neq + nineq))
+            .collect();
+        let cols = [&self.eq, &self.ineq, &self.soc]
+            .iter()
+            .flat_map(|r| r.col.iter().copied())
+            .collect();
+        let vals = [&self.eq, &self.ineq, &self.soc]
+            .iter()
+            .flat_map(|r| r.val.iter().copied())
+            .collect();
+        (rows, cols, vals)
+    }
+
+    /// Solves; returns the primal solution.
+    pub fn solve(&self) -> Result<Vec<f64>, LpFailure> {
+        self.solve_full().map(|s| s.x)
+    }
+
+    /// Solves; returns primal and dual solutions.
+    pub fn solve_full(&self) -> Result<LpSolution, LpFailure> {
+        let neq = self.eq.rhs.len();
+        let nineq = self.ineq.rhs.len();
+        let m = self.rows();
+        let (rows, cols, vals) = self.triplets();
+        let a = CscMatrix::new_from_triplets(m, self.vars, rows, cols, vals);
+        let b: Vec<f64> = [&self.eq, &self.ineq, &self.soc]
+            .iter()
+            .flat_map(|r| r.rhs.iter().copied())
+            .collect();
+        let p = CscMatrix::zeros((self.vars, self.vars));
+        let mut cones = vec![
+            SupportedConeT::ZeroConeT(neq),
+            SupportedConeT::NonnegativeConeT(nineq),
+        ];
+        cones.extend((0..self.soc.rhs.len() / 3).map(|_| SupportedConeT::SecondOrderConeT(3)));
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .presolve_enable(false)
+            .tol_gap_abs(1e-11)
+            .tol_gap_rel(1e-11)
+            .tol_feas(1e-11)
+            .max_iter(200)
+            .build()
+            .map_err(|_| LpFailure(SolverStatus::NumericalError))?;
+        let mut solver = DefaultSolver::new(&p, &self.cost, &a, &b, &cones, settings)
+            .map_err(|_| LpFailure(SolverStatus::NumericalError))?;
+        solver.solve();
+        if std::env::var_os("TRIQUINT_LP_DEBUG").is_some() {
+            eprintln!(
+                "lp: {} vars {} rows, {} iterations, {:.3} ms, status {:?}",
+                self.vars,
+                m,
+                solver.solution.iterations,
+                solver.solution.solve_time * 1e3,
+                solver.solution.status
+            );
+        }
+        match solver.solution.status {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(LpSolution {
+                x: solver.solution.x.clone(),
+                z: solver.solution.z.clone(),
+            }),
+            other => Err(LpFailure(other)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_lp() {
+        // min -x - y, x + 2y ≤ 4, 3x + y ≤ 6, x = y... → x = y = 4/3.
+        let mut lp = Lp::new(2);
+        lp.cost = vec![-1.0, -1.0];
+        lp.at_most(&[(0, 1.0), (1, 2.0)], 4.0);
+        lp.at_most(&[(0, 3.0), (1, 1.0)], 6.0);
+        lp.equal(&[(0, 1.0), (1, -1.0)], 0.0);
+        let x = lp.solve().unwrap();
+        assert!((x[0] - 4.0 / 3.0).abs() < 1e-8 && (x[1] - 4.0 / 3.0).abs() < 1e-8);
+        let mut bad = Lp::new(1);
+        bad.at_most(&[(0, 1.0)], -1.0);
+        bad.at_most(&[(0, -1.0)], -1.0);
+        assert!(bad.solve().is_err());
+    }
+}

@@ -1,0 +1,211 @@
+//! The planner: Cartesian via-points → globally min-max-jerk C3 piecewise
+//! quintic joint trajectory under velocity, acceleration, jerk, torque and
+//! total-time limits, with every limit verified in continuous time.
+//!
+//! - [`spline`]: Hermite form of the C3 quintic spline (unknowns: knot v, a).
+//! - [`lp`]: the linear/second-order-cone program and its solver (Clarabel).
+//! - [`local`]: exact inner problem for fixed intervals; local search over intervals.
+//! - [`search`]: deterministic multistart, µs rounding, min-time.
+//! - [`verify`]: independent checks of a plan file.
+
+pub mod local;
+pub mod lp;
+pub mod search;
+pub mod spline;
+pub mod verify;
+
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use triquint_shared::plan::{Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
+
+use crate::exit::{CliError, CliResult};
+use crate::job::Job;
+use local::{Problem, Quantity, Solution, knots_from, problem};
+use search::{SearchOptions, global, min_time, round_to_microseconds};
+
+/// Torque samples per segment in the final solve (the search uses fewer).
+const FINAL_TORQUE_SAMPLES: usize = 400;
+
+/// Knots of a path: the via-points, with straight-line points added between
+/// them when there are fewer than five (a C3 quintic spline at rest at both
+/// ends needs n ≥ 4 knots, and one more leaves the jerk a free variable).
+pub fn knot_points(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
+    let n = points.len();
+    if n >= 5 || n < 2 {
+        return points.to_vec();
+    }
+    let pieces = 4usize.div_ceil(n - 1);
+    let mut out = Vec::new();
+    for w in points.windows(2) {
+        for i in 0..pieces {
+            out.push(w[0] + (w[1] - w[0]) * (i as f64 / pieces as f64));
+        }
+    }
+    out.push(points[n - 1]);
+    out
+}
+
+/// The planning problem of a job at its total-time limit.
+pub fn job_problem(job: &Job) -> CliResult<Problem> {
+    let model = job.robot.model::<f64>();
+    let pts = knot_points(&job.points_m());
+    let knots = knots_from(&pts, &model).map_err(|(i, e)| {
+        CliError::bad_input(format!("knot {} on the straight line between via-points is outside the workspace: {e}", i + 1))
+    })?;
+    Ok(problem(knots, &job.limits, model, job.limits.total_time))
+}
+
+fn infeasible_limit(q: Quantity, job: &Job) -> String {
+    let l = &job.limits;
+    let (value, unit) = match q {
+        Quantity::Velocity => (l.velocity, "m/s"),
+        Quantity::Acceleration => (l.acceleration, "m/s²"),
+        Quantity::Jerk => (l.jerk, "m/s³"),
+        Quantity::Torque => (l.torque, "N·m"),
+    };
+    format!("{} limit {value} {unit}", q.name())
+}
+
+/// Plans a job. Errors: bad input (2) or infeasible (3), each one line.
+pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
+    let clock = Instant::now();
+    let p = job_problem(job)?;
+    let (sol, starts, mut lp_solves) = match job.objective {
+        Objective::MinMaxJerk => {
+            let r = global(&p, opts)
+                .ok_or_else(|| CliError::infeasible("the solver found no plan for these knots"))?;
+            let best = r.best;
+            if best.violation > 1e-9 || best.jerk > job.limits.jerk * (1.0 + 1e-9) {
+                let binding = if best.violation > 1e-9 { best.binding } else { Quantity::Jerk };
+                let hint = match min_time(&p, job.limits.total_time * 8.0, opts) {
+                    Ok((s, _)) => format!(
+                        "; the shortest total time that meets every limit is {:.6} s",
+                        s.h.iter().sum::<f64>()
+                    ),
+                    Err(_) => String::new(),
+                };
+                return Err(CliError::infeasible(format!(
+                    "no plan within total_time {} s meets the {} (best max jerk {:.6} m/s³, limit violation {:.3} %){hint}",
+                    job.limits.total_time,
+                    infeasible_limit(binding, job),
+                    best.jerk,
+                    best.violation * 100.0
+                )));
+            }
+            (best, r.starts, r.lp_solves)
+        }
+        Objective::MinTime => {
+            let (best, probe) = min_time(&p, job.limits.total_time, opts).map_err(|f| {
+                CliError::infeasible(format!(
+                    "no total time up to {:.3} s meets the {}",
+                    f.tried_up_to,
+                    infeasible_limit(f.binding, job)
+                ))
+            })?;
+            let t: f64 = best.h.iter().sum();
+            if t > job.limits.total_time * (1.0 + 1e-9) {
+                return Err(CliError::infeasible(format!(
+                    "total_time {} s is too short: the shortest total time that meets every limit is {t:.6} s",
+                    job.limits.total_time
+                )));
+            }
+            (best.clone(), probe.starts, probe.lp_solves + best.lp_solves)
+        }
+    };
+    let total: f64 = sol.h.iter().sum();
+    let h = round_to_microseconds(&sol.h, total);
+    let mut fine = p.clone();
+    fine.torque_samples = FINAL_TORQUE_SAMPLES;
+    fine.total_time = h.iter().sum();
+    let exact = fine
+        .inner(&h, &sol.x)
+        .ok_or_else(|| CliError::infeasible("the solver failed on the rounded intervals"))?;
+    lp_solves += exact.lp_solves;
+    if exact.violation > 1e-9 || exact.jerk > job.limits.jerk * (1.0 + 1e-9) {
+        return Err(CliError::infeasible(format!(
+            "after rounding the intervals to whole microseconds the {} is exceeded by {:.3e}",
+            infeasible_limit(exact.binding, job),
+            exact.violation
+        )));
+    }
+    let mut plan = assemble(job, &fine, &exact);
+    plan.max_abs = verify::max_abs(&plan, FINAL_TORQUE_SAMPLES)
+        .map_err(|e| CliError::infeasible(format!("plan leaves the workspace: {e}")))?;
+    plan.solver = SolverStats {
+        seconds: clock.elapsed().as_secs_f64(),
+        starts: starts as u64,
+        lp_solves,
+    };
+    Ok(plan)
+}
+
+fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
+    let mut t0 = 0.0;
+    let segments = (0..p.knots.segments())
+        .map(|k| {
+            let seg = Segment {
+                t0_s: t0,
+                duration_s: s.h[k],
+                coeffs: [0, 1, 2].map(|j| p.knots.coefficients(&s.x[j], j, k, s.h[k])),
+            };
+            t0 += s.h[k];
+            seg
+        })
+        .collect();
+    Plan {
+        format: PLAN_FORMAT.to_string(),
+        objective: job.objective,
+        robot: job.robot.clone(),
+        limits: job.limits.clone(),
+        via_points_m: job.points_m().iter().map(|p| [p.x, p.y, p.z]).collect(),
+        knots_m: p.knots.q.clone(),
+        intervals_s: s.h.clone(),
+        total_time_s: s.h.iter().sum(),
+        segments,
+        max_abs: Default::default(),
+        solver: Default::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::local::*;
+    use nalgebra::Vector3;
+    use triquint_shared::{Limits, Robot};
+
+    pub const CASE1: [[f64; 3]; 10] = [
+        [-90.0, 90.0, 680.0], [-90.0, 90.0, 660.0], [-90.0, 90.0, 640.0], [-60.0, 60.0, 620.0],
+        [-20.0, 20.0, 620.0], [20.0, -20.0, 620.0], [60.0, -60.0, 620.0], [90.0, -90.0, 640.0],
+        [90.0, -90.0, 660.0], [90.0, -90.0, 680.0],
+    ];
+    pub const CASE2: [[f64; 3]; 11] = [
+        [-86.0, 83.66, 597.66], [-43.0, 97.74, 654.74], [0.0, 84.85, 684.85], [43.0, 54.74, 697.74],
+        [86.0, -2.34, 683.66], [86.0, -83.66, 602.34], [43.0, -97.74, 545.26], [0.0, -84.85, 515.15],
+        [-43.0, -54.74, 502.26], [-86.0, 2.34, 516.34], [-86.0, 83.66, 597.66],
+    ];
+
+    fn prob(points: &[[f64; 3]]) -> Problem {
+        let m = Robot::default().model::<f64>();
+        let pts: Vec<_> = points.iter().map(|p| Vector3::from(*p) / 1000.0).collect();
+        problem(knots_from(&pts, &m).unwrap(), &Limits::default(), m, 5.0)
+    }
+
+    #[test]
+    fn paper_intervals_reoptimised() {
+        let p = prob(&CASE1);
+        let h = [0.738, 0.238, 0.588, 0.370, 0.388, 0.623, 0.799, 0.267, 0.756];
+        let s = p.inner(&h, &p.zero_x()).unwrap();
+        eprintln!("case1 paper h: jerk {} viol {} solves {}", s.jerk, s.violation, s.lp_solves);
+        assert!((s.jerk - 1.054).abs() < 1e-3);
+        let p = prob(&CASE2);
+        let h = [1.027, 0.229, 0.225, 0.347, 0.583, 0.455, 0.255, 0.212, 0.307, 1.359];
+        let s = p.inner(&h, &p.zero_x()).unwrap();
+        eprintln!("case2 paper h: jerk {} viol {} solves {}", s.jerk, s.violation, s.lp_solves);
+        assert!((s.jerk - 2.661).abs() < 1e-3);
+        let t = std::time::Instant::now();
+        let start = s.clone();
+        let best = p.local_search(&start, 300, 1e-9);
+        eprintln!("case2 local from paper: jerk {} solves {} in {:?} h {:?}", best.jerk, best.lp_solves, t.elapsed(), best.h);
+    }
+}

@@ -1,0 +1,280 @@
+//! Global search over the intervals: deterministic multistart of the local
+//! trust-region SLP (coarse for every start, then to convergence for the
+//! best few), rounding to whole microseconds, and the min-time search.
+
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::local::{Problem, Quantity, Solution};
+
+/// How hard to search.
+#[derive(Clone, Debug)]
+pub struct SearchOptions {
+    /// Starting interval sets (the first three are deterministic shapes, the rest seeded random).
+    pub starts: usize,
+    /// Seed of the random starts: the same seed always gives the same plan.
+    pub seed: u64,
+    /// Worker threads (results do not depend on it).
+    pub threads: usize,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+impl Default for SearchOptions {
+    fn default() -> Self {
+        Self {
+            starts: 12,
+            seed: 1,
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
+            progress: false,
+        }
+    }
+}
+
+/// The best solution and how it was found.
+#[derive(Clone, Debug)]
+pub struct SearchResult {
+    pub best: Solution,
+    /// Merit reached from every start after refinement of the best few (coarse for the rest).
+    pub merits: Vec<f64>,
+    pub starts: usize,
+    pub lp_solves: u64,
+}
+
+/// SplitMix64: a tiny, portable, seeded generator (the plan must not depend
+/// on a library's stream changing between versions).
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_f64(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Interval sets summing to the total time: uniform, proportional to the
+/// largest joint travel, to its square root, then seeded random (Dirichlet(1)).
+pub fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let nseg = p.knots.segments();
+    let travel: Vec<f64> = (0..nseg)
+        .map(|k| {
+            (0..3)
+                .map(|j| (p.knots.q[k + 1][j] - p.knots.q[k][j]).abs())
+                .fold(1e-6, f64::max)
+        })
+        .collect();
+    let mut rng = SplitMix(seed);
+    let mut out = vec![
+        vec![1.0; nseg],
+        travel.clone(),
+        travel.iter().map(|t| t.sqrt()).collect(),
+    ];
+    while out.len() < n {
+        out.push((0..nseg).map(|_| -(1.0 - rng.next_f64()).ln() + 0.05).collect());
+    }
+    out.truncate(n.max(1));
+    for h in &mut out {
+        let sum: f64 = h.iter().sum();
+        h.iter_mut().for_each(|x| *x *= p.total_time / sum);
+    }
+    out
+}
+
+fn bar(len: usize, show: bool, what: &str) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(len as u64);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg:>14} [{bar:30}] {pos}/{len} starts, best {prefix}")
+    {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb.set_message(what.to_string());
+    pb
+}
+
+/// Runs `f` on every item with `threads` workers; results keep the items' order.
+fn parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|s| {
+        for _ in 0..threads.max(1).min(items.len().max(1)) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    let r = f(item);
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some(r);
+                    }
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .filter_map(|m| m.into_inner().ok().flatten())
+        .collect()
+}
+
+/// Refined starts: the best few coarse results are driven to convergence.
+const REFINE: usize = 3;
+
+/// Multistart global search for min-max jerk at the problem's total time.
+pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
+    let starts = start_points(p, opts.starts, opts.seed);
+    let pb = bar(starts.len() + REFINE, opts.progress, "searching");
+    let best_so_far = Mutex::new(f64::INFINITY);
+    let coarse: Vec<Option<Solution>> = parallel(&starts, opts.threads, |h| {
+        let first = p.inner(h, &p.zero_x())?;
+        let sol = p.local_search(&first, 60, 1e-5);
+        if let Ok(mut b) = best_so_far.lock() {
+            *b = b.min(sol.merit(p.weight));
+            pb.set_prefix(format!("{:.6}", *b));
+        }
+        pb.inc(1);
+        Some(sol)
+    });
+    let mut lp_solves: u64 = coarse.iter().flatten().map(|s| s.lp_solves).sum();
+    let mut order: Vec<usize> = (0..coarse.len()).filter(|&i| coarse[i].is_some()).collect();
+    if order.is_empty() {
+        return None;
+    }
+    let merit = |s: &Solution| s.merit(p.weight);
+    order.sort_by(|&a, &b| {
+        let (ma, mb) = (coarse[a].as_ref().map_or(f64::INFINITY, merit), coarse[b].as_ref().map_or(f64::INFINITY, merit));
+        ma.total_cmp(&mb).then(a.cmp(&b))
+    });
+    let chosen: Vec<usize> = order.iter().copied().take(REFINE).collect();
+    let refined: Vec<Solution> = parallel(&chosen, opts.threads, |&i| {
+        let sol = coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-11));
+        pb.inc(1);
+        sol
+    })
+    .into_iter()
+    .flatten()
+    .collect();
+    pb.finish_and_clear();
+    let mut merits: Vec<f64> = coarse.iter().map(|s| s.as_ref().map_or(f64::INFINITY, merit)).collect();
+    let mut best: Option<Solution> = None;
+    for (sol, &i) in refined.iter().zip(&chosen) {
+        lp_solves += sol.lp_solves - coarse[i].as_ref().map_or(0, |s| s.lp_solves);
+        merits[i] = merit(sol);
+        if best.as_ref().is_none_or(|b| merit(sol) < merit(b)) {
+            best = Some(sol.clone());
+        }
+    }
+    Some(SearchResult {
+        best: best?,
+        merits,
+        starts: starts.len(),
+        lp_solves,
+    })
+}
+
+/// Rounds intervals to whole microseconds without exceeding the total time.
+pub fn round_to_microseconds(h: &[f64], total_time: f64) -> Vec<f64> {
+    let mut us: Vec<i64> = h.iter().map(|x| (x * 1e6).round().max(1.0) as i64).collect();
+    let budget = (total_time * 1e6 + 1e-3).floor() as i64;
+    while us.iter().sum::<i64>() > budget {
+        if let Some((i, _)) = us.iter().enumerate().max_by_key(|(_, v)| **v) {
+            us[i] -= 1;
+        }
+    }
+    us.into_iter().map(|v| v as f64 * 1e-6).collect()
+}
+
+/// A solution is feasible when no limit is violated beyond rounding.
+pub fn feasible(p: &Problem, s: &Solution) -> bool {
+    s.violation <= 1e-9 && s.jerk <= p.limits.jerk * (1.0 + 1e-9)
+}
+
+/// Why min-time found no plan: the binding limit and the shortest time tried.
+#[derive(Debug, Clone)]
+pub struct MinTimeFailure {
+    pub binding: Quantity,
+    pub tried_up_to: f64,
+}
+
+/// Shortest total time T ≤ `upper` with a plan meeting every limit, and the
+/// min-max-jerk plan there. Jerk alone gives a lower bound (jerk scales as
+/// T⁻³ for the optimal shape, which does not depend on T when only jerk
+/// binds); velocity, acceleration and torque are handled by bisection.
+pub fn min_time(template: &Problem, upper: f64, opts: &SearchOptions) -> Result<(Solution, SearchResult), MinTimeFailure> {
+    let at = |t: f64| {
+        let mut p = template.clone();
+        p.total_time = t;
+        p
+    };
+    // Probe: the global min-max-jerk shape at the upper bound (or beyond, if
+    // the upper bound itself is infeasible), scaled to the jerk limit.
+    let mut t_probe = upper;
+    let mut probe = None;
+    for _ in 0..8 {
+        let p = at(t_probe);
+        if let Some(r) = global(&p, opts) {
+            if r.best.violation <= 1e-9 {
+                probe = Some(r);
+                break;
+            }
+        }
+        t_probe *= 2.0;
+    }
+    let probe = probe.ok_or(MinTimeFailure {
+        binding: Quantity::Torque,
+        tried_up_to: t_probe,
+    })?;
+    let s = &probe.best;
+    let total: f64 = s.h.iter().sum();
+    // Jerk-only lower bound on the time, valid because `s` is the global optimum.
+    let t_low = total * (s.jerk / template.limits.jerk).cbrt();
+    let scaled = |t: f64| -> Option<Solution> {
+        let alpha = t / total;
+        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+        let p = at(t);
+        let guess = p.inner(&h, &s.x.clone().map(|v| {
+            let n = v.len() / 2;
+            v.iter()
+                .enumerate()
+                .map(|(i, x)| if i < n { x / alpha } else { x / (alpha * alpha) })
+                .collect()
+        }))?;
+        Some(p.local_search(&guess, 200, 1e-9))
+    };
+    // Walk up from the lower bound until feasible, then bisect.
+    let mut lo = t_low;
+    let mut hi = t_low;
+    let mut best = None;
+    for _ in 0..40 {
+        if let Some(sol) = scaled(hi).filter(|sol| feasible(&at(hi), sol)) {
+            best = Some(sol);
+            break;
+        }
+        lo = hi;
+        hi *= 1.1;
+    }
+    let Some(mut best) = best else {
+        return Err(MinTimeFailure {
+            binding: probe.best.binding,
+            tried_up_to: hi,
+        });
+    };
+    while hi > lo && hi - lo > 1e-5 * hi {
+        let mid = 0.5 * (lo + hi);
+        match scaled(mid).filter(|sol| feasible(&at(mid), sol)) {
+            Some(sol) => {
+                hi = mid;
+                best = sol;
+            }
+            None => lo = mid,
+        }
+    }
+    Ok((best, probe))
+}

@@ -1,0 +1,172 @@
+//! Independent verification of a plan file: interpolation, C3 continuity,
+//! rest at both ends, and every limit in continuous time (velocity,
+//! acceleration and jerk exactly, from the roots of their derivatives;
+//! torque on a fine grid).
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::Pose;
+use triquint_shared::plan::{MaxAbs, PLAN_FORMAT, Plan};
+use triquint_shared::quintic::eval_poly;
+use triquint_shared::dynamics;
+
+use crate::report::extrema::{derivative, max_abs_on_interval};
+
+/// Torque samples per segment in checks and in the reported maxima.
+pub const TORQUE_CHECK_SAMPLES: usize = 400;
+/// Tolerance of positions and continuity (m, m/s, m/s², m/s³).
+pub const CONTINUITY_TOL: f64 = 1e-9;
+/// Relative tolerance of the exact limits; torque (sampled) gets 0.1 %.
+pub const LIMIT_TOL: f64 = 1e-9;
+pub const TORQUE_TOL: f64 = 1e-3;
+
+/// One line of a check: what, the measured value, the bound, and whether it holds.
+#[derive(Clone, Debug)]
+pub struct CheckRow {
+    pub what: String,
+    pub value: f64,
+    pub bound: f64,
+    pub ok: bool,
+}
+
+/// Exact continuous-time maxima of |v|, |a|, |jerk|; |τ| on a grid.
+pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
+    let mut m = MaxAbs::default();
+    let model = plan.robot.model::<f64>();
+    for (k, seg) in plan.segments.iter().enumerate() {
+        for j in 0..3 {
+            let vel = derivative(&seg.coeffs[j]);
+            let acc = derivative(&vel);
+            let jerk = derivative(&acc);
+            let h = seg.duration_s;
+            m.velocity[j] = m.velocity[j].max(max_abs_on_interval(&vel, 0.0, h));
+            m.acceleration[j] = m.acceleration[j].max(max_abs_on_interval(&acc, 0.0, h));
+            m.jerk[j] = m.jerk[j].max(max_abs_on_interval(&jerk, 0.0, h));
+        }
+        for i in 0..=torque_samples {
+            let t = seg.duration_s * i as f64 / torque_samples as f64;
+            let s = [0, 1, 2].map(|j| eval_poly(&seg.coeffs[j], t));
+            let v = |r: usize| Vector3::new(s[0][r], s[1][r], s[2][r]);
+            let tau = dynamics::torque(&model, &v(0), &v(1), &v(2))
+                .map_err(|e| format!("segment {} at t = {t:.6} s: {e}", k + 1))?;
+            for j in 0..3 {
+                m.torque[j] = m.torque[j].max(tau[j].abs());
+            }
+        }
+    }
+    Ok(m)
+}
+
+/// Checks a plan. Err: the file is not a usable plan (exit 2); Ok rows: each
+/// check with its figure (exit 1 if any fails).
+pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
+    if plan.format != PLAN_FORMAT {
+        return Err(format!("format is `{}`, expected `{PLAN_FORMAT}`", plan.format));
+    }
+    plan.robot.validate().map_err(|e| format!("robot: {e}"))?;
+    plan.limits.validate().map_err(|e| format!("limits: {e}"))?;
+    let n = plan.knots_m.len();
+    if n < 2 || plan.segments.len() != n - 1 || plan.intervals_s.len() != n - 1 {
+        return Err(format!(
+            "{} knots need {} segments and intervals, found {} and {}",
+            n,
+            n.saturating_sub(1),
+            plan.segments.len(),
+            plan.intervals_s.len()
+        ));
+    }
+    let all_finite = plan.segments.iter().all(|s| {
+        s.t0_s.is_finite() && s.duration_s > 0.0 && s.coeffs.iter().flatten().all(|c| c.is_finite())
+    });
+    if !all_finite {
+        return Err("a segment has a non-finite coefficient or a non-positive duration".into());
+    }
+    let mut rows = Vec::new();
+    let mut row = |what: &str, value: f64, bound: f64| {
+        rows.push(CheckRow {
+            what: what.to_string(),
+            value,
+            bound,
+            ok: value <= bound,
+        })
+    };
+
+    // Timing: whole microseconds, consistent offsets and total.
+    let mut t = 0.0;
+    let (mut timing, mut micro): (f64, f64) = (0.0, 0.0);
+    for (seg, h) in plan.segments.iter().zip(&plan.intervals_s) {
+        timing = timing.max((seg.t0_s - t).abs()).max((seg.duration_s - h).abs());
+        micro = micro.max((h * 1e6 - (h * 1e6).round()).abs() * 1e-6);
+        t += h;
+    }
+    timing = timing.max((plan.total_time_s - t).abs());
+    row("segment times consistent (s)", timing, 1e-9);
+    row("intervals whole µs (s)", micro, 1e-9);
+    row("total time ≤ limit (s)", t, plan.limits.total_time * (1.0 + LIMIT_TOL));
+
+    // Interpolation of the knots, and via-points among the knots (in order).
+    let model = plan.robot.model::<f64>();
+    let mut interp: f64 = 0.0;
+    for (k, seg) in plan.segments.iter().enumerate() {
+        for j in 0..3 {
+            let start = eval_poly(&seg.coeffs[j], 0.0)[0];
+            let end = eval_poly(&seg.coeffs[j], seg.duration_s)[0];
+            interp = interp
+                .max((start - plan.knots_m[k][j]).abs())
+                .max((end - plan.knots_m[k + 1][j]).abs());
+        }
+    }
+    row("knot interpolation error (m)", interp, CONTINUITY_TOL);
+    let mut via_err: f64 = 0.0;
+    let mut next = 0;
+    for (i, p) in plan.via_points_m.iter().enumerate() {
+        let q = Pose::from_cartesian(&model, Vector3::from(*p))
+            .map_err(|e| format!("via point {}: {e}", i + 1))?
+            .q;
+        let dist = |k: usize| (0..3).map(|j| (plan.knots_m[k][j] - q[j]).abs()).fold(0.0, f64::max);
+        match (next..n).find(|&k| dist(k) <= 1e-9) {
+            Some(k) => next = k + 1,
+            None => via_err = f64::INFINITY,
+        }
+    }
+    row("via-points are knots, in order (m)", via_err, 1e-9);
+
+    // C3 at interior knots and rest (v = a = jerk = 0) at both ends.
+    let mut c3: f64 = 0.0;
+    for k in 1..plan.segments.len() {
+        let (a, b) = (&plan.segments[k - 1], &plan.segments[k]);
+        for j in 0..3 {
+            let end = eval_poly(&a.coeffs[j], a.duration_s);
+            let start = eval_poly(&b.coeffs[j], 0.0);
+            for r in 0..4 {
+                c3 = c3.max((end[r] - start[r]).abs());
+            }
+        }
+    }
+    row("C3 residual at interior knots", c3, CONTINUITY_TOL);
+    let (first, last) = (&plan.segments[0], &plan.segments[plan.segments.len() - 1]);
+    let mut rest: f64 = 0.0;
+    for j in 0..3 {
+        let s = eval_poly(&first.coeffs[j], 0.0);
+        let e = eval_poly(&last.coeffs[j], last.duration_s);
+        for r in 1..4 {
+            rest = rest.max(s[r].abs()).max(e[r].abs());
+        }
+    }
+    row("end velocity/acceleration/jerk", rest, CONTINUITY_TOL);
+
+    let m = max_abs(plan, TORQUE_CHECK_SAMPLES.max(200))?;
+    let l = &plan.limits;
+    for (name, vals, lim, tol) in [
+        ("velocity (m/s)", m.velocity, l.velocity, LIMIT_TOL),
+        ("acceleration (m/s²)", m.acceleration, l.acceleration, LIMIT_TOL),
+        ("jerk (m/s³)", m.jerk, l.jerk, LIMIT_TOL),
+        ("torque (N·m)", m.torque, l.torque, TORQUE_TOL),
+    ] {
+        for (j, v) in vals.iter().enumerate() {
+            row(&format!("max |{name}| joint {}", j + 1), *v, lim * (1.0 + tol));
+        }
+    }
+    let reported = plan.max_abs.jerk.iter().zip(&m.jerk).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    row("reported max jerk matches (m/s³)", reported, 1e-9 * m.jerk.iter().fold(1.0, |a: f64, b| a.max(*b)));
+    Ok(rows)
+}
