@@ -168,6 +168,45 @@ fn range_of(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo, hi)
 }
 
+/// Mean of pixel positions ((0, 0) if none).
+fn centroid(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
+    for (x, y) in points.filter(|p| p.0.is_finite() && p.1.is_finite()) {
+        sx += x;
+        sy += y;
+        n += 1.0;
+    }
+    if n == 0.0 {
+        (0.0, 0.0)
+    } else {
+        (sx / n, sy / n)
+    }
+}
+
+/// A marker label placed away from the markers' centroid, so labels of a
+/// closed path sit outside it and labels of an open one spread apart.
+fn label_outward(out: &mut String, p: (f64, f64), centre: (f64, f64), label: &str) {
+    let (dx, dy) = (p.0 - centre.0, p.1 - centre.1);
+    let len = dx.hypot(dy);
+    let (ux, uy) = if len > 1e-9 {
+        (dx / len, dy / len)
+    } else {
+        (
+            std::f64::consts::FRAC_1_SQRT_2,
+            -std::f64::consts::FRAC_1_SQRT_2,
+        )
+    };
+    let (x, y) = (p.0 + 9.0 * ux, p.1 + 9.0 * uy + 4.0 + 3.0 * uy);
+    let anchor = if ux > 0.35 {
+        "start"
+    } else if ux < -0.35 {
+        "end"
+    } else {
+        "middle"
+    };
+    text(out, x, y, 11.0, anchor, "fill=\"#222\"", label);
+}
+
 /// How a series is drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Style {
@@ -453,7 +492,8 @@ impl Panel for Chart {
             (area.y + area.h - bottom - top).max(40.0),
         );
 
-        // Ranges: x fits the data exactly, y is padded and widened to round ticks.
+        // Ranges: x fits the data exactly (padded for equal aspect), y is padded
+        // by 5 %; ticks fall inside.
         let xs = self
             .series
             .iter()
@@ -475,20 +515,12 @@ impl Panel for Chart {
         });
         let mut yr = self.y_range.unwrap_or_else(|| {
             let (lo, hi) = range_of(ys);
-            let pad = 0.04 * (hi - lo);
+            let pad = 0.05 * (hi - lo);
             (lo - pad, hi + pad)
         });
         let x_target = ((plot.w / 90.0) as usize).clamp(2, 12);
         let y_target = ((plot.h / 55.0) as usize).clamp(2, 10);
-        if self.y_range.is_none() {
-            let s = nice_step(yr.1 - yr.0, y_target);
-            yr = ((yr.0 / s).floor() * s, (yr.1 / s).ceil() * s);
-        }
         if self.equal_aspect {
-            if self.x_range.is_none() {
-                let s = nice_step(xr.1 - xr.0, x_target);
-                xr = ((xr.0 / s).floor() * s, (xr.1 / s).ceil() * s);
-            }
             // Widen whichever axis has room so one unit is the same length on both.
             let sx = plot.w / (xr.1 - xr.0);
             let sy = plot.h / (yr.1 - yr.0);
@@ -657,6 +689,7 @@ impl Panel for Chart {
             }
             match s.style {
                 Style::Markers => {
+                    let centre = centroid(s.points.iter().map(|&(x, y)| (ax.px(x), ax.py(y))));
                     for (k, &(x, y)) in s.points.iter().enumerate() {
                         let inside = x >= xr.0 && x <= xr.1 && y >= yr.0 && y <= yr.1;
                         if !inside {
@@ -668,15 +701,7 @@ impl Panel for Chart {
                             "<circle cx=\"{px:.1}\" cy=\"{py:.1}\" r=\"4\" fill=\"{colour}\" stroke=\"#222\" stroke-width=\"0.8\"/>"
                         );
                         if let Some(label) = s.labels.get(k).filter(|l| !l.is_empty()) {
-                            text(
-                                out,
-                                px + 6.0,
-                                py - 6.0,
-                                11.0,
-                                "start",
-                                "fill=\"#222\"",
-                                label,
-                            );
+                            label_outward(out, (px, py), centre, label);
                         }
                     }
                 }
@@ -1113,6 +1138,11 @@ impl Path3d {
         }
         for (i, (_, pts, labels)) in self.markers.iter().enumerate() {
             let colour = PALETTE[(self.paths.len() + i) % PALETTE.len()];
+            let centre = centroid(
+                pts.iter()
+                    .filter(|p| p.iter().all(|v| v.is_finite()))
+                    .map(|p| to_px(*p)),
+            );
             for (k, p) in pts.iter().enumerate() {
                 if !p.iter().all(|v| v.is_finite()) {
                     continue;
@@ -1123,7 +1153,7 @@ impl Path3d {
                     "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"4.5\" fill=\"{colour}\" stroke=\"#222\" stroke-width=\"0.8\"/>"
                 );
                 if let Some(label) = labels.get(k).filter(|l| !l.is_empty()) {
-                    text(out, x + 7.0, y - 7.0, 11.5, "start", "fill=\"#222\"", label);
+                    label_outward(out, (x, y), centre, label);
                 }
             }
         }

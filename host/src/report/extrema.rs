@@ -6,7 +6,7 @@
 //! higher degrees the roots of p′ split the interval into pieces on which p is
 //! monotone, so each piece holds at most one root, bracketed by a sign change
 //! and refined by safeguarded Newton (Newton inside the bracket, bisection
-//! otherwise). The recursion works for any degree; the planner uses ≤ 5.
+//! otherwise). Fixed-size buffers, no allocation, degree ≤ 7; the planner uses ≤ 5.
 
 /// p(t) by Horner's rule.
 pub fn eval(c: &[f64], t: f64) -> f64 {
@@ -40,6 +40,66 @@ fn ordered(t0: f64, t1: f64) -> (f64, f64) {
     if t0 <= t1 { (t0, t1) } else { (t1, t0) }
 }
 
+/// Coefficient capacity of the allocation-free core: degree ≤ 7.
+const CAP: usize = 8;
+
+/// A polynomial of degree < CAP, trimmed (c[n − 1] ≠ 0 unless n = 0).
+#[derive(Clone, Copy)]
+struct Poly {
+    c: [f64; CAP],
+    n: usize,
+}
+
+impl Poly {
+    fn new(c: &[f64]) -> Self {
+        let c = trimmed(c);
+        assert!(
+            c.len() <= CAP,
+            "extrema: degree {} polynomial, at most {} supported",
+            c.len() - 1,
+            CAP - 1
+        );
+        let mut p = Self {
+            c: [0.0; CAP],
+            n: c.len(),
+        };
+        p.c[..c.len()].copy_from_slice(c);
+        p
+    }
+    fn eval(&self, t: f64) -> f64 {
+        eval(&self.c[..self.n], t)
+    }
+    fn derivative(&self) -> Self {
+        let mut d = Self {
+            c: [0.0; CAP],
+            n: self.n.saturating_sub(1),
+        };
+        for k in 1..self.n {
+            d.c[k - 1] = k as f64 * self.c[k];
+        }
+        d
+    }
+}
+
+/// Up to CAP roots, ascending, without allocation.
+#[derive(Clone, Copy, Default)]
+struct Roots {
+    r: [f64; CAP],
+    n: usize,
+}
+
+impl Roots {
+    fn push(&mut self, x: f64) {
+        if self.n < CAP && (self.n == 0 || self.r[self.n - 1] != x) {
+            self.r[self.n] = x;
+            self.n += 1;
+        }
+    }
+    fn as_slice(&self) -> &[f64] {
+        &self.r[..self.n]
+    }
+}
+
 /// Real roots of p in [t0, t1], ascending, each isolated root once.
 ///
 /// The zero polynomial (every point a root) and constants have none. Roots of
@@ -47,26 +107,40 @@ fn ordered(t0: f64, t1: f64) -> (f64, f64) {
 /// they coincide with a root of p′ that evaluates to exactly zero; otherwise
 /// they may be missed, which never matters for extrema (see
 /// [`argmax_abs_on_interval`], which also evaluates p at the roots of p″).
+///
+/// # Panics
+/// If the degree exceeds 7 (after dropping trailing zero coefficients).
 pub fn roots_in(c: &[f64], t0: f64, t1: f64) -> Vec<f64> {
     let (t0, t1) = ordered(t0, t1);
-    if !(t0.is_finite() && t1.is_finite()) {
-        return Vec::new();
-    }
-    let c = trimmed(c);
-    let mut roots = match c.len() {
-        0 | 1 => Vec::new(),
-        2 => vec![-c[0] / c[1]],
-        3 => quadratic_roots(c[0], c[1], c[2]),
-        _ => return higher_roots(c, t0, t1),
-    };
-    roots.retain(|r| r.is_finite() && *r >= t0 && *r <= t1);
-    roots.sort_by(f64::total_cmp);
-    roots.dedup();
-    roots
+    poly_roots(&Poly::new(c), t0, t1).as_slice().to_vec()
 }
 
-/// Real roots of a + b t + c t², c ≠ 0, by the cancellation-free formula.
-fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+fn poly_roots(p: &Poly, t0: f64, t1: f64) -> Roots {
+    let mut out = Roots::default();
+    if !(t0.is_finite() && t1.is_finite()) {
+        return out;
+    }
+    let c = &p.c[..p.n];
+    let (mut r, k) = match p.n {
+        0 | 1 => return out,
+        2 => ([-c[0] / c[1], 0.0], 1),
+        3 => quadratic_roots(c[0], c[1], c[2]),
+        _ => return higher_roots(p, t0, t1),
+    };
+    if k == 2 && r[1] < r[0] {
+        r.swap(0, 1);
+    }
+    for &x in &r[..k] {
+        if x.is_finite() && x >= t0 && x <= t1 {
+            out.push(x);
+        }
+    }
+    out
+}
+
+/// Real roots of a + b t + c t², c ≠ 0, by the cancellation-free formula
+/// (roots, how many).
+fn quadratic_roots(a: f64, b: f64, c: f64) -> ([f64; 2], usize) {
     let disc = b * b - 4.0 * a * c;
     if disc < 0.0 {
         // A double root lost to rounding still is an extremum of the
@@ -74,45 +148,37 @@ fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
         // best estimate when the discriminant is negative only by rounding.
         let scale = (b * b).max((4.0 * a * c).abs());
         return if -disc <= 8.0 * f64::EPSILON * scale {
-            vec![-b / (2.0 * c)]
+            ([-b / (2.0 * c), 0.0], 1)
         } else {
-            Vec::new()
+            ([0.0; 2], 0)
         };
     }
     if disc == 0.0 {
-        return vec![-b / (2.0 * c)];
+        return ([-b / (2.0 * c), 0.0], 1);
     }
+    // disc > 0, so q ≠ 0.
     let q = -0.5 * (b + b.signum() * disc.sqrt());
-    if q == 0.0 {
-        // b = 0 and a c < 0 handled above via disc > 0, so q = 0 means a = b = 0.
-        return vec![0.0];
-    }
-    vec![q / c, a / q]
+    ([q / c, a / q], 2)
 }
 
 /// Degree ≥ 3: split at the roots of p′, refine each sign change.
-fn higher_roots(c: &[f64], t0: f64, t1: f64) -> Vec<f64> {
-    let dc = derivative(c);
-    let mut breaks = vec![t0];
-    breaks.extend(roots_in(&dc, t0, t1));
-    breaks.push(t1);
-    let mut roots: Vec<f64> = Vec::new();
-    let push = |r: f64, roots: &mut Vec<f64>| {
-        if roots.last() != Some(&r) {
-            roots.push(r);
-        }
-    };
-    for w in breaks.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let (fa, fb) = (eval(c, a), eval(c, b));
+fn higher_roots(p: &Poly, t0: f64, t1: f64) -> Roots {
+    let dp = p.derivative();
+    let crit = poly_roots(&dp, t0, t1);
+    let mut roots = Roots::default();
+    let mut a = t0;
+    let mut fa = p.eval(a);
+    for &b in crit.as_slice().iter().chain(std::iter::once(&t1)) {
+        let fb = p.eval(b);
         if fa == 0.0 {
-            push(a, &mut roots);
+            roots.push(a);
         } else if fb != 0.0 && (fa < 0.0) != (fb < 0.0) {
-            push(refine(c, &dc, a, b, fa), &mut roots);
+            roots.push(refine(p, &dp, a, b, fa));
         }
+        (a, fa) = (b, fb);
     }
-    if eval(c, t1) == 0.0 {
-        push(t1, &mut roots);
+    if fa == 0.0 {
+        roots.push(t1);
     }
     roots
 }
@@ -120,12 +186,12 @@ fn higher_roots(c: &[f64], t0: f64, t1: f64) -> Vec<f64> {
 /// Root of p in [a, b] where p(a) = fa and p(b) have opposite signs:
 /// Newton's step when it stays in the bracket and shrinks fast enough,
 /// bisection otherwise; the bracket always holds the root.
-fn refine(c: &[f64], dc: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
+fn refine(p: &Poly, dp: &Poly, mut a: f64, mut b: f64, fa: f64) -> f64 {
     let neg_at_a = fa < 0.0;
     let mut x = 0.5 * (a + b);
     let mut dx_old = b - a;
     for _ in 0..200 {
-        let fx = eval(c, x);
+        let fx = p.eval(x);
         if fx == 0.0 {
             return x;
         }
@@ -134,8 +200,7 @@ fn refine(c: &[f64], dc: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
         } else {
             b = x;
         }
-        let d = eval(dc, x);
-        let newton = x - fx / d;
+        let newton = x - fx / dp.eval(x);
         let step_ok = newton > a && newton < b && (newton - x).abs() * 2.0 < dx_old;
         let next = if step_ok { newton } else { 0.5 * (a + b) };
         dx_old = (next - x).abs();
@@ -150,18 +215,19 @@ fn refine(c: &[f64], dc: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
 
 /// The largest |p(t)| on [t0, t1] and a time where it occurs (the earliest
 /// candidate on ties): candidates are the ends, the roots of p′ and, for
-/// robustness against near-double roots of p′, the roots of p″.
+/// robustness against near-double roots of p′, the roots of p″. No allocation.
+///
+/// # Panics
+/// If the degree exceeds 7 (after dropping trailing zero coefficients).
 pub fn argmax_abs_on_interval(coeffs: &[f64], t0: f64, t1: f64) -> (f64, f64) {
     let (t0, t1) = ordered(t0, t1);
-    let d1 = derivative(coeffs);
-    let d2 = derivative(&d1);
-    let mut best = (t0, eval(coeffs, t0).abs());
-    let candidates = roots_in(&d1, t0, t1)
-        .into_iter()
-        .chain(roots_in(&d2, t0, t1))
-        .chain(std::iter::once(t1));
-    for t in candidates {
-        let v = eval(coeffs, t).abs();
+    let p = Poly::new(coeffs);
+    let d1 = p.derivative();
+    let d2 = d1.derivative();
+    let mut best = (t0, p.eval(t0).abs());
+    let (r1, r2) = (poly_roots(&d1, t0, t1), poly_roots(&d2, t0, t1));
+    for &t in r1.as_slice().iter().chain(r2.as_slice()).chain([&t1]) {
+        let v = p.eval(t).abs();
         if v > best.1 || v.is_nan() {
             best = (t, v);
         }
@@ -169,13 +235,15 @@ pub fn argmax_abs_on_interval(coeffs: &[f64], t0: f64, t1: f64) -> (f64, f64) {
     best
 }
 
-/// The largest |p(t)| on [t0, t1], exact up to rounding (see [`argmax_abs_on_interval`]).
+/// The largest |p(t)| on [t0, t1], exact up to rounding (see
+/// [`argmax_abs_on_interval`]); `coeffs` in ascending powers, degree ≤ 7.
 pub fn max_abs_on_interval(coeffs: &[f64], t0: f64, t1: f64) -> f64 {
     argmax_abs_on_interval(coeffs, t0, t1).1
 }
 
 /// ∫ |p(t)| dt over [t0, t1], exact: p keeps its sign between its roots, and
 /// on each such piece the integral is the change of the antiderivative.
+/// Degree ≤ 7.
 pub fn integral_abs_on_interval(coeffs: &[f64], t0: f64, t1: f64) -> f64 {
     let (t0, t1) = ordered(t0, t1);
     let anti = antiderivative(coeffs);
