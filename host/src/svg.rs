@@ -184,8 +184,15 @@ fn centroid(points: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
 }
 
 /// A marker label placed away from the markers' centroid, so labels of a
-/// closed path sit outside it and labels of an open one spread apart.
-fn label_outward(out: &mut String, p: (f64, f64), centre: (f64, f64), label: &str) {
+/// closed path sit outside it and labels of an open one spread apart; left
+/// out if it would overprint a label already in `placed`.
+fn label_outward(
+    out: &mut String,
+    p: (f64, f64),
+    centre: (f64, f64),
+    label: &str,
+    placed: &mut Vec<Rect>,
+) {
     let (dx, dy) = (p.0 - centre.0, p.1 - centre.1);
     let len = dx.hypot(dy);
     let (ux, uy) = if len > 1e-9 {
@@ -204,6 +211,20 @@ fn label_outward(out: &mut String, p: (f64, f64), centre: (f64, f64), label: &st
     } else {
         "middle"
     };
+    let w = text_width(label, 11.0);
+    let left = match anchor {
+        "start" => x,
+        "end" => x - w,
+        _ => x - w / 2.0,
+    };
+    let rect = Rect::new(left, y - 10.0, w, 12.0);
+    let overlaps = |r: &Rect| {
+        rect.x < r.x + r.w && r.x < rect.x + rect.w && rect.y < r.y + r.h && r.y < rect.y + rect.h
+    };
+    if placed.iter().any(overlaps) {
+        return;
+    }
+    placed.push(rect);
     text(out, x, y, 11.0, anchor, "fill=\"#222\"", label);
 }
 
@@ -611,8 +632,12 @@ impl Panel for Chart {
             );
         }
 
-        // Vertical markers (labels above the frame), limit lines.
-        for l in &self.vlines {
+        // Vertical markers (labels above the frame; a label that would overlap
+        // the previous one is left out), limit lines.
+        let mut vlines: Vec<&Line> = self.vlines.iter().collect();
+        vlines.sort_by(|a, b| a.at.total_cmp(&b.at));
+        let mut label_right = f64::NEG_INFINITY;
+        for l in vlines {
             if !(l.at >= xr.0 && l.at <= xr.1) {
                 continue;
             }
@@ -622,7 +647,9 @@ impl Panel for Chart {
                 "<line x1=\"{px:.1}\" y1=\"{:.1}\" x2=\"{px:.1}\" y2=\"{bottom_y:.1}\" stroke=\"{}\" stroke-width=\"1\" stroke-dasharray=\"2,3\"/>",
                 plot.y, l.colour
             );
-            if !l.label.is_empty() {
+            let half = 0.5 * text_width(&l.label, 10.5);
+            if !l.label.is_empty() && px - half > label_right + 3.0 {
+                label_right = px + half;
                 text(
                     out,
                     px,
@@ -690,6 +717,7 @@ impl Panel for Chart {
             match s.style {
                 Style::Markers => {
                     let centre = centroid(s.points.iter().map(|&(x, y)| (ax.px(x), ax.py(y))));
+                    let mut placed = Vec::new();
                     for (k, &(x, y)) in s.points.iter().enumerate() {
                         let inside = x >= xr.0 && x <= xr.1 && y >= yr.0 && y <= yr.1;
                         if !inside {
@@ -701,7 +729,7 @@ impl Panel for Chart {
                             "<circle cx=\"{px:.1}\" cy=\"{py:.1}\" r=\"4\" fill=\"{colour}\" stroke=\"#222\" stroke-width=\"0.8\"/>"
                         );
                         if let Some(label) = s.labels.get(k).filter(|l| !l.is_empty()) {
-                            label_outward(out, (px, py), centre, label);
+                            label_outward(out, (px, py), centre, label, &mut placed);
                         }
                     }
                 }
@@ -1138,6 +1166,7 @@ impl Path3d {
         }
         for (i, (_, pts, labels)) in self.markers.iter().enumerate() {
             let colour = PALETTE[(self.paths.len() + i) % PALETTE.len()];
+            let mut placed = Vec::new();
             let centre = centroid(
                 pts.iter()
                     .filter(|p| p.iter().all(|v| v.is_finite()))
@@ -1153,7 +1182,7 @@ impl Path3d {
                     "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"4.5\" fill=\"{colour}\" stroke=\"#222\" stroke-width=\"0.8\"/>"
                 );
                 if let Some(label) = labels.get(k).filter(|l| !l.is_empty()) {
-                    label_outward(out, (x, y), centre, label);
+                    label_outward(out, (x, y), centre, label, &mut placed);
                 }
             }
         }

@@ -285,3 +285,21 @@ fn cli_bad_input_exits_2_with_one_line() {
     assert!(parse_plan("[").unwrap_err().to_string().contains("line 1"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn recorded_maxima_are_compared() {
+    use triquint_host::report::tables::recorded_check;
+    let mut plan = rest_to_rest_plan(&[[-90.0, 90.0, 680.0], [-90.0, 90.0, 660.0]], &[1.0]);
+    let s = plan_stats(&plan).unwrap();
+    assert!(recorded_check(&plan, &s).contains("not recorded"));
+    plan.max_abs = MaxAbs {
+        velocity: s.velocity.max,
+        acceleration: s.acceleration.max,
+        jerk: s.jerk.max,
+        torque: s.torque.max,
+    };
+    assert!(recorded_check(&plan, &s).contains("agrees"));
+    plan.max_abs.jerk[1] *= 1.001;
+    let text = recorded_check(&plan, &s);
+    assert!(text.contains("DIFFERS") && text.contains("jerk joint 2"), "{text}");
+}

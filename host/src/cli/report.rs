@@ -40,7 +40,8 @@ pub fn run(args: &ReportArgs) -> CliResult {
         println!("{text}");
     } else {
         println!("{}", tables::intervals_table(&plan, &stats));
-        print!("{}", tables::joint_table(&plan, &stats));
+        println!("{}", tables::joint_table(&plan, &stats));
+        print!("{}", tables::recorded_check(&plan, &stats));
     }
     for path in written {
         eprintln!("wrote {}", path.display());

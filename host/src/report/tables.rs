@@ -126,3 +126,45 @@ pub fn joint_table(plan: &Plan, stats: &PlanStats) -> String {
     out.push_str(&render(&header, &rows));
     out
 }
+
+/// Compares the maxima recorded in the plan file (`max_abs`) with the
+/// recomputed ones: exact quantities to 1e-6 relative, torque to 0.1 %.
+pub fn recorded_check(plan: &Plan, stats: &PlanStats) -> String {
+    let r = &plan.max_abs;
+    let all = [r.velocity, r.acceleration, r.jerk, r.torque];
+    if all.iter().flatten().all(|&x| x == 0.0) {
+        return "max_abs in the plan file: not recorded (all zero)\n".into();
+    }
+    let mut diffs = Vec::new();
+    for (name, rec, got, tol) in [
+        ("velocity", &r.velocity, &stats.velocity.max, 1e-6),
+        (
+            "acceleration",
+            &r.acceleration,
+            &stats.acceleration.max,
+            1e-6,
+        ),
+        ("jerk", &r.jerk, &stats.jerk.max, 1e-6),
+        ("torque", &r.torque, &stats.torque.max, 1e-3),
+    ] {
+        for j in 0..3 {
+            let scale = got[j].abs().max(1e-12);
+            if (rec[j] - got[j]).abs() > tol * scale {
+                diffs.push(format!(
+                    "{name} joint {}: recorded {:.6}, recomputed {:.6}",
+                    j + 1,
+                    rec[j],
+                    got[j]
+                ));
+            }
+        }
+    }
+    if diffs.is_empty() {
+        "max_abs in the plan file: agrees with the recomputed maxima\n".into()
+    } else {
+        format!(
+            "max_abs in the plan file DIFFERS from the recomputed maxima: {}\n",
+            diffs.join("; ")
+        )
+    }
+}
