@@ -301,5 +301,8 @@ fn recorded_maxima_are_compared() {
     assert!(recorded_check(&plan, &s).contains("agrees"));
     plan.max_abs.jerk[1] *= 1.001;
     let text = recorded_check(&plan, &s);
-    assert!(text.contains("DIFFERS") && text.contains("jerk joint 2"), "{text}");
+    assert!(
+        text.contains("DIFFERS") && text.contains("jerk joint 2"),
+        "{text}"
+    );
 }
