@@ -22,6 +22,7 @@ pub mod lagrangian;
 pub mod params;
 #[cfg(feature = "alloc")]
 pub mod plan;
+pub mod protocol;
 pub mod quintic;
 
 pub use kinematics::KinematicsError;

@@ -1,0 +1,231 @@
+//! Per-joint statistics of a plan (paper Tables 5/8): max and time-averaged
+//! |v|, |a|, |jerk| and |τ|, and per-segment maxima.
+//!
+//! Velocity, acceleration and jerk are polynomials per segment (quartic,
+//! cubic, quadratic), so their maxima are exact ([`super::extrema`]) and
+//! their means too: ∫|p′| between the roots of p′ is a change of p. Torque
+//! is sampled on [`TORQUE_INTERVALS`] intervals per segment, the grid maximum
+//! refined by golden-section search, and averaged by Simpson's rule.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+use triquint_shared::Model;
+use triquint_shared::dynamics;
+use triquint_shared::plan::{Plan, Segment};
+
+use super::ReportError;
+use super::extrema::{argmax_abs_on_interval, derivative, integral_abs_on_interval};
+
+/// Torque grid intervals per segment (even, for Simpson's rule; ≥ 200).
+pub const TORQUE_INTERVALS: usize = 256;
+
+/// Max and time-averaged absolute value of one quantity, per joint.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Quantity {
+    /// max |x| per joint (continuous time; torque on the refined grid).
+    pub max: [f64; 3],
+    /// Plan time (s) at which each maximum occurs.
+    pub argmax_s: [f64; 3],
+    /// (1/T) ∫ |x| dt per joint.
+    pub mean: [f64; 3],
+}
+
+/// Maxima of one segment, per joint.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SegmentStats {
+    /// 1-based, as in the paper (h1 runs from P1 to P2).
+    pub index: usize,
+    pub t0_s: f64,
+    pub duration_s: f64,
+    pub max_velocity: [f64; 3],
+    pub max_acceleration: [f64; 3],
+    pub max_jerk: [f64; 3],
+    pub max_torque: [f64; 3],
+}
+
+/// Everything the report prints.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlanStats {
+    /// Σ h (s): the plan's duration.
+    pub total_time_s: f64,
+    pub intervals_s: Vec<f64>,
+    /// m/s
+    pub velocity: Quantity,
+    /// m/s²
+    pub acceleration: Quantity,
+    /// m/s³
+    pub jerk: Quantity,
+    /// N·m
+    pub torque: Quantity,
+    pub segments: Vec<SegmentStats>,
+}
+
+/// Motor torques at segment-local time `t`.
+pub fn segment_torque(
+    model: &Model<f64>,
+    seg: &Segment,
+    index: usize,
+    t: f64,
+) -> Result<Vector3<f64>, ReportError> {
+    let m = seg.quintic().eval(t);
+    dynamics::torque(model, &m.q, &m.qd, &m.qdd).map_err(|source| ReportError::Kinematics {
+        segment: index + 1,
+        time_s: seg.t0_s + t,
+        source,
+    })
+}
+
+/// Folds one segment's (t, |x|) maximum into a running per-joint maximum.
+fn fold_max(q: &mut Quantity, j: usize, t_abs: f64, value: f64) {
+    if value > q.max[j] {
+        q.max[j] = value;
+        q.argmax_s[j] = t_abs;
+    }
+}
+
+/// Statistics of a (validated) plan.
+pub fn plan_stats(plan: &Plan) -> Result<PlanStats, ReportError> {
+    let model = plan.robot.model::<f64>();
+    let mut out = PlanStats {
+        total_time_s: plan.segments.iter().map(|s| s.duration_s).sum(),
+        intervals_s: plan.segments.iter().map(|s| s.duration_s).collect(),
+        velocity: Quantity::default(),
+        acceleration: Quantity::default(),
+        jerk: Quantity::default(),
+        torque: Quantity::default(),
+        segments: Vec::with_capacity(plan.segments.len()),
+    };
+    let mut integrals = [[0.0f64; 3]; 4];
+    for (i, seg) in plan.segments.iter().enumerate() {
+        let h = seg.duration_s;
+        let mut s = SegmentStats {
+            index: i + 1,
+            t0_s: seg.t0_s,
+            duration_s: h,
+            max_velocity: [0.0; 3],
+            max_acceleration: [0.0; 3],
+            max_jerk: [0.0; 3],
+            max_torque: [0.0; 3],
+        };
+        for j in 0..3 {
+            let v = derivative(&seg.coeffs[j]);
+            let a = derivative(&v);
+            let jk = derivative(&a);
+            for (d, (poly, quantity, seg_max)) in [
+                (&v, &mut out.velocity, &mut s.max_velocity),
+                (&a, &mut out.acceleration, &mut s.max_acceleration),
+                (&jk, &mut out.jerk, &mut s.max_jerk),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let (t, value) = argmax_abs_on_interval(poly, 0.0, h);
+                seg_max[j] = value;
+                fold_max(quantity, j, seg.t0_s + t, value);
+                integrals[d][j] += integral_abs_on_interval(poly, 0.0, h);
+            }
+        }
+        let torque = segment_torque_stats(&model, seg, i)?;
+        s.max_torque = torque.max;
+        for (j, integral) in integrals[3].iter_mut().enumerate() {
+            *integral += torque.integral[j];
+            fold_max(
+                &mut out.torque,
+                j,
+                seg.t0_s + torque.argmax[j],
+                torque.max[j],
+            );
+        }
+        out.segments.push(s);
+    }
+    let total = out.total_time_s;
+    for (q, integral) in [
+        &mut out.velocity,
+        &mut out.acceleration,
+        &mut out.jerk,
+        &mut out.torque,
+    ]
+    .into_iter()
+    .zip(integrals)
+    {
+        q.mean = integral.map(|x| x / total);
+    }
+    Ok(out)
+}
+
+struct TorqueSegment {
+    max: [f64; 3],
+    argmax: [f64; 3],
+    integral: [f64; 3],
+}
+
+/// Grid, golden-section refinement of each joint's grid maximum, Simpson integral.
+fn segment_torque_stats(
+    model: &Model<f64>,
+    seg: &Segment,
+    index: usize,
+) -> Result<TorqueSegment, ReportError> {
+    let n = TORQUE_INTERVALS;
+    let h = seg.duration_s;
+    let dt = h / n as f64;
+    let mut out = TorqueSegment {
+        max: [0.0; 3],
+        argmax: [0.0; 3],
+        integral: [0.0; 3],
+    };
+    for k in 0..=n {
+        let t = dt * k as f64;
+        let tau = segment_torque(model, seg, index, t)?;
+        let w = if k == 0 || k == n {
+            1.0
+        } else if k % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        for j in 0..3 {
+            let a = tau[j].abs();
+            out.integral[j] += w * a * dt / 3.0;
+            if a > out.max[j] {
+                out.max[j] = a;
+                out.argmax[j] = t;
+            }
+        }
+    }
+    for j in 0..3 {
+        let lo = (out.argmax[j] - dt).max(0.0);
+        let hi = (out.argmax[j] + dt).min(h);
+        let f = |t: f64| segment_torque(model, seg, index, t).map(|tau| tau[j].abs());
+        let (t, value) = golden_max(f, lo, hi)?;
+        if value > out.max[j] {
+            out.max[j] = value;
+            out.argmax[j] = t;
+        }
+    }
+    Ok(out)
+}
+
+/// Golden-section search for a maximum of a unimodal f on [lo, hi].
+fn golden_max<E>(f: impl Fn(f64) -> Result<f64, E>, lo: f64, hi: f64) -> Result<(f64, f64), E> {
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (lo, hi);
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let (mut fc, mut fd) = (f(c)?, f(d)?);
+    for _ in 0..40 {
+        if fc > fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c)?;
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d)?;
+        }
+    }
+    Ok(if fc > fd { (c, fc) } else { (d, fd) })
+}

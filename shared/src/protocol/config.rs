@@ -1,0 +1,507 @@
+//! Drive configuration: the parameters a node needs to compute the
+//! feedforward, close its loop and check segments. Declared once here; each is
+//! written with a ConfigWrite frame (byte 0 = parameter index, a DBC
+//! multiplexor; bytes 1–4 = f32 value) and activated by ConfigCommit with the
+//! CRC-32 of the whole set, which every heartbeat then reports.
+
+use super::crc::Crc32;
+use super::wire::{Addr, FieldDef, MessageDef, WireType};
+use crate::{Limits, Robot};
+
+/// One configuration parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParamDef {
+    pub index: u8,
+    pub name: &'static str,
+    pub unit: &'static str,
+    pub doc: &'static str,
+}
+
+macro_rules! config_params {
+    ($( $(#[doc = $doc:literal])* $idx:literal $name:ident [$unit:literal] ),* $(,)?) => {
+        /// A node's complete configuration, in SI units, as the f32 values on the wire.
+        #[derive(Clone, Copy, Debug, PartialEq, Default)]
+        pub struct DriveConfig { $( $(#[doc = $doc])* pub $name: f32, )* }
+
+        /// Every parameter, in index order.
+        pub const PARAMS: &[ParamDef] = &[ $( ParamDef {
+            index: $idx, name: stringify!($name), unit: $unit, doc: concat!($($doc),*)
+        } ),* ];
+
+        impl DriveConfig {
+            /// Values in index order.
+            pub fn to_values(&self) -> [f32; PARAM_COUNT] {
+                [ $( self.$name ),* ]
+            }
+            /// From values in index order.
+            pub fn from_values(v: &[f32; PARAM_COUNT]) -> Self {
+                let mut c = Self::default();
+                $( c.$name = v[$idx]; )*
+                c
+            }
+        }
+    };
+}
+
+config_params! {
+    /// Which row of the inverse dynamics this node drives (0, 1, 2 = node − 1).
+    0 axis [""],
+    /// s: platform circumradius.
+    1 platform_radius ["m"],
+    /// S: base circumradius.
+    2 base_radius ["m"],
+    /// l: strut length.
+    3 strut_length ["m"],
+    /// d: slider offset toward the centre.
+    4 slider_offset ["m"],
+    /// m_p: platform mass.
+    5 platform_mass ["kg"],
+    /// Payload on the platform.
+    6 payload_mass ["kg"],
+    /// m_i: strut mass.
+    7 strut_mass ["kg"],
+    /// m_qi: slider mass.
+    8 slider_mass ["kg"],
+    /// I_M: motor rotor inertia.
+    9 motor_inertia ["kg.m2"],
+    /// I_C: coupling inertia.
+    10 coupling_inertia ["kg.m2"],
+    /// I_L: leadscrew inertia.
+    11 leadscrew_inertia ["kg.m2"],
+    /// p: leadscrew lead.
+    12 lead ["m"],
+    /// g: gravity.
+    13 gravity ["m/s2"],
+    /// Joint velocity limit (segments are checked against it).
+    14 max_velocity ["m/s"],
+    /// Joint acceleration limit.
+    15 max_acceleration ["m/s2"],
+    /// Joint jerk limit.
+    16 max_jerk ["m/s3"],
+    /// Motor torque limit; the command is clamped to it.
+    17 max_torque ["N.m"],
+    /// Proportional gain (torque per metre of position error).
+    18 kp ["N.m/m"],
+    /// Integral gain.
+    19 ki ["N.m/(m.s)"],
+    /// Derivative gain (torque per m/s of velocity error).
+    20 kd ["N.m.s/m"],
+    /// Clamp of the integral term.
+    21 integral_limit ["N.m"],
+    /// +1 if positive motor torque lifts the slider, −1 if it lowers it.
+    22 direction [""],
+    /// Encoder counts per metre of slider travel (signed: the encoder's direction).
+    23 counts_per_metre ["1/m"],
+    /// Following-error bound that stops the machine.
+    24 following_error_max ["m"],
+    /// Arm is refused further than this from the plan start.
+    25 arm_tolerance ["m"],
+    /// Duration of a stop (and of feed hold/resume) by time-scaling.
+    26 stop_time ["s"],
+    /// Duration of a quick stop.
+    27 quick_stop_time ["s"],
+    /// Extra buffered time required beyond the stop's path length before underrun.
+    28 underrun_margin ["s"],
+    /// Time without a sync after which the node stops (LostSync).
+    29 sync_timeout ["s"],
+    /// Control tick rate (1000–10000).
+    30 control_rate ["Hz"],
+    /// Telemetry rate (0 = off).
+    31 telemetry_rate ["Hz"],
+    /// Heartbeat period.
+    32 heartbeat_period ["s"],
+    /// 1 = inverse-dynamics feedforward on, 0 = feedback only.
+    33 feedforward [""],
+    /// Cut-off of the first-order velocity filter.
+    34 velocity_filter ["Hz"],
+}
+
+/// Number of configuration parameters.
+pub const PARAM_COUNT: usize = 35;
+
+/// ConfigWrite: host → node n, one parameter per frame.
+pub const CONFIG_WRITE: MessageDef = MessageDef {
+    name: "ConfigWrite",
+    addr: Addr::ToNode(0x040),
+    len: 5,
+    sender: "host",
+    period: "on upload",
+    doc: " One configuration parameter (byte 0 = index, a multiplexor).",
+    mux: Some("index"),
+    fd: false,
+    fields: &CONFIG_FIELDS,
+};
+
+/// ConfigValue: node n → host, the answer to ReadConfig, one parameter per frame.
+pub const CONFIG_VALUE: MessageDef = MessageDef {
+    name: "ConfigValue",
+    addr: Addr::FromNode(0x1C0),
+    len: 5,
+    sender: "node",
+    period: "on ReadConfig",
+    doc: " One parameter of the written configuration (byte 0 = index, a multiplexor).",
+    mux: Some("index"),
+    fd: false,
+    fields: &CONFIG_FIELDS,
+};
+
+const CONFIG_FIELDS: [FieldDef; 2] = [
+    FieldDef {
+        name: "index",
+        offset: 0,
+        ty: WireType::U8,
+        scale: 1.0,
+        unit: "",
+        doc: " Parameter index (multiplexor).",
+        values: None,
+    },
+    FieldDef {
+        name: "value",
+        offset: 1,
+        ty: WireType::F32,
+        scale: 1.0,
+        unit: "",
+        doc: " Value in the parameter's unit.",
+        values: None,
+    },
+];
+
+/// Payload of a ConfigWrite/ConfigValue frame.
+pub fn encode_param(index: u8, value: f32) -> [u8; 5] {
+    let v = value.to_le_bytes();
+    [index, v[0], v[1], v[2], v[3]]
+}
+
+/// Decodes a ConfigWrite/ConfigValue payload.
+pub fn decode_param(data: &[u8]) -> Option<(u8, f32)> {
+    if data.len() < 5 {
+        return None;
+    }
+    Some((
+        data[0],
+        f32::from_le_bytes([data[1], data[2], data[3], data[4]]),
+    ))
+}
+
+/// CRC-32 of a configuration: over (index u8, value f32 LE) for every parameter in index order.
+pub fn config_crc(values: &[f32; PARAM_COUNT]) -> u32 {
+    let mut c = Crc32::new();
+    for (i, v) in values.iter().enumerate() {
+        c.update(&encode_param(i as u8, *v));
+    }
+    c.finish()
+}
+
+/// A configuration value that a drive cannot run with.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("configuration parameter `{name}` = {value} is invalid ({rule})")]
+pub struct ConfigError {
+    pub name: &'static str,
+    pub value: f32,
+    pub rule: &'static str,
+}
+
+/// Smoothstep S(u) = 10u³ − 15u⁴ + 6u⁵ bounds used by the stop time-scaling.
+pub const SMOOTHSTEP_MAX_D1: f64 = 1.875;
+/// max |S''(u)| = 10/√3.
+pub const SMOOTHSTEP_MAX_D2: f64 = 5.773_502_691_896_258;
+
+/// Duration of a stop by time-scaling σ = 1 − S(t/T) such that the joint jerk
+/// q'''σ³ + 3q''σσ̇ + q'σ̈ stays within `jerk_limit` when the plan's own
+/// maxima are `v`, `a`, `j` (the stop adds at most
+/// 3a·1.875/T + v·5.774/T²); if the plan already uses the jerk limit, the
+/// stop may add half of it again. At least 50 ms.
+pub fn stop_time(v: f64, a: f64, j: f64, jerk_limit: f64) -> f64 {
+    let budget = (jerk_limit - j).max(0.5 * jerk_limit).max(1e-9);
+    let b = 3.0 * SMOOTHSTEP_MAX_D1 * a;
+    let c = SMOOTHSTEP_MAX_D2 * v;
+    let t = (b + libm::sqrt(b * b + 4.0 * budget * c)) / (2.0 * budget);
+    t.max(0.05)
+}
+
+/// Settings of a drive that are not in the plan (machine and tuning).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveSettings {
+    /// Closed-loop bandwidth (Hz) the PID gains are placed at (triple pole).
+    pub bandwidth_hz: f64,
+    pub direction: [f64; 3],
+    pub counts_per_metre: [f64; 3],
+    pub following_error_max: f64,
+    pub arm_tolerance: f64,
+    pub underrun_margin: f64,
+    pub sync_timeout: f64,
+    pub control_rate: f64,
+    pub telemetry_rate: f64,
+    pub heartbeat_period: f64,
+    pub feedforward: bool,
+    pub velocity_filter: f64,
+}
+
+/// The loop bandwidth every plan runs with (Hz). Not tuned per plan.
+pub const DEFAULT_BANDWIDTH_HZ: f64 = 10.0;
+
+impl Default for DriveSettings {
+    fn default() -> Self {
+        // A 17-bit encoder on a 10 mm lead: 2^17 counts per 10 mm.
+        let cpm = 131_072.0 / 0.010;
+        Self {
+            bandwidth_hz: DEFAULT_BANDWIDTH_HZ,
+            direction: [1.0; 3],
+            counts_per_metre: [cpm; 3],
+            following_error_max: 1.0e-3,
+            arm_tolerance: 0.2e-3,
+            underrun_margin: 0.05,
+            sync_timeout: 0.5,
+            control_rate: 1000.0,
+            telemetry_rate: 50.0,
+            heartbeat_period: 0.1,
+            feedforward: true,
+            velocity_filter: 300.0,
+        }
+    }
+}
+
+/// Inertia of one axis seen at the motor (kg m²): rotor plus the slider, half
+/// a strut and a third of the platform reflected through the screw.
+pub fn axis_inertia(robot: &Robot) -> f64 {
+    let k = robot.lead / (2.0 * core::f64::consts::PI);
+    let m = robot.slider_mass
+        + 0.5 * robot.strut_mass
+        + (robot.platform_mass + robot.payload_mass) / 3.0;
+    robot.rotor_inertia() + m * k * k
+}
+
+impl DriveConfig {
+    /// The configuration of node `axis + 1` for a plan's robot and limits,
+    /// stop times from the plan's maxima, and gains from the settings' bandwidth:
+    /// a triple closed-loop pole at ω (Kp = 3Jω², Ki = Jω³, Kd = 3Jω, in N·m per metre).
+    pub fn new(
+        robot: &Robot,
+        limits: &Limits,
+        axis: usize,
+        s: &DriveSettings,
+        stop_time_s: f64,
+        quick_stop_time_s: f64,
+    ) -> Self {
+        let a = axis.min(2);
+        let w = 2.0 * core::f64::consts::PI * s.bandwidth_hz;
+        let ratio = 2.0 * core::f64::consts::PI / robot.lead;
+        let j = axis_inertia(robot) * ratio;
+        let f = |x: f64| x as f32;
+        Self {
+            axis: a as f32,
+            platform_radius: f(robot.platform_radius),
+            base_radius: f(robot.base_radius),
+            strut_length: f(robot.strut_length),
+            slider_offset: f(robot.slider_offset),
+            platform_mass: f(robot.platform_mass),
+            payload_mass: f(robot.payload_mass),
+            strut_mass: f(robot.strut_mass),
+            slider_mass: f(robot.slider_mass),
+            motor_inertia: f(robot.motor_inertia),
+            coupling_inertia: f(robot.coupling_inertia),
+            leadscrew_inertia: f(robot.leadscrew_inertia),
+            lead: f(robot.lead),
+            gravity: f(robot.gravity),
+            max_velocity: f(limits.velocity),
+            max_acceleration: f(limits.acceleration),
+            max_jerk: f(limits.jerk),
+            max_torque: f(limits.torque),
+            kp: f(3.0 * j * w * w),
+            ki: f(j * w * w * w),
+            kd: f(3.0 * j * w),
+            integral_limit: f(0.5 * limits.torque),
+            direction: f(s.direction[a]),
+            counts_per_metre: f(s.counts_per_metre[a]),
+            following_error_max: f(s.following_error_max),
+            arm_tolerance: f(s.arm_tolerance),
+            stop_time: f(stop_time_s),
+            quick_stop_time: f(quick_stop_time_s),
+            underrun_margin: f(s.underrun_margin),
+            sync_timeout: f(s.sync_timeout),
+            control_rate: f(s.control_rate),
+            telemetry_rate: f(s.telemetry_rate),
+            heartbeat_period: f(s.heartbeat_period),
+            feedforward: if s.feedforward { 1.0 } else { 0.0 },
+            velocity_filter: f(s.velocity_filter),
+        }
+    }
+
+    pub fn crc(&self) -> u32 {
+        config_crc(&self.to_values())
+    }
+
+    /// The robot these parameters describe (f32 values widened).
+    pub fn robot(&self) -> Robot {
+        let d = |x: f32| x as f64;
+        Robot {
+            platform_radius: d(self.platform_radius),
+            base_radius: d(self.base_radius),
+            strut_length: d(self.strut_length),
+            slider_offset: d(self.slider_offset),
+            platform_mass: d(self.platform_mass),
+            payload_mass: d(self.payload_mass),
+            strut_mass: d(self.strut_mass),
+            slider_mass: d(self.slider_mass),
+            motor_inertia: d(self.motor_inertia),
+            coupling_inertia: d(self.coupling_inertia),
+            leadscrew_inertia: d(self.leadscrew_inertia),
+            lead: d(self.lead),
+            gravity: d(self.gravity),
+        }
+    }
+
+    /// Checks that a drive can run with these values (no panics, no NaN).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let values = self.to_values();
+        for (p, v) in PARAMS.iter().zip(values.iter()) {
+            if !v.is_finite() {
+                return Err(ConfigError {
+                    name: p.name,
+                    value: *v,
+                    rule: "finite",
+                });
+            }
+        }
+        let positive: [(&'static str, f32); 13] = [
+            ("max_velocity", self.max_velocity),
+            ("max_acceleration", self.max_acceleration),
+            ("max_jerk", self.max_jerk),
+            ("max_torque", self.max_torque),
+            ("following_error_max", self.following_error_max),
+            ("arm_tolerance", self.arm_tolerance),
+            ("stop_time", self.stop_time),
+            ("quick_stop_time", self.quick_stop_time),
+            ("sync_timeout", self.sync_timeout),
+            ("heartbeat_period", self.heartbeat_period),
+            ("velocity_filter", self.velocity_filter),
+            ("kp", self.kp),
+            ("kd", self.kd),
+        ];
+        for (name, value) in positive {
+            if value <= 0.0 {
+                return Err(ConfigError {
+                    name,
+                    value,
+                    rule: "> 0",
+                });
+            }
+        }
+        let rules: [(&'static str, f32, bool, &'static str); 8] = [
+            (
+                "axis",
+                self.axis,
+                self.axis == 0.0 || self.axis == 1.0 || self.axis == 2.0,
+                "0, 1 or 2",
+            ),
+            (
+                "direction",
+                self.direction,
+                self.direction == 1.0 || self.direction == -1.0,
+                "+1 or -1",
+            ),
+            (
+                "counts_per_metre",
+                self.counts_per_metre,
+                self.counts_per_metre != 0.0,
+                "non-zero",
+            ),
+            (
+                "control_rate",
+                self.control_rate,
+                (1000.0..=10000.0).contains(&self.control_rate),
+                "1000 to 10000",
+            ),
+            (
+                "telemetry_rate",
+                self.telemetry_rate,
+                self.telemetry_rate >= 0.0 && self.telemetry_rate <= self.control_rate,
+                "0 to control_rate",
+            ),
+            (
+                "feedforward",
+                self.feedforward,
+                self.feedforward == 0.0 || self.feedforward == 1.0,
+                "0 or 1",
+            ),
+            ("ki", self.ki, self.ki >= 0.0, ">= 0"),
+            (
+                "underrun_margin",
+                self.underrun_margin,
+                self.underrun_margin >= 0.0,
+                ">= 0",
+            ),
+        ];
+        for (name, value, ok, rule) in rules {
+            if !ok {
+                return Err(ConfigError { name, value, rule });
+            }
+        }
+        self.robot().validate().map_err(|e| match e {
+            crate::params::ParamError::Invalid { name, rule, value } => ConfigError {
+                name,
+                value: value as f32,
+                rule,
+            },
+        })
+    }
+
+    /// The first parameter that differs from `other`: (name, ours, theirs).
+    pub fn first_difference(&self, other: &Self) -> Option<(&'static str, f32, f32)> {
+        let (a, b) = (self.to_values(), other.to_values());
+        PARAMS
+            .iter()
+            .zip(a.iter().zip(b.iter()))
+            .find(|(_, (x, y))| x.to_bits() != y.to_bits())
+            .map(|(p, (x, y))| (p.name, *x, *y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_is_dense_and_ordered() {
+        assert_eq!(PARAMS.len(), PARAM_COUNT);
+        for (i, p) in PARAMS.iter().enumerate() {
+            assert_eq!(p.index as usize, i, "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn paper_config_is_valid_and_round_trips() {
+        let c = DriveConfig::new(
+            &Robot::default(),
+            &Limits::default(),
+            1,
+            &DriveSettings::default(),
+            0.8,
+            0.3,
+        );
+        c.validate().unwrap();
+        let back = DriveConfig::from_values(&c.to_values());
+        assert_eq!(back, c);
+        assert_eq!(back.crc(), c.crc());
+        let mut d = c;
+        d.kp *= 1.01;
+        assert_ne!(d.crc(), c.crc());
+        assert_eq!(c.first_difference(&d).map(|x| x.0), Some("kp"));
+        d.direction = 0.5;
+        assert_eq!(d.validate().unwrap_err().name, "direction");
+    }
+
+    #[test]
+    fn stop_time_meets_jerk_budget() {
+        for (v, a, j, lim) in [
+            (0.2, 0.8, 1.5, 5.0),
+            (0.5, 1.2, 5.0, 5.0),
+            (0.0, 0.0, 0.1, 5.0),
+        ] {
+            let t = stop_time(v, a, j, lim);
+            let added = 3.0 * a * SMOOTHSTEP_MAX_D1 / t + v * SMOOTHSTEP_MAX_D2 / (t * t);
+            let budget = (lim - j).max(0.5 * lim);
+            assert!(added <= budget * (1.0 + 1e-9), "{added} > {budget}");
+        }
+    }
+}

@@ -1,0 +1,217 @@
+//! THE declaration of the triquint CAN protocol: every code table and every
+//! fixed-layout message, once. The codec, `docs/triquint.dbc`, the tables of
+//! `docs/protocol.md` and `testdata/protocol/golden.txt` are generated from it.
+//! Multiplexed messages (segment parts, configuration) are declared in
+//! [`super::segment`] and [`super::config`].
+
+use super::wire::{Addr, code_enum, messages};
+
+code_enum! {
+    /// Drive state (CiA 402 in spirit, reduced to what a motion queue needs).
+    State {
+        /// Servo holds position; no segments queued. Accepts config and segments.
+        Idle = 0,
+        /// At least one segment queued; waiting for Arm.
+        Loaded = 1,
+        /// Checks passed (config, time sync, position at plan start); waiting for Start.
+        Armed = 2,
+        /// Executing the queue on the shared time base (feed hold is a sub-mode).
+        Running = 3,
+        /// Slowing along the buffered path by a jerk-limited time-scaling.
+        Stopping = 4,
+        /// Stopped with a fault code; holds position; only ClearFault leaves it.
+        Fault = 5,
+    }
+}
+
+code_enum! {
+    /// Fault codes (Emergency, Heartbeat) and refusal reasons (CommandAck); 0 = none.
+    FaultCode {
+        /// No fault / command accepted.
+        None = 0,
+        /// Buffered motion time fell below the stop time plus margin.
+        Underrun = 1,
+        /// No time sync within the configured timeout while armed or running.
+        LostSync = 2,
+        /// |position reference − encoder| exceeded the configured bound.
+        FollowingError = 3,
+        /// Another node sent an Emergency frame.
+        PeerEmergency = 4,
+        /// The host sent an Emergency frame (emergency stop).
+        HostEmergency = 5,
+        /// Arm refused: this axis is further than the arm tolerance from the plan start.
+        ArmTooFar = 6,
+        /// Arm or Start refused: no valid time sync yet.
+        NotSynced = 7,
+        /// Arm refused or segment rejected: no active configuration.
+        NoConfig = 8,
+        /// ConfigCommit refused: CRC differs or a parameter is missing or invalid.
+        ConfigMismatch = 9,
+        /// Start time already passed when the Start command arrived.
+        StartInPast = 10,
+        /// Arm refused: the queue does not begin with the plan's first segment.
+        EmptyQueue = 11,
+        /// Command not allowed in the current state.
+        WrongState = 12,
+        /// The feedforward could not be computed (pose outside the workspace).
+        Kinematics = 13,
+        /// Unknown command code or argument.
+        BadCommand = 14,
+        /// Commanded quick stop (not an error; reported for the record).
+        QuickStop = 15,
+    }
+}
+
+code_enum! {
+    /// Result of a segment (SegmentAck.result).
+    Reject {
+        /// Complete, CRC valid, in sequence, queued.
+        Accepted = 0,
+        /// CRC-32 over the reassembled segment does not match.
+        BadCrc = 1,
+        /// Segment sequence number already accepted (or part received twice).
+        Duplicate = 2,
+        /// Part index or sequence number out of order; the partial segment is dropped.
+        OutOfOrder = 3,
+        /// The queue is full (host ignored flow control).
+        QueueFull = 4,
+        /// Contents invalid: zero duration, coefficients out of range, bad flags.
+        Invalid = 5,
+        /// Segments are not accepted in this state (Stopping, Fault, no config).
+        WrongState = 6,
+        /// A new segment began before the previous one was complete.
+        Incomplete = 7,
+        /// The segment does not start where the previous one ends.
+        Discontinuous = 8,
+    }
+}
+
+code_enum! {
+    /// Command codes (Command.command).
+    CommandCode {
+        /// Loaded → Armed after checks; refusal → Fault with the reason.
+        Arm = 1,
+        /// Armed → Running at host time `arg` (µs, wrapping u32).
+        Start = 2,
+        /// Stop along the path with the configured stop time, then Idle (queue flushed).
+        Stop = 3,
+        /// Stop along the path with the quick-stop time, then Idle (queue flushed).
+        QuickStop = 4,
+        /// Fault → Idle; the queue is flushed and sequence numbers restart at 0.
+        ClearFault = 5,
+        /// Running: slow to rest on the path (same time-scaling as a stop) and wait.
+        FeedHold = 6,
+        /// Running and held: accelerate back to the plan's speed.
+        Resume = 7,
+        /// Activate the written parameters if their CRC-32 equals `arg`.
+        ConfigCommit = 8,
+        /// Idle or Loaded: flush the queue, sequence numbers restart at 0.
+        Reset = 9,
+        /// Answer with a ConfigValue frame for every parameter.
+        ReadConfig = 10,
+    }
+}
+
+/// Protocol version carried in every heartbeat.
+pub const PROTOCOL_VERSION: u8 = 1;
+
+messages! {
+    /// Sent at once when a node faults (or by the host, node 0, as an emergency stop).
+    Emergency = Addr::FromNodeOrHost(0x010), len 8, from "node/host", every "on event" {
+        /// Fault code.
+        code: u8 @ 0 ["", 1.0, FaultCode],
+        /// State after the fault.
+        state: u8 @ 1 ["", 1.0, State],
+        /// Sequence number of the segment executing.
+        segment: u16 @ 2 ["", 1.0],
+        /// Plan time at the fault.
+        plan_time_us: u32 @ 4 ["us", 1.0],
+    }
+    /// Broadcast time base. `prev_tx_us` is the host time at which the previous
+    /// sync (seq − 1) was transmitted, so receivers cancel queueing delay.
+    TimeSync = Addr::Broadcast(0x020), len 5, from "host", every "100 ms" {
+        /// Sync sequence number (wrapping).
+        seq: u8 @ 0 ["", 1.0],
+        /// Host time when sync `seq − 1` left the host (µs, wrapping).
+        prev_tx_us: u32 @ 1 ["us", 1.0],
+    }
+    /// Command to node n (or all nodes on node 0); answered by CommandAck.
+    Command = Addr::ToNode(0x030), len 6, from "host", every "on event" {
+        /// Command code.
+        command: u8 @ 0 ["", 1.0, CommandCode],
+        /// Echoed in the CommandAck.
+        token: u8 @ 1 ["", 1.0],
+        /// Start: host time (µs); ConfigCommit: CRC-32; otherwise 0.
+        arg: u32 @ 2 ["", 1.0],
+    }
+    /// Acknowledgement of every segment, accepted or rejected.
+    SegmentAck = Addr::FromNode(0x180), len 8, from "node", every "per segment" {
+        /// Segment sequence number (or the partial segment's).
+        seq: u16 @ 0 ["", 1.0],
+        /// Accepted or the reason for rejection.
+        result: u8 @ 2 ["", 1.0, Reject],
+        /// Segments queued after this one.
+        depth: u8 @ 3 ["", 1.0],
+        /// Next sequence number the node will accept.
+        next_seq: u16 @ 4 ["", 1.0],
+        /// Queue capacity (segments).
+        capacity: u8 @ 6 ["", 1.0],
+        /// How many segments were rejected for this reason so far (saturating).
+        reason_count: u8 @ 7 ["", 1.0],
+    }
+    /// Answer to every Command.
+    CommandAck = Addr::FromNode(0x1A0), len 8, from "node", every "per command" {
+        /// Command code answered.
+        command: u8 @ 0 ["", 1.0, CommandCode],
+        /// Token of the command.
+        token: u8 @ 1 ["", 1.0],
+        /// 0 = done, otherwise why not.
+        result: u8 @ 2 ["", 1.0, FaultCode],
+        /// State after the command.
+        state: u8 @ 3 ["", 1.0, State],
+        /// ConfigCommit: CRC-32 the node computed; otherwise 0.
+        value: u32 @ 4 ["", 1.0],
+    }
+    /// Periodic status of node n.
+    Heartbeat = Addr::FromNode(0x700), len 8, from "node", every "100 ms" {
+        /// State.
+        state: u8 @ 0 ["", 1.0, State],
+        /// Active fault (0 = none).
+        fault: u8 @ 1 ["", 1.0, FaultCode],
+        /// Segments queued (including the executing one).
+        queue_depth: u8 @ 2 ["", 1.0],
+        /// Protocol version.
+        protocol_version: u8 @ 3 ["", 1.0],
+        /// CRC-32 of the active configuration (0 = none).
+        config_crc: u32 @ 4 ["", 1.0],
+    }
+    /// Second heartbeat frame: sequence, rejection and bus counters.
+    HeartbeatExt = Addr::FromNode(0x740), len 8, from "node", every "100 ms" {
+        /// Next sequence number the node will accept (= last accepted + 1).
+        next_seq: u16 @ 0 ["", 1.0],
+        /// Segments and parts rejected since the last Reset (saturating).
+        rejects: u16 @ 2 ["", 1.0],
+        /// CAN transmit error counter (TEC).
+        tx_errors: u8 @ 4 ["", 1.0],
+        /// CAN receive error counter (REC).
+        rx_errors: u8 @ 5 ["", 1.0],
+        /// Reason of the last rejection.
+        last_reject: u8 @ 6 ["", 1.0, Reject],
+        /// 1 when the node has a valid time sync.
+        sync_ok: u8 @ 7 ["", 1.0],
+    }
+    /// Telemetry: measured position and velocity of node n's axis.
+    Telemetry = Addr::FromNode(0x780), len 8, from "node", every "configurable" {
+        /// Joint position from the encoder.
+        position: f32 @ 0 ["m", 1.0],
+        /// Joint velocity (filtered difference).
+        velocity: f32 @ 4 ["m/s", 1.0],
+    }
+    /// Telemetry: torque command and following error of node n's axis.
+    TelemetryExt = Addr::FromNode(0x790), len 8, from "node", every "configurable" {
+        /// Motor torque command.
+        torque: f32 @ 0 ["N.m", 1.0],
+        /// Position reference − measured position.
+        following_error: f32 @ 4 ["m", 1.0],
+    }
+}
