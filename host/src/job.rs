@@ -71,12 +71,18 @@ impl Job {
             Units::Millimetres => 1e-3,
             Units::Metres => 1.0,
         };
-        self.path.points.iter().map(|p| Vector3::from(*p) * scale).collect()
+        self.path
+            .points
+            .iter()
+            .map(|p| Vector3::from(*p) * scale)
+            .collect()
     }
 
     fn validate(&self) -> Result<(), String> {
         self.robot.validate().map_err(|e| format!("[robot] {e}"))?;
-        self.limits.validate().map_err(|e| format!("[limits] {e}"))?;
+        self.limits
+            .validate()
+            .map_err(|e| format!("[limits] {e}"))?;
         let pts = &self.path.points;
         if pts.len() < 2 {
             return Err(format!("[path] needs at least 2 points, got {}", pts.len()));
@@ -134,13 +140,18 @@ mod tests {
                 .contains("point 2 (900, 0, 600) mm is outside the workspace")
         );
         assert!(
-            err("[limits]\njerk = -1\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [1, 0, 600]]\n")
-                .contains("jerk")
+            err(
+                "[limits]\njerk = -1\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [1, 0, 600]]\n"
+            )
+            .contains("jerk")
         );
         assert!(
             err("[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [0, 0, 600]]\n")
                 .contains("repeats")
         );
-        assert!(err("[path]\nunits = \"m\"\npoints = [[0, 0, nan], [0, 0, 0.6]]\n").contains("not finite"));
+        assert!(
+            err("[path]\nunits = \"m\"\npoints = [[0, 0, nan], [0, 0, 0.6]]\n")
+                .contains("not finite")
+        );
     }
 }

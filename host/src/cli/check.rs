@@ -16,8 +16,9 @@ pub struct CheckArgs {
 
 pub fn run(args: &CheckArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let rows = verify::check(&plan)
-        .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display())))?;
+    let rows = verify::check(&plan).map_err(|e| {
+        CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
+    })?;
     println!("{:<42} {:>14} {:>14}  result", "check", "value", "bound");
     for r in &rows {
         println!(

@@ -3,8 +3,8 @@
 pub mod check;
 pub mod fk;
 pub mod ik;
-pub mod report;
 pub mod plan;
+pub mod report;
 pub mod simulate;
 pub mod torque;
 

@@ -69,7 +69,7 @@ fn write_plots(plan: &triquint_shared::plan::Plan, dir: &std::path::Path) -> Cli
     let bad = |e: crate::report::ReportError| CliError::bad_input(format!("plots: {e}"));
     let stats = crate::report::plan_stats(plan).map_err(bad)?;
     for (name, svg) in crate::report::plots::plots(plan, &stats).map_err(bad)? {
-        write_atomic(&dir.join(format!("{name}.svg")), svg.as_bytes())?;
+        write_atomic(&dir.join(name), svg.as_bytes())?;
     }
     Ok(())
 }

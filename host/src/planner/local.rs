@@ -15,6 +15,9 @@
 //! violation), priced by a large weight, so every LP is feasible and an
 //! infeasible job is recognised by σ > 0 at the optimum.
 
+// Index loops over joints and segments mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{DMatrix, DVector, Vector3};
 use triquint_shared::kinematics::Pose;
 use triquint_shared::{Limits, Model, dynamics};
@@ -85,6 +88,9 @@ impl Solution {
     }
 }
 
+/// (segment, normalised time) of one side of a jerk condition.
+type KnotSide = (usize, f64);
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Cut {
     q: Quantity,
@@ -115,7 +121,8 @@ impl RowBuilder {
     fn combine(parts: &[(f64, &RowBuilder)]) -> RowBuilder {
         let mut out = RowBuilder::default();
         for &(scale, row) in parts {
-            out.terms.extend(row.terms.iter().map(|&(c, v)| (c, scale * v)));
+            out.terms
+                .extend(row.terms.iter().map(|&(c, v)| (c, scale * v)));
             out.constant += scale * row.constant;
         }
         out
@@ -217,8 +224,7 @@ impl Problem {
                 .map(|i| {
                     let u = i as f64 / torque_samples as f64;
                     let f = self.motion_forms(h, x, k, u);
-                    self.torque_at(&f)
-                        .unwrap_or(Vector3::repeat(f64::INFINITY))
+                    self.torque_at(&f).unwrap_or(Vector3::repeat(f64::INFINITY))
                 })
                 .collect();
             let lim = self.limits.torque;
@@ -231,7 +237,12 @@ impl Problem {
                     let right = i == torque_samples || a(i) >= a(i + 1);
                     if left && right && a(i) >= CUT_THRESHOLD * lim {
                         let u = i as f64 / torque_samples as f64;
-                        fig.cuts.push(Cut { q: Quantity::Torque, j: axis, k, u });
+                        fig.cuts.push(Cut {
+                            q: Quantity::Torque,
+                            j: axis,
+                            k,
+                            u,
+                        });
                     }
                 }
                 note(&mut fig, Quantity::Torque, best);
@@ -332,7 +343,9 @@ impl Problem {
                         Quantity::Acceleration => 2,
                         _ => 3,
                     };
-                    let f = self.knots.functional(&x[cut.j], cut.j, cut.k, cut.u, r, h[cut.k]);
+                    let f = self
+                        .knots
+                        .functional(&x[cut.j], cut.j, cut.k, cut.u, r, h[cut.k]);
                     row.add(1.0, &f, &x[cut.j], cut.j * nv, dh_col(cut.k));
                 }
             }
@@ -357,14 +370,17 @@ impl Problem {
             lp.at_most(&all, slack.max(0.0));
             for (k, &hk) in h.iter().enumerate() {
                 lp.at_most(&[(dh0 + k, 1.0)], delta * hk);
-                lp.at_most(&[(dh0 + k, -1.0)], (delta * hk).min(hk - self.h_min).max(0.0));
+                lp.at_most(
+                    &[(dh0 + k, -1.0)],
+                    (delta * hk).min(hk - self.h_min).max(0.0),
+                );
             }
         }
         lp
     }
 
     /// (segment, u) pairs whose jerks must match: C3 at interior knots, zero at the ends.
-    fn jerk_conditions(&self) -> Vec<((usize, f64), Option<(usize, f64)>)> {
+    fn jerk_conditions(&self) -> Vec<(KnotSide, Option<KnotSide>)> {
         let nseg = self.nseg();
         let mut out = vec![((0, 0.0), None), ((nseg - 1, 1.0), None)];
         out.extend((1..nseg).map(|k| ((k - 1, 1.0), Some((k, 0.0)))));
@@ -376,7 +392,9 @@ impl Problem {
     fn torque_gradient(&self, f: &[[Affine; 3]; 3], axis: usize) -> Option<(f64, [[f64; 3]; 3])> {
         let base = [0, 1, 2].map(|r| Vector3::new(f[0][r].value, f[1][r].value, f[2][r].value));
         let tau = |s: &[Vector3<f64>; 3]| {
-            dynamics::torque(&self.model, &s[0], &s[1], &s[2]).ok().map(|t| t[axis])
+            dynamics::torque(&self.model, &s[0], &s[1], &s[2])
+                .ok()
+                .map(|t| t[axis])
         };
         let t0 = tau(&base)?;
         let mut grad = [[0.0; 3]; 3];
@@ -465,7 +483,10 @@ impl Problem {
                 });
             }
             for c in fig.cuts {
-                if !cuts.iter().any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9) {
+                if !cuts
+                    .iter()
+                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
+                {
                     cuts.push(c);
                 }
             }
@@ -521,7 +542,11 @@ impl Problem {
             let rho = actual / gain;
             let at_edge = (0..nseg).any(|k| sol[3 * nv + k].abs() >= 0.99 * delta * cur.h[k]);
             if rho > 0.1 {
-                stalled = if actual < rel_tol * merit { stalled + 1 } else { 0 };
+                stalled = if actual < rel_tol * merit {
+                    stalled + 1
+                } else {
+                    0
+                };
                 cur = cand;
                 if rho > 0.5 && at_edge {
                     delta = (delta * 2.0).min(0.5);
@@ -574,4 +599,3 @@ pub fn knots_from(points: &[Vector3<f64>], model: &Model<f64>) -> Result<Knots, 
     }
     Ok(Knots { q })
 }
-

@@ -32,7 +32,7 @@ const FINAL_TORQUE_SAMPLES: usize = 400;
 /// ends needs n ≥ 4 knots, and one more leaves the jerk a free variable).
 pub fn knot_points(points: &[Vector3<f64>]) -> Vec<Vector3<f64>> {
     let n = points.len();
-    if n >= 5 || n < 2 {
+    if !(2..5).contains(&n) {
         return points.to_vec();
     }
     let pieces = 4usize.div_ceil(n - 1);
@@ -51,7 +51,10 @@ pub fn job_problem(job: &Job) -> CliResult<Problem> {
     let model = job.robot.model::<f64>();
     let pts = knot_points(&job.points_m());
     let knots = knots_from(&pts, &model).map_err(|(i, e)| {
-        CliError::bad_input(format!("knot {} on the straight line between via-points is outside the workspace: {e}", i + 1))
+        CliError::bad_input(format!(
+            "knot {} on the straight line between via-points is outside the workspace: {e}",
+            i + 1
+        ))
     })?;
     Ok(problem(knots, &job.limits, model, job.limits.total_time))
 }
@@ -75,25 +78,46 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
         Objective::MinMaxJerk => {
             let r = global(&p, opts)
                 .ok_or_else(|| CliError::infeasible("the solver found no plan for these knots"))?;
-            let best = r.best;
-            if best.violation > 1e-9 || best.jerk > job.limits.jerk * (1.0 + 1e-9) {
-                let binding = if best.violation > 1e-9 { best.binding } else { Quantity::Jerk };
-                let hint = match min_time(&p, job.limits.total_time * 8.0, opts) {
-                    Ok((s, _)) => format!(
-                        "; the shortest total time that meets every limit is {:.6} s",
-                        s.h.iter().sum::<f64>()
-                    ),
-                    Err(_) => String::new(),
-                };
-                return Err(CliError::infeasible(format!(
-                    "no plan within total_time {} s meets the {} (best max jerk {:.6} m/s³, limit violation {:.3} %){hint}",
-                    job.limits.total_time,
-                    infeasible_limit(binding, job),
-                    best.jerk,
-                    best.violation * 100.0
-                )));
+            let mut best = r.best;
+            let mut lp_solves = r.lp_solves;
+            if !search::feasible(&p, &best) {
+                // Restoration: the shortest feasible plan, stretched to the
+                // time budget, then optimised locally there.
+                let shortest = min_time(&p, job.limits.total_time * 8.0, opts).ok();
+                let restored = shortest.as_ref().and_then(|(s, _)| {
+                    let t: f64 = s.h.iter().sum();
+                    (t <= job.limits.total_time)
+                        .then(|| search::stretch(&p, s, job.limits.total_time))?
+                });
+                match restored {
+                    Some(sol) if search::feasible(&p, &sol) => {
+                        lp_solves += sol.lp_solves;
+                        best = sol;
+                    }
+                    _ => {
+                        let binding = if best.violation > 1e-9 {
+                            best.binding
+                        } else {
+                            Quantity::Jerk
+                        };
+                        let hint = match &shortest {
+                            Some((s, _)) => format!(
+                                "; the shortest total time that meets every limit is {:.6} s",
+                                s.h.iter().sum::<f64>()
+                            ),
+                            None => String::new(),
+                        };
+                        return Err(CliError::infeasible(format!(
+                            "no plan within total_time {} s meets the {} (best max jerk {:.6} m/s³, limit violation {:.3} %){hint}",
+                            job.limits.total_time,
+                            infeasible_limit(binding, job),
+                            best.jerk,
+                            best.violation * 100.0
+                        )));
+                    }
+                }
             }
-            (best, r.starts, r.lp_solves)
+            (best, r.starts, lp_solves)
         }
         Objective::MinTime => {
             let (best, probe) = min_time(&p, job.limits.total_time, opts).map_err(|f| {
@@ -103,7 +127,11 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
                     infeasible_limit(f.binding, job)
                 ))
             })?;
-            let t: f64 = best.h.iter().sum();
+            // Leave room for rounding to whole microseconds (jerk ∝ T⁻³).
+            let t = best.h.iter().sum::<f64>() * (1.0 + 1e-6) + 1e-6 * best.h.len() as f64;
+            let best = search::stretch(&p, &best, t)
+                .filter(|s| search::feasible(&p, s))
+                .unwrap_or(best);
             if t > job.limits.total_time * (1.0 + 1e-9) {
                 return Err(CliError::infeasible(format!(
                     "total_time {} s is too short: the shortest total time that meets every limit is {t:.6} s",
@@ -114,7 +142,15 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
         }
     };
     let total: f64 = sol.h.iter().sum();
-    let h = round_to_microseconds(&sol.h, total);
+    let h = match job.objective {
+        Objective::MinMaxJerk => round_to_microseconds(&sol.h, total),
+        // Never shorter than the shortest feasible time: round every interval up.
+        Objective::MinTime => sol
+            .h
+            .iter()
+            .map(|x| (x * 1e6 - 1e-6).ceil() * 1e-6)
+            .collect(),
+    };
     let mut fine = p.clone();
     fine.torque_samples = FINAL_TORQUE_SAMPLES;
     fine.total_time = h.iter().sum();
@@ -122,10 +158,16 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
         .inner(&h, &sol.x)
         .ok_or_else(|| CliError::infeasible("the solver failed on the rounded intervals"))?;
     lp_solves += exact.lp_solves;
-    if exact.violation > 1e-9 || exact.jerk > job.limits.jerk * (1.0 + 1e-9) {
+    if !search::feasible(&fine, &exact) {
+        let binding = if exact.violation > 1e-9 {
+            exact.binding
+        } else {
+            Quantity::Jerk
+        };
         return Err(CliError::infeasible(format!(
-            "after rounding the intervals to whole microseconds the {} is exceeded by {:.3e}",
-            infeasible_limit(exact.binding, job),
+            "after rounding the intervals to whole microseconds the {} is exceeded (max jerk {:.9} m/s³, violation {:.3e})",
+            infeasible_limit(binding, job),
+            exact.jerk,
             exact.violation
         )));
     }
@@ -175,14 +217,29 @@ mod tests {
     use triquint_shared::{Limits, Robot};
 
     pub const CASE1: [[f64; 3]; 10] = [
-        [-90.0, 90.0, 680.0], [-90.0, 90.0, 660.0], [-90.0, 90.0, 640.0], [-60.0, 60.0, 620.0],
-        [-20.0, 20.0, 620.0], [20.0, -20.0, 620.0], [60.0, -60.0, 620.0], [90.0, -90.0, 640.0],
-        [90.0, -90.0, 660.0], [90.0, -90.0, 680.0],
+        [-90.0, 90.0, 680.0],
+        [-90.0, 90.0, 660.0],
+        [-90.0, 90.0, 640.0],
+        [-60.0, 60.0, 620.0],
+        [-20.0, 20.0, 620.0],
+        [20.0, -20.0, 620.0],
+        [60.0, -60.0, 620.0],
+        [90.0, -90.0, 640.0],
+        [90.0, -90.0, 660.0],
+        [90.0, -90.0, 680.0],
     ];
     pub const CASE2: [[f64; 3]; 11] = [
-        [-86.0, 83.66, 597.66], [-43.0, 97.74, 654.74], [0.0, 84.85, 684.85], [43.0, 54.74, 697.74],
-        [86.0, -2.34, 683.66], [86.0, -83.66, 602.34], [43.0, -97.74, 545.26], [0.0, -84.85, 515.15],
-        [-43.0, -54.74, 502.26], [-86.0, 2.34, 516.34], [-86.0, 83.66, 597.66],
+        [-86.0, 83.66, 597.66],
+        [-43.0, 97.74, 654.74],
+        [0.0, 84.85, 684.85],
+        [43.0, 54.74, 697.74],
+        [86.0, -2.34, 683.66],
+        [86.0, -83.66, 602.34],
+        [43.0, -97.74, 545.26],
+        [0.0, -84.85, 515.15],
+        [-43.0, -54.74, 502.26],
+        [-86.0, 2.34, 516.34],
+        [-86.0, 83.66, 597.66],
     ];
 
     fn prob(points: &[[f64; 3]]) -> Problem {
@@ -194,18 +251,34 @@ mod tests {
     #[test]
     fn paper_intervals_reoptimised() {
         let p = prob(&CASE1);
-        let h = [0.738, 0.238, 0.588, 0.370, 0.388, 0.623, 0.799, 0.267, 0.756];
+        let h = [
+            0.738, 0.238, 0.588, 0.370, 0.388, 0.623, 0.799, 0.267, 0.756,
+        ];
         let s = p.inner(&h, &p.zero_x()).unwrap();
-        eprintln!("case1 paper h: jerk {} viol {} solves {}", s.jerk, s.violation, s.lp_solves);
+        eprintln!(
+            "case1 paper h: jerk {} viol {} solves {}",
+            s.jerk, s.violation, s.lp_solves
+        );
         assert!((s.jerk - 1.054).abs() < 1e-3);
         let p = prob(&CASE2);
-        let h = [1.027, 0.229, 0.225, 0.347, 0.583, 0.455, 0.255, 0.212, 0.307, 1.359];
+        let h = [
+            1.027, 0.229, 0.225, 0.347, 0.583, 0.455, 0.255, 0.212, 0.307, 1.359,
+        ];
         let s = p.inner(&h, &p.zero_x()).unwrap();
-        eprintln!("case2 paper h: jerk {} viol {} solves {}", s.jerk, s.violation, s.lp_solves);
+        eprintln!(
+            "case2 paper h: jerk {} viol {} solves {}",
+            s.jerk, s.violation, s.lp_solves
+        );
         assert!((s.jerk - 2.661).abs() < 1e-3);
         let t = std::time::Instant::now();
         let start = s.clone();
         let best = p.local_search(&start, 300, 1e-9);
-        eprintln!("case2 local from paper: jerk {} solves {} in {:?} h {:?}", best.jerk, best.lp_solves, t.elapsed(), best.h);
+        eprintln!(
+            "case2 local from paper: jerk {} solves {} in {:?} h {:?}",
+            best.jerk,
+            best.lp_solves,
+            t.elapsed(),
+            best.h
+        );
     }
 }

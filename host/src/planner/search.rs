@@ -2,6 +2,9 @@
 //! trust-region SLP (coarse for every start, then to convergence for the
 //! best few), rounding to whole microseconds, and the min-time search.
 
+// Index loops over joints and segments mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -76,7 +79,11 @@ pub fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
         travel.iter().map(|t| t.sqrt()).collect(),
     ];
     while out.len() < n {
-        out.push((0..nseg).map(|_| -(1.0 - rng.next_f64()).ln() + 0.05).collect());
+        out.push(
+            (0..nseg)
+                .map(|_| -(1.0 - rng.next_f64()).ln() + 0.05)
+                .collect(),
+        );
     }
     out.truncate(n.max(1));
     for h in &mut out {
@@ -149,7 +156,10 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
     }
     let merit = |s: &Solution| s.merit(p.weight);
     order.sort_by(|&a, &b| {
-        let (ma, mb) = (coarse[a].as_ref().map_or(f64::INFINITY, merit), coarse[b].as_ref().map_or(f64::INFINITY, merit));
+        let (ma, mb) = (
+            coarse[a].as_ref().map_or(f64::INFINITY, merit),
+            coarse[b].as_ref().map_or(f64::INFINITY, merit),
+        );
         ma.total_cmp(&mb).then(a.cmp(&b))
     });
     let chosen: Vec<usize> = order.iter().copied().take(REFINE).collect();
@@ -162,7 +172,10 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
     .flatten()
     .collect();
     pb.finish_and_clear();
-    let mut merits: Vec<f64> = coarse.iter().map(|s| s.as_ref().map_or(f64::INFINITY, merit)).collect();
+    let mut merits: Vec<f64> = coarse
+        .iter()
+        .map(|s| s.as_ref().map_or(f64::INFINITY, merit))
+        .collect();
     let mut best: Option<Solution> = None;
     for (sol, &i) in refined.iter().zip(&chosen) {
         lp_solves += sol.lp_solves - coarse[i].as_ref().map_or(0, |s| s.lp_solves);
@@ -181,7 +194,10 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
 
 /// Rounds intervals to whole microseconds without exceeding the total time.
 pub fn round_to_microseconds(h: &[f64], total_time: f64) -> Vec<f64> {
-    let mut us: Vec<i64> = h.iter().map(|x| (x * 1e6).round().max(1.0) as i64).collect();
+    let mut us: Vec<i64> = h
+        .iter()
+        .map(|x| (x * 1e6).round().max(1.0) as i64)
+        .collect();
     let budget = (total_time * 1e6 + 1e-3).floor() as i64;
     while us.iter().sum::<i64>() > budget {
         if let Some((i, _)) = us.iter().enumerate().max_by_key(|(_, v)| **v) {
@@ -207,7 +223,11 @@ pub struct MinTimeFailure {
 /// min-max-jerk plan there. Jerk alone gives a lower bound (jerk scales as
 /// T⁻³ for the optimal shape, which does not depend on T when only jerk
 /// binds); velocity, acceleration and torque are handled by bisection.
-pub fn min_time(template: &Problem, upper: f64, opts: &SearchOptions) -> Result<(Solution, SearchResult), MinTimeFailure> {
+pub fn min_time(
+    template: &Problem,
+    upper: f64,
+    opts: &SearchOptions,
+) -> Result<(Solution, SearchResult), MinTimeFailure> {
     let at = |t: f64| {
         let mut p = template.clone();
         p.total_time = t;
@@ -235,19 +255,7 @@ pub fn min_time(template: &Problem, upper: f64, opts: &SearchOptions) -> Result<
     let total: f64 = s.h.iter().sum();
     // Jerk-only lower bound on the time, valid because `s` is the global optimum.
     let t_low = total * (s.jerk / template.limits.jerk).cbrt();
-    let scaled = |t: f64| -> Option<Solution> {
-        let alpha = t / total;
-        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-        let p = at(t);
-        let guess = p.inner(&h, &s.x.clone().map(|v| {
-            let n = v.len() / 2;
-            v.iter()
-                .enumerate()
-                .map(|(i, x)| if i < n { x / alpha } else { x / (alpha * alpha) })
-                .collect()
-        }))?;
-        Some(p.local_search(&guess, 200, 1e-9))
-    };
+    let scaled = |t: f64| stretch(&at(t), s, t);
     // Walk up from the lower bound until feasible, then bisect.
     let mut lo = t_low;
     let mut hi = t_low;
@@ -277,4 +285,28 @@ pub fn min_time(template: &Problem, upper: f64, opts: &SearchOptions) -> Result<
         }
     }
     Ok((best, probe))
+}
+
+/// A solution's shape time-scaled to total time `t` (velocities ÷ α,
+/// accelerations ÷ α²), re-solved and locally optimised there.
+pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+    let alpha = t / s.h.iter().sum::<f64>();
+    let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+    let x = s.x.clone().map(|v| {
+        let n = v.len() / 2;
+        v.iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i < n {
+                    x / alpha
+                } else {
+                    x / (alpha * alpha)
+                }
+            })
+            .collect()
+    });
+    let mut p = p.clone();
+    p.total_time = t;
+    let guess = p.inner(&h, &x)?;
+    Some(p.local_search(&guess, 200, 1e-9))
 }

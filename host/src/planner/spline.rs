@@ -12,6 +12,9 @@
 //! q^(r)(t_k + u h_k) = Σ_m H_m^(r)(u) h_k^(e_m − r) w_m, with
 //! w = (p_k, v_k, a_k, p_k+1, v_k+1, a_k+1) and e = (0, 1, 2, 0, 1, 2).
 
+// Index loops over joints and segments mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
 use triquint_shared::quintic::eval_poly;
 
 /// Power coefficients (in u) of the quintic Hermite basis H_0..H_5.
@@ -80,7 +83,11 @@ impl Knots {
         let mut out = Affine::default();
         for (m, basis) in BASIS.iter().enumerate() {
             let b = eval_poly(basis, u);
-            let br = if r < 4 { b[r] } else { quartic_plus(basis, u, r) };
+            let br = if r < 4 {
+                b[r]
+            } else {
+                quartic_plus(basis, u, r)
+            };
             if br == 0.0 {
                 continue;
             }
@@ -142,7 +149,12 @@ mod tests {
     #[test]
     fn functional_matches_coefficients_and_h_derivative() {
         let knots = Knots {
-            q: vec![[0.1, 0.2, 0.3], [0.15, 0.1, 0.32], [0.2, 0.05, 0.3], [0.18, 0.1, 0.25]],
+            q: vec![
+                [0.1, 0.2, 0.3],
+                [0.15, 0.1, 0.32],
+                [0.2, 0.05, 0.3],
+                [0.18, 0.1, 0.25],
+            ],
         };
         let x = [0.05, -0.02, 0.3, -0.1];
         for k in 0..3 {
@@ -157,7 +169,11 @@ mod tests {
                     let fd = (knots.functional(&x, 1, k, u, r, h + eps).value
                         - knots.functional(&x, 1, k, u, r, h - eps).value)
                         / (2.0 * eps);
-                    assert!((f.dh - fd).abs() < 1e-5 * (1.0 + fd.abs()), "{} vs {fd}", f.dh);
+                    assert!(
+                        (f.dh - fd).abs() < 1e-5 * (1.0 + fd.abs()),
+                        "{} vs {fd}",
+                        f.dh
+                    );
                     // Affine in x: the value is the sum of the linear terms plus the positions.
                     let lin: f64 = f.dx().iter().map(|&(v, a)| a * x[v]).sum();
                     let zero = knots.functional(&[0.0; 4], 1, k, u, r, h).value;

@@ -3,11 +3,14 @@
 //! acceleration and jerk exactly, from the roots of their derivatives;
 //! torque on a fine grid).
 
+// Index loops over joints and segments mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::Vector3;
+use triquint_shared::dynamics;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{MaxAbs, PLAN_FORMAT, Plan};
 use triquint_shared::quintic::eval_poly;
-use triquint_shared::dynamics;
 
 use crate::report::extrema::{derivative, max_abs_on_interval};
 
@@ -60,7 +63,10 @@ pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
 /// check with its figure (exit 1 if any fails).
 pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
     if plan.format != PLAN_FORMAT {
-        return Err(format!("format is `{}`, expected `{PLAN_FORMAT}`", plan.format));
+        return Err(format!(
+            "format is `{}`, expected `{PLAN_FORMAT}`",
+            plan.format
+        ));
     }
     plan.robot.validate().map_err(|e| format!("robot: {e}"))?;
     plan.limits.validate().map_err(|e| format!("limits: {e}"))?;
@@ -94,14 +100,20 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
     let mut t = 0.0;
     let (mut timing, mut micro): (f64, f64) = (0.0, 0.0);
     for (seg, h) in plan.segments.iter().zip(&plan.intervals_s) {
-        timing = timing.max((seg.t0_s - t).abs()).max((seg.duration_s - h).abs());
+        timing = timing
+            .max((seg.t0_s - t).abs())
+            .max((seg.duration_s - h).abs());
         micro = micro.max((h * 1e6 - (h * 1e6).round()).abs() * 1e-6);
         t += h;
     }
     timing = timing.max((plan.total_time_s - t).abs());
     row("segment times consistent (s)", timing, 1e-9);
     row("intervals whole µs (s)", micro, 1e-9);
-    row("total time ≤ limit (s)", t, plan.limits.total_time * (1.0 + LIMIT_TOL));
+    row(
+        "total time ≤ limit (s)",
+        t,
+        plan.limits.total_time * (1.0 + LIMIT_TOL),
+    );
 
     // Interpolation of the knots, and via-points among the knots (in order).
     let model = plan.robot.model::<f64>();
@@ -122,7 +134,11 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
         let q = Pose::from_cartesian(&model, Vector3::from(*p))
             .map_err(|e| format!("via point {}: {e}", i + 1))?
             .q;
-        let dist = |k: usize| (0..3).map(|j| (plan.knots_m[k][j] - q[j]).abs()).fold(0.0, f64::max);
+        let dist = |k: usize| {
+            (0..3)
+                .map(|j| (plan.knots_m[k][j] - q[j]).abs())
+                .fold(0.0, f64::max)
+        };
         match (next..n).find(|&k| dist(k) <= 1e-9) {
             Some(k) => next = k + 1,
             None => via_err = f64::INFINITY,
@@ -158,15 +174,34 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
     let l = &plan.limits;
     for (name, vals, lim, tol) in [
         ("velocity (m/s)", m.velocity, l.velocity, LIMIT_TOL),
-        ("acceleration (m/s²)", m.acceleration, l.acceleration, LIMIT_TOL),
+        (
+            "acceleration (m/s²)",
+            m.acceleration,
+            l.acceleration,
+            LIMIT_TOL,
+        ),
         ("jerk (m/s³)", m.jerk, l.jerk, LIMIT_TOL),
         ("torque (N·m)", m.torque, l.torque, TORQUE_TOL),
     ] {
         for (j, v) in vals.iter().enumerate() {
-            row(&format!("max |{name}| joint {}", j + 1), *v, lim * (1.0 + tol));
+            row(
+                &format!("max |{name}| joint {}", j + 1),
+                *v,
+                lim * (1.0 + tol),
+            );
         }
     }
-    let reported = plan.max_abs.jerk.iter().zip(&m.jerk).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-    row("reported max jerk matches (m/s³)", reported, 1e-9 * m.jerk.iter().fold(1.0, |a: f64, b| a.max(*b)));
+    let reported = plan
+        .max_abs
+        .jerk
+        .iter()
+        .zip(&m.jerk)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    row(
+        "reported max jerk matches (m/s³)",
+        reported,
+        1e-9 * m.jerk.iter().fold(1.0, |a: f64, b| a.max(*b)),
+    );
     Ok(rows)
 }
