@@ -1,0 +1,803 @@
+//! One drive node: protocol endpoint, state machine, segment queue and control tick.
+
+use heapless::Deque;
+use nalgebra::Vector3;
+use triquint_shared::Model;
+use triquint_shared::dynamics;
+use triquint_shared::protocol::segment::MAX_DURATION_US;
+use triquint_shared::protocol::{
+    Command, CommandAck, CommandCode, DriveConfig, Emergency, FaultCode, Frame, Heartbeat,
+    HeartbeatExt, Msg, PARAM_COUNT, PROTOCOL_VERSION, PartEvent, Reassembler, Reject, SegmentAck,
+    State, Telemetry, TelemetryExt, WireSegment, config_value_frame, decode,
+};
+use triquint_shared::quintic::JointMotion;
+
+use crate::hal::{Encoder, MotorOutput, RxFrame};
+use crate::scaling::{Phase, TimeScaling};
+use crate::segment::{Seg, scale};
+use crate::sync::SyncEstimator;
+
+use triquint_shared::protocol::config::config_crc;
+
+/// Segment queue capacity of a node (segments).
+pub const QUEUE_CAPACITY: usize = 8;
+/// Frames waiting for the CAN controller.
+pub const OUTBOX: usize = 64;
+/// Largest allowed jump between a segment's start and the previous end (m).
+pub const CONTINUITY_TOL: f32 = 10e-6;
+
+/// Why the node is slowing down.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    /// Stop command: Idle at rest.
+    Commanded,
+    /// Feed hold: stay Running at rest until Resume.
+    Hold,
+    /// Fault: Fault at rest.
+    Fault(FaultCode),
+}
+
+/// The active configuration and what is derived from it once.
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    cfg: DriveConfig,
+    model: Model<f32>,
+    crc: u32,
+    axis: usize,
+    dt: f32,
+    inv_cpm: f32,
+    vel_alpha: f32,
+    stop_ns: i64,
+    quick_stop_ns: i64,
+    margin_ns: i64,
+    sync_timeout_us: u64,
+    telemetry_us: u64,
+    heartbeat_us: u64,
+}
+
+/// Counters and last values, for telemetry and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stats {
+    pub rejects: u16,
+    pub reason_counts: [u8; 9],
+    pub last_reject: u8,
+    pub torque: f32,
+    pub following_error: f32,
+    pub q: f32,
+    pub v: f32,
+    pub reference: JointMotion<f32>,
+    /// Host time (ns) of the first Running tick.
+    pub started_at_ns: Option<i64>,
+    pub ticks: u64,
+}
+
+/// One drive node with a segment queue of capacity `Q`.
+pub struct Node<const Q: usize = QUEUE_CAPACITY> {
+    node_id: u8,
+    state: State,
+    fault: FaultCode,
+    written: [f32; PARAM_COUNT],
+    written_mask: u64,
+    active: Option<Active>,
+    queue: Deque<Seg, Q>,
+    asm: Reassembler,
+    next_seq: u16,
+    queued_end_ns: i64,
+    prev_end: Option<Vector3<f32>>,
+    sync: SyncEstimator,
+    scaling: TimeScaling,
+    stop_reason: Option<StopReason>,
+    start_ns: Option<i64>,
+    current_seq: u16,
+    plan_ns: i64,
+    hold: Option<Vector3<f32>>,
+    hold_own: f32,
+    integral: f32,
+    last_q: Option<f32>,
+    vel: f32,
+    enabled: bool,
+    next_heartbeat_us: u64,
+    next_telemetry_us: u64,
+    last_local_us: u64,
+    errors: (u8, u8),
+    outbox: Deque<Frame, OUTBOX>,
+    dropped_tx: u32,
+    pub stats: Stats,
+}
+
+fn seq_diff(a: u16, b: u16) -> i16 {
+    a.wrapping_sub(b) as i16
+}
+
+impl<const Q: usize> Node<Q> {
+    /// A node with number `node_id` (1–3), Idle, unconfigured, motor off.
+    pub fn new(node_id: u8) -> Self {
+        Self {
+            node_id,
+            state: State::Idle,
+            fault: FaultCode::None,
+            written: [0.0; PARAM_COUNT],
+            written_mask: 0,
+            active: None,
+            queue: Deque::new(),
+            asm: Reassembler::default(),
+            next_seq: 0,
+            queued_end_ns: 0,
+            prev_end: None,
+            sync: SyncEstimator::default(),
+            scaling: TimeScaling::nominal(0, 0),
+            stop_reason: None,
+            start_ns: None,
+            current_seq: 0,
+            plan_ns: 0,
+            hold: None,
+            hold_own: 0.0,
+            integral: 0.0,
+            last_q: None,
+            vel: 0.0,
+            enabled: false,
+            next_heartbeat_us: 0,
+            next_telemetry_us: 0,
+            last_local_us: 0,
+            errors: (0, 0),
+            outbox: Deque::new(),
+            dropped_tx: 0,
+            stats: Stats::default(),
+        }
+    }
+
+    pub fn state(&self) -> State {
+        self.state
+    }
+    pub fn fault(&self) -> FaultCode {
+        self.fault
+    }
+    pub fn node_id(&self) -> u8 {
+        self.node_id
+    }
+    pub fn queue_depth(&self) -> usize {
+        self.queue.len()
+    }
+    pub fn next_seq(&self) -> u16 {
+        self.next_seq
+    }
+    pub fn config_crc(&self) -> u32 {
+        self.active.map(|a| a.crc).unwrap_or(0)
+    }
+    pub fn config(&self) -> Option<DriveConfig> {
+        self.active.map(|a| a.cfg)
+    }
+    pub fn is_synced(&self) -> bool {
+        match self.active {
+            Some(a) => self.sync.is_synced(self.last_local_us, a.sync_timeout_us),
+            None => self.sync.is_synced(self.last_local_us, 500_000),
+        }
+    }
+    /// Host time (ns) estimated at local time `local_us`.
+    pub fn host_ns(&self, local_us: u64) -> Option<i64> {
+        self.sync.host_ns(local_us)
+    }
+    pub fn scaling_phase(&self) -> Phase {
+        self.scaling.phase
+    }
+    /// Frames the controller refused and the outbox could not keep.
+    pub fn dropped_tx(&self) -> u32 {
+        self.dropped_tx
+    }
+
+    pub fn set_error_counters(&mut self, e: (u8, u8)) {
+        self.errors = e;
+    }
+
+    /// Next frame to transmit.
+    pub fn peek_tx(&self) -> Option<Frame> {
+        self.outbox.front().copied()
+    }
+    pub fn pop_tx(&mut self) -> Option<Frame> {
+        self.outbox.pop_front()
+    }
+
+    fn send(&mut self, f: Frame) {
+        if self.outbox.push_back(f).is_err() {
+            self.dropped_tx = self.dropped_tx.saturating_add(1);
+        }
+    }
+
+    fn send_priority(&mut self, f: Frame) {
+        if self.outbox.push_front(f).is_err() {
+            self.dropped_tx = self.dropped_tx.saturating_add(1);
+        }
+    }
+
+    // ---------------------------------------------------------------- frames
+
+    /// Handles one received frame.
+    pub fn on_frame(&mut self, rx: &RxFrame) {
+        let Ok((msg, node)) = decode(&rx.frame) else {
+            return;
+        };
+        let for_me = node == 0 || node == self.node_id;
+        match msg {
+            Msg::TimeSync(s) => self.sync.on_sync(s.seq, s.prev_tx_us, rx.timestamp_us),
+            Msg::Emergency(e) if node != self.node_id => {
+                let code = if node == 0 {
+                    FaultCode::HostEmergency
+                } else {
+                    FaultCode::PeerEmergency
+                };
+                let _ = e;
+                self.on_emergency(code, rx.timestamp_us);
+            }
+            Msg::Command(c) if for_me => self.on_command(&c, rx.timestamp_us),
+            Msg::ConfigWrite { index, value } if for_me => {
+                if let Some(slot) = self.written.get_mut(index as usize) {
+                    *slot = value;
+                    self.written_mask |= 1u64 << index;
+                }
+            }
+            Msg::SegmentPart => {
+                let ev = self.asm.push(rx.frame.payload(), false);
+                self.on_part(ev);
+            }
+            Msg::SegmentPartFd => {
+                let ev = self.asm.push(rx.frame.payload(), true);
+                self.on_part(ev);
+            }
+            _ => {}
+        }
+    }
+
+    fn count_reject(&mut self, r: Reject) -> u8 {
+        self.stats.rejects = self.stats.rejects.saturating_add(1);
+        self.stats.last_reject = r as u8;
+        let slot = self.stats.reason_counts.get_mut(r as usize);
+        match slot {
+            Some(c) => {
+                *c = c.saturating_add(1);
+                *c
+            }
+            None => 0,
+        }
+    }
+
+    fn ack(&mut self, seq: u16, result: Reject, reason_count: u8) {
+        let a = SegmentAck {
+            seq,
+            result: result as u8,
+            depth: self.queue.len() as u8,
+            next_seq: self.next_seq,
+            capacity: Q as u8,
+            reason_count,
+        };
+        let f = a.to_frame(self.node_id);
+        self.send(f);
+    }
+
+    fn on_part(&mut self, ev: PartEvent) {
+        match ev {
+            PartEvent::Pending => {}
+            PartEvent::Ignored(r) => {
+                self.count_reject(r);
+            }
+            PartEvent::Rejected { seq, reason } => {
+                let n = self.count_reject(reason);
+                self.ack(seq.unwrap_or(0xFFFF), reason, n);
+            }
+            PartEvent::Complete(w) => match self.accept(&w) {
+                Ok(()) => self.ack(w.seq, Reject::Accepted, 0),
+                Err(r) => {
+                    let n = self.count_reject(r);
+                    self.ack(w.seq, r, n);
+                }
+            },
+        }
+    }
+
+    fn accept(&mut self, w: &WireSegment) -> Result<(), Reject> {
+        if !matches!(
+            self.state,
+            State::Idle | State::Loaded | State::Armed | State::Running
+        ) || self.active.is_none()
+        {
+            return Err(Reject::WrongState);
+        }
+        let d = seq_diff(w.seq, self.next_seq);
+        if d < 0 {
+            return Err(Reject::Duplicate);
+        }
+        if d > 0 {
+            return Err(Reject::OutOfOrder);
+        }
+        let first = w.flags & triquint_shared::protocol::segment::FLAG_FIRST != 0;
+        if w.duration_us == 0 || w.duration_us > MAX_DURATION_US || first != (w.seq == 0) {
+            return Err(Reject::Invalid);
+        }
+        if self.queue.is_full() {
+            return Err(Reject::QueueFull);
+        }
+        let start = if first { 0 } else { self.queued_end_ns };
+        let seg = Seg::from_wire(w, start);
+        if let Some(prev) = self.prev_end
+            && !first
+            && (seg.start_q() - prev).amax() > CONTINUITY_TOL
+        {
+            return Err(Reject::Discontinuous);
+        }
+        self.prev_end = Some(seg.end_q());
+        self.queued_end_ns = seg.end_ns();
+        self.next_seq = self.next_seq.wrapping_add(1);
+        if self.queue.push_back(seg).is_err() {
+            return Err(Reject::QueueFull);
+        }
+        if self.state == State::Idle {
+            self.state = State::Loaded;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) {
+        self.queue.clear();
+        self.asm.clear();
+        self.next_seq = 0;
+        self.queued_end_ns = 0;
+        self.prev_end = None;
+        self.start_ns = None;
+        self.stop_reason = None;
+    }
+
+    fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
+        let a = CommandAck {
+            command: c.command,
+            token: c.token,
+            result: result as u8,
+            state: self.state as u8,
+            value,
+        };
+        let f = a.to_frame(self.node_id);
+        self.send(f);
+    }
+
+    /// Enters Fault at once (not moving): Emergency frame, hold where we are.
+    fn fault_now(&mut self, code: FaultCode) {
+        self.state = State::Fault;
+        self.fault = code;
+        self.start_ns = None;
+        self.emergency(code);
+    }
+
+    fn emergency(&mut self, code: FaultCode) {
+        let plan_us = (self.plan_ns.max(0) / 1000) as u32;
+        let e = Emergency {
+            code: code as u8,
+            state: self.state as u8,
+            segment: self.current_seq,
+            plan_time_us: plan_us,
+        };
+        let f = e.to_frame(self.node_id);
+        self.send_priority(f);
+    }
+
+    /// Begins a stop along the path (Running only); otherwise handles the
+    /// reason directly.
+    fn begin_stop(&mut self, reason: StopReason, quick: bool, local_us: u64) {
+        let Some(a) = self.active else {
+            return;
+        };
+        if self.state == State::Running {
+            let ramp = if quick { a.quick_stop_ns } else { a.stop_ns };
+            let t = self.sync.host_ns(local_us).unwrap_or(0);
+            self.scaling.begin_decel(t, ramp);
+            self.stop_reason = Some(reason);
+            if reason != StopReason::Hold {
+                self.state = State::Stopping;
+            }
+            if let StopReason::Fault(code) = reason {
+                self.fault = code;
+                self.emergency(code);
+            }
+        }
+    }
+
+    fn on_emergency(&mut self, code: FaultCode, local_us: u64) {
+        match self.state {
+            State::Running => self.begin_stop(StopReason::Fault(code), false, local_us),
+            State::Stopping => {
+                if !matches!(self.stop_reason, Some(StopReason::Fault(_))) {
+                    self.stop_reason = Some(StopReason::Fault(code));
+                    self.fault = code;
+                }
+            }
+            State::Loaded | State::Armed => self.fault_now(code),
+            State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
+            _ => {}
+        }
+    }
+
+    fn on_command(&mut self, c: &Command, local_us: u64) {
+        let Some(code) = CommandCode::from_u8(c.command) else {
+            self.command_ack(c, FaultCode::BadCommand, 0);
+            return;
+        };
+        let r = match code {
+            CommandCode::Arm => self.arm(local_us),
+            CommandCode::Start => self.start(c.arg, local_us),
+            CommandCode::Stop | CommandCode::QuickStop => {
+                let quick = code == CommandCode::QuickStop;
+                match self.state {
+                    State::Running => {
+                        self.begin_stop(StopReason::Commanded, quick, local_us);
+                        FaultCode::None
+                    }
+                    State::Armed => {
+                        self.state = State::Loaded;
+                        self.start_ns = None;
+                        FaultCode::None
+                    }
+                    _ => FaultCode::None,
+                }
+            }
+            CommandCode::ClearFault => {
+                if self.state == State::Fault {
+                    self.flush();
+                    self.state = State::Idle;
+                    self.fault = FaultCode::None;
+                    self.integral = 0.0;
+                    FaultCode::None
+                } else {
+                    FaultCode::WrongState
+                }
+            }
+            CommandCode::FeedHold => {
+                if self.state == State::Running && self.scaling.phase != Phase::Rest {
+                    self.begin_stop(StopReason::Hold, false, local_us);
+                    FaultCode::None
+                } else {
+                    FaultCode::WrongState
+                }
+            }
+            CommandCode::Resume => match (self.state, self.active) {
+                (State::Running, Some(a)) if self.stop_reason == Some(StopReason::Hold) => {
+                    let t = self.sync.host_ns(local_us).unwrap_or(0);
+                    self.scaling.at(t);
+                    self.scaling.begin_accel(t, a.stop_ns);
+                    self.stop_reason = None;
+                    FaultCode::None
+                }
+                _ => FaultCode::WrongState,
+            },
+            CommandCode::ConfigCommit => {
+                let (r, crc) = self.commit(c.arg);
+                self.command_ack(c, r, crc);
+                return;
+            }
+            CommandCode::Reset => match self.state {
+                State::Idle | State::Loaded | State::Armed => {
+                    self.flush();
+                    self.state = State::Idle;
+                    FaultCode::None
+                }
+                _ => FaultCode::WrongState,
+            },
+            CommandCode::ReadConfig => {
+                for i in 0..PARAM_COUNT {
+                    let v = self.written.get(i).copied().unwrap_or(0.0);
+                    let f = config_value_frame(self.node_id, i as u8, v);
+                    self.send(f);
+                }
+                FaultCode::None
+            }
+        };
+        self.command_ack(c, r, 0);
+    }
+
+    fn commit(&mut self, want: u32) -> (FaultCode, u32) {
+        let crc = config_crc(&self.written);
+        if self.state != State::Idle {
+            return (FaultCode::WrongState, crc);
+        }
+        let all = (1u64 << PARAM_COUNT) - 1;
+        if self.written_mask & all != all || crc != want {
+            return (FaultCode::ConfigMismatch, crc);
+        }
+        let cfg = DriveConfig::from_values(&self.written);
+        if cfg.validate().is_err() {
+            return (FaultCode::ConfigMismatch, crc);
+        }
+        let robot = cfg.robot();
+        let dt = 1.0 / cfg.control_rate;
+        let wc = 2.0 * core::f32::consts::PI * cfg.velocity_filter * dt;
+        let ns = |s: f32| (s as f64 * 1e9) as i64;
+        let us = |s: f32| (s as f64 * 1e6) as u64;
+        self.active = Some(Active {
+            cfg,
+            model: robot.model::<f32>(),
+            crc,
+            axis: (cfg.axis as usize).min(2),
+            dt,
+            inv_cpm: 1.0 / cfg.counts_per_metre,
+            vel_alpha: wc / (1.0 + wc),
+            stop_ns: ns(cfg.stop_time),
+            quick_stop_ns: ns(cfg.quick_stop_time),
+            margin_ns: ns(cfg.underrun_margin),
+            sync_timeout_us: us(cfg.sync_timeout),
+            telemetry_us: if cfg.telemetry_rate > 0.0 {
+                us(1.0 / cfg.telemetry_rate)
+            } else {
+                0
+            },
+            heartbeat_us: us(cfg.heartbeat_period),
+        });
+        (FaultCode::None, crc)
+    }
+
+    fn arm(&mut self, local_us: u64) -> FaultCode {
+        if self.state != State::Loaded {
+            return FaultCode::WrongState;
+        }
+        let Some(a) = self.active else {
+            self.fault_now(FaultCode::NoConfig);
+            return FaultCode::NoConfig;
+        };
+        if !self.sync.is_synced(local_us, a.sync_timeout_us) {
+            self.fault_now(FaultCode::NotSynced);
+            return FaultCode::NotSynced;
+        }
+        let Some(front) = self.queue.front().copied() else {
+            self.fault_now(FaultCode::EmptyQueue);
+            return FaultCode::EmptyQueue;
+        };
+        if !front.first {
+            self.fault_now(FaultCode::EmptyQueue);
+            return FaultCode::EmptyQueue;
+        }
+        let start = front.start_q();
+        let own = start[a.axis];
+        match self.last_q {
+            Some(q) if (q - own).abs() <= a.cfg.arm_tolerance => {}
+            _ => {
+                self.fault_now(FaultCode::ArmTooFar);
+                return FaultCode::ArmTooFar;
+            }
+        }
+        self.hold = Some(start);
+        self.hold_own = own;
+        self.state = State::Armed;
+        FaultCode::None
+    }
+
+    fn start(&mut self, arg: u32, local_us: u64) -> FaultCode {
+        if self.state != State::Armed {
+            return FaultCode::WrongState;
+        }
+        let Some(now) = self.sync.host_us(local_us) else {
+            self.fault_now(FaultCode::NotSynced);
+            return FaultCode::NotSynced;
+        };
+        let d = arg.wrapping_sub(now as u32) as i32 as i64;
+        if d < 0 {
+            self.fault_now(FaultCode::StartInPast);
+            return FaultCode::StartInPast;
+        }
+        self.start_ns = Some((now + d) * 1000);
+        FaultCode::None
+    }
+
+    // ---------------------------------------------------------------- control
+
+    /// One control tick at local time `now_us`: read the encoder, run the
+    /// state machine and the time-scaling, evaluate the reference, compute
+    /// feedforward and PID, command the motor, queue periodic frames.
+    pub fn tick<E: Encoder, M: MotorOutput>(&mut self, now_us: u64, enc: &mut E, motor: &mut M) {
+        self.last_local_us = now_us;
+        self.stats.ticks = self.stats.ticks.wrapping_add(1);
+        let Some(a) = self.active else {
+            motor.enable(false);
+            motor.set_torque(0.0);
+            self.enabled = false;
+            self.last_q = Some(enc.read_counts() as f32 * 1e-9);
+            self.periodic(now_us);
+            return;
+        };
+        if !self.enabled {
+            motor.enable(true);
+            self.enabled = true;
+            self.integral = 0.0;
+            self.last_q = None;
+        }
+        let q = enc.read_counts() as f32 * a.inv_cpm;
+        let raw_v = match self.last_q {
+            Some(l) => (q - l) / a.dt,
+            None => 0.0,
+        };
+        if self.last_q.is_none() {
+            self.hold_own = q;
+        }
+        self.last_q = Some(q);
+        self.vel += a.vel_alpha * (raw_v - self.vel);
+
+        let host = self.sync.host_ns(now_us);
+        let lost = self.sync.lost(now_us, a.sync_timeout_us) || host.is_none();
+        if lost {
+            match self.state {
+                State::Armed => self.fault_now(FaultCode::LostSync),
+                State::Running => {
+                    // Without a time base, keep stepping on the local clock.
+                    self.begin_stop(StopReason::Fault(FaultCode::LostSync), false, now_us)
+                }
+                _ => {}
+            }
+        }
+        let host_ns = host.unwrap_or(0);
+
+        if self.state == State::Armed
+            && let Some(t0) = self.start_ns
+            && host_ns >= t0
+        {
+            self.state = State::Running;
+            self.scaling = TimeScaling::nominal(t0, 0);
+            self.stop_reason = None;
+            self.stats.started_at_ns = Some(host_ns);
+        }
+
+        let reference = if matches!(self.state, State::Running | State::Stopping) {
+            self.path_reference(&a, host_ns)
+        } else {
+            None
+        };
+        let reference = match reference {
+            Some(r) => r,
+            None => self.hold_reference(),
+        };
+
+        // Feedforward and PID on our own axis.
+        let i = a.axis;
+        let mut ff = 0.0;
+        if a.cfg.feedforward != 0.0 && self.hold.is_some() {
+            match dynamics::torque(&a.model, &reference.q, &reference.qd, &reference.qdd) {
+                Ok(t) => ff = t[i],
+                Err(_) => {
+                    if matches!(self.state, State::Running) {
+                        self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, now_us);
+                    }
+                }
+            }
+        }
+        let e = reference.q[i] - q;
+        let ev = reference.qd[i] - self.vel;
+        if self.state == State::Running && e.abs() > a.cfg.following_error_max {
+            self.begin_stop(StopReason::Fault(FaultCode::FollowingError), false, now_us);
+        }
+        let lim = a.cfg.integral_limit;
+        self.integral = (self.integral + a.cfg.ki * e * a.dt).clamp(-lim, lim);
+        let torque = (ff + a.cfg.kp * e + a.cfg.kd * ev + self.integral)
+            .clamp(-a.cfg.max_torque, a.cfg.max_torque);
+        motor.set_torque(torque * a.cfg.direction);
+
+        self.stats.torque = torque;
+        self.stats.following_error = e;
+        self.stats.q = q;
+        self.stats.v = self.vel;
+        self.stats.reference = reference;
+        self.periodic(now_us);
+    }
+
+    fn hold_reference(&self) -> JointMotion<f32> {
+        let mut m = JointMotion::default();
+        if let Some(h) = self.hold {
+            m.q = h;
+        }
+        if let Some(a) = self.active {
+            m.q[a.axis] = self.hold_own;
+        }
+        m
+    }
+
+    /// Reference on the path (Running/Stopping); handles queue advance, the
+    /// end of the plan, the end of a stop and underrun.
+    fn path_reference(&mut self, a: &Active, host_ns: i64) -> Option<JointMotion<f32>> {
+        let sc = self.scaling.at(host_ns);
+        while self.queue.len() > 1 {
+            match self.queue.front() {
+                Some(f) if sc.s_ns >= f.end_ns() => {
+                    self.queue.pop_front();
+                }
+                _ => break,
+            }
+        }
+        let front = self.queue.front().copied()?;
+        self.current_seq = front.seq;
+        self.plan_ns = sc.s_ns;
+        let path = front.eval(sc.s_ns);
+        let m = scale(&path, sc.sigma, sc.sigma_d, sc.sigma_dd);
+        self.hold = Some(m.q);
+        self.hold_own = m.q[a.axis];
+
+        let at_rest = self.scaling.phase == Phase::Rest;
+        let last_queued = self.queue.back().map(|b| b.last).unwrap_or(false);
+        if self.state == State::Stopping && at_rest {
+            match self.stop_reason {
+                Some(StopReason::Fault(code)) => {
+                    self.state = State::Fault;
+                    self.fault = code;
+                    self.queue.clear();
+                }
+                _ => {
+                    self.flush();
+                    self.state = State::Idle;
+                }
+            }
+            return Some(m);
+        }
+        if self.state == State::Running {
+            if front.last && sc.s_ns >= front.end_ns() {
+                // Plan complete: hold the end.
+                self.flush();
+                self.state = State::Idle;
+                return Some(m);
+            }
+            let ahead = self.queued_end_ns - sc.s_ns;
+            let need = TimeScaling::stop_distance_ns(a.stop_ns) + a.margin_ns;
+            if !last_queued
+                && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
+                && ahead < need
+            {
+                self.begin_stop(
+                    StopReason::Fault(FaultCode::Underrun),
+                    false,
+                    self.last_local_us,
+                );
+            }
+        }
+        Some(m)
+    }
+
+    fn periodic(&mut self, now_us: u64) {
+        let (hb_us, tel_us) = match self.active {
+            Some(a) => (a.heartbeat_us.max(1000), a.telemetry_us),
+            None => (100_000, 0),
+        };
+        if now_us >= self.next_heartbeat_us {
+            self.next_heartbeat_us = now_us + hb_us;
+            let hb = Heartbeat {
+                state: self.state as u8,
+                fault: self.fault as u8,
+                queue_depth: self.queue.len() as u8,
+                protocol_version: PROTOCOL_VERSION,
+                config_crc: self.config_crc(),
+            };
+            let f = hb.to_frame(self.node_id);
+            self.send(f);
+            let timeout = self.active.map(|a| a.sync_timeout_us).unwrap_or(500_000);
+            let ext = HeartbeatExt {
+                next_seq: self.next_seq,
+                rejects: self.stats.rejects,
+                tx_errors: self.errors.0,
+                rx_errors: self.errors.1,
+                last_reject: self.stats.last_reject,
+                sync_ok: self.sync.is_synced(now_us, timeout) as u8,
+            };
+            let f = ext.to_frame(self.node_id);
+            self.send(f);
+        }
+        if tel_us > 0 && now_us >= self.next_telemetry_us {
+            self.next_telemetry_us = now_us + tel_us;
+            let t = Telemetry {
+                position: self.stats.q,
+                velocity: self.stats.v,
+            };
+            let f = t.to_frame(self.node_id);
+            self.send(f);
+            let t = TelemetryExt {
+                torque: self.stats.torque,
+                following_error: self.stats.following_error,
+            };
+            let f = t.to_frame(self.node_id);
+            self.send(f);
+        }
+    }
+
+    /// Buffered plan time ahead of the current plan time (ns), for tests and monitors.
+    pub fn buffered_end_ns(&self) -> i64 {
+        self.queued_end_ns
+    }
+}

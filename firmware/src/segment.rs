@@ -1,0 +1,82 @@
+//! Queued segments in drive precision (f32, normalised time) and their evaluation.
+
+use nalgebra::Vector3;
+use triquint_shared::protocol::WireSegment;
+use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
+use triquint_shared::quintic::{JointMotion, eval_poly};
+
+/// One queued segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seg {
+    pub seq: u16,
+    /// Plan time at the segment start (ns).
+    pub start_ns: i64,
+    pub duration_ns: i64,
+    /// 1/h, 1/h², 1/h³ (s⁻ᵏ).
+    pub inv_h: [f32; 3],
+    /// Normalised coefficients b_jk (m).
+    pub b: [[f32; 6]; 3],
+    pub first: bool,
+    pub last: bool,
+}
+
+impl Seg {
+    pub fn from_wire(w: &WireSegment, start_ns: i64) -> Self {
+        let h = w.duration_us as f32 * 1e-6;
+        let ih = if h > 0.0 { 1.0 / h } else { 0.0 };
+        Self {
+            seq: w.seq,
+            start_ns,
+            duration_ns: w.duration_us as i64 * 1000,
+            inv_h: [ih, ih * ih, ih * ih * ih],
+            b: w.normalised_f32(),
+            first: w.flags & FLAG_FIRST != 0,
+            last: w.flags & FLAG_LAST != 0,
+        }
+    }
+
+    pub fn end_ns(&self) -> i64 {
+        self.start_ns + self.duration_ns
+    }
+
+    /// Positions at the start (τ = 0).
+    pub fn start_q(&self) -> Vector3<f32> {
+        Vector3::new(self.b[0][0], self.b[1][0], self.b[2][0])
+    }
+
+    /// Positions at the end (τ = 1).
+    pub fn end_q(&self) -> Vector3<f32> {
+        Vector3::from_fn(|j, _| self.b[j].iter().sum())
+    }
+
+    /// q, q', q'', q''' (derivatives with respect to plan time) at plan time `s_ns`,
+    /// clamped into the segment.
+    pub fn eval(&self, s_ns: i64) -> JointMotion<f32> {
+        let d = (s_ns - self.start_ns).clamp(0, self.duration_ns);
+        let tau = if self.duration_ns > 0 {
+            d as f32 / self.duration_ns as f32
+        } else {
+            0.0
+        };
+        let mut m = JointMotion::default();
+        for j in 0..3 {
+            let [p, v, a, jk] = eval_poly(&self.b[j], tau);
+            m.q[j] = p;
+            m.qd[j] = v * self.inv_h[0];
+            m.qdd[j] = a * self.inv_h[1];
+            m.qddd[j] = jk * self.inv_h[2];
+        }
+        m
+    }
+}
+
+/// Applies a time-scaling σ to path derivatives: q̇ = q'σ, q̈ = q''σ² + q'σ̇,
+/// jerk = q'''σ³ + 3q''σσ̇ + q'σ̈.
+pub fn scale(m: &JointMotion<f32>, sigma: f32, sigma_d: f32, sigma_dd: f32) -> JointMotion<f32> {
+    JointMotion {
+        q: m.q,
+        qd: m.qd * sigma,
+        qdd: m.qdd * (sigma * sigma) + m.qd * sigma_d,
+        qddd: m.qddd * (sigma * sigma * sigma) + m.qdd * (3.0 * sigma * sigma_d) + m.qd * sigma_dd,
+    }
+}

@@ -1,0 +1,321 @@
+//! The virtual machine: three firmware nodes with their own drifting clocks,
+//! the bus, and the plant, advanced together in true time.
+
+use nalgebra::Vector3;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
+use triquint_shared::Robot;
+use triquint_shared::kinematics::KinematicsError;
+use triquint_shared::protocol::{FaultCode, Frame, State};
+
+use crate::bus::{Bus, BusConfig, Delivery};
+use crate::plant::{Plant, PlantConfig};
+
+/// Everything configurable about the virtual hardware.
+#[derive(Clone, Debug)]
+pub struct SimConfig {
+    pub fd: bool,
+    /// Control tick rate of the nodes (Hz); must match the drives' configuration.
+    pub rate_hz: f64,
+    pub plant: PlantConfig,
+    pub bus: BusConfig,
+    /// Seed of the clock offsets and drifts.
+    pub clock_seed: u64,
+    /// Clock drift bound (ppm): each node draws a drift in ±this.
+    pub max_drift_ppm: f64,
+    /// Encoder counts per metre (the drives are configured with the same value).
+    pub counts_per_metre: f64,
+    /// Communication service interval of the nodes (µs of local time).
+    pub comm_interval_us: u64,
+    /// Record a sample every this many control ticks of node 1 (0 = every tick).
+    pub record_every: u32,
+    /// Frames a node's controller holds for transmission (mailboxes).
+    pub tx_mailboxes: usize,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            fd: false,
+            rate_hz: 1000.0,
+            plant: PlantConfig::default(),
+            bus: BusConfig::default(),
+            clock_seed: 7,
+            max_drift_ppm: 200.0,
+            counts_per_metre: 131_072.0 / 0.010,
+            comm_interval_us: 50,
+            record_every: 1,
+            tx_mailboxes: 3,
+        }
+    }
+}
+
+/// A node's local clock: local = offset + (1 + drift)·true.
+#[derive(Clone, Copy, Debug)]
+pub struct LocalClock {
+    pub offset_ns: i64,
+    pub drift: f64,
+}
+
+impl LocalClock {
+    pub fn local_ns(&self, t_ns: u64) -> i64 {
+        self.offset_ns + (t_ns as f64 * (1.0 + self.drift)).round() as i64
+    }
+    pub fn local_us(&self, t_ns: u64) -> u64 {
+        (self.local_ns(t_ns).max(0) / 1000) as u64
+    }
+    /// True time (ns) at which the local clock reads `local_us`.
+    pub fn true_ns(&self, local_us: u64) -> u64 {
+        let l = local_us as f64 * 1000.0 - self.offset_ns as f64;
+        (l / (1.0 + self.drift)).ceil().max(0.0) as u64
+    }
+}
+
+/// One recorded instant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub t_ns: u64,
+    pub q: [f64; 3],
+    pub torque: [f32; 3],
+    pub reference: [f32; 3],
+    pub state: [State; 3],
+}
+
+/// A fault as seen on the node (first tick in the faulted state or stop).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaultEvent {
+    pub node: u8,
+    pub code: FaultCode,
+    pub t_ns: u64,
+}
+
+/// One simulated drive.
+pub struct SimNode {
+    pub node: Node,
+    pub clock: LocalClock,
+    next_tick_us: u64,
+    next_comm_us: u64,
+    pending_torque: f64,
+    enabled: bool,
+    last_fault: FaultCode,
+    /// True time of the first Running tick.
+    pub started_ns: Option<u64>,
+    pub faults: Vec<FaultEvent>,
+    pub peak_torque: f32,
+}
+
+struct SimEncoder(i64);
+impl Encoder for SimEncoder {
+    fn read_counts(&mut self) -> i64 {
+        self.0
+    }
+}
+
+#[derive(Default)]
+struct SimMotor {
+    torque: f32,
+    enabled: bool,
+}
+impl MotorOutput for SimMotor {
+    fn set_torque(&mut self, t: f32) {
+        self.torque = t;
+    }
+    fn enable(&mut self, on: bool) {
+        self.enabled = on;
+    }
+}
+
+/// An error of the virtual machine itself.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("the plant left the workspace at t = {t_s:.4} s: {source}")]
+    Plant {
+        t_s: f64,
+        #[source]
+        source: KinematicsError,
+    },
+}
+
+/// The virtual machine.
+pub struct Sim {
+    pub cfg: SimConfig,
+    pub bus: Bus,
+    pub plant: Plant,
+    pub nodes: Vec<SimNode>,
+    t_ns: u64,
+    tick_us: u64,
+    tick_count: u64,
+    pub samples: Vec<Sample>,
+}
+
+impl Sim {
+    /// A machine at joint position `q0`, nodes unconfigured, brakes on.
+    pub fn new(robot: &Robot, q0: Vector3<f64>, cfg: SimConfig) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.clock_seed);
+        let tick_us = (1e6 / cfg.rate_hz).round().max(1.0) as u64;
+        let nodes = (1..=3u8)
+            .map(|id| SimNode {
+                node: Node::new(id),
+                clock: LocalClock {
+                    offset_ns: rng.random_range(0..10_000_000_000i64),
+                    drift: rng.random_range(-1.0..1.0) * cfg.max_drift_ppm * 1e-6,
+                },
+                next_tick_us: 0,
+                next_comm_us: 0,
+                pending_torque: 0.0,
+                enabled: false,
+                last_fault: FaultCode::None,
+                started_ns: None,
+                faults: Vec::new(),
+                peak_torque: 0.0,
+            })
+            .collect::<Vec<_>>();
+        let mut sim = Self {
+            bus: Bus::new(cfg.bus.clone(), 4),
+            plant: Plant::new(robot, cfg.plant.clone(), q0),
+            nodes,
+            t_ns: 0,
+            tick_us,
+            tick_count: 0,
+            samples: Vec::new(),
+            cfg,
+        };
+        for n in &mut sim.nodes {
+            let l = n.clock.local_us(0);
+            n.next_tick_us = (l / tick_us + 1) * tick_us;
+            n.next_comm_us = l + 1;
+        }
+        sim
+    }
+
+    /// True time (ns); the host's clock.
+    pub fn now_ns(&self) -> u64 {
+        self.t_ns
+    }
+
+    /// The host queues a frame now.
+    pub fn host_send(&mut self, frame: Frame) {
+        self.bus.advance(self.t_ns);
+        self.bus.send(0, frame, self.t_ns);
+    }
+
+    /// Frames the host has queued that are not on the bus yet.
+    pub fn host_pending(&self) -> usize {
+        self.bus.pending(0)
+    }
+
+    /// Next frame delivered to the host (including its own, as transmit confirmations).
+    pub fn host_receive(&mut self) -> Option<Delivery> {
+        self.bus.receive(0)
+    }
+
+    fn service(&mut self, i: usize) {
+        let station = i + 1;
+        let n = &mut self.nodes[i];
+        while let Some(d) = self.bus.receive(station) {
+            let rx = RxFrame {
+                frame: d.frame,
+                timestamp_us: n.clock.local_us(d.t_ns),
+            };
+            n.node.on_frame(&rx);
+        }
+        while self.bus.pending(station) < self.cfg.tx_mailboxes {
+            let Some(f) = n.node.pop_tx() else { break };
+            self.bus.send(station, f, self.t_ns);
+        }
+    }
+
+    fn control_tick(&mut self, i: usize, local_us: u64) {
+        let cpm = self.cfg.counts_per_metre;
+        let counts = (self.plant.q[i] * cpm).floor() as i64;
+        let mut motor = SimMotor::default();
+        let n = &mut self.nodes[i];
+        n.node.tick(local_us, &mut SimEncoder(counts), &mut motor);
+        // One-tick actuation delay: last tick's command acts from now on.
+        self.plant.tau[i] = if n.enabled { n.pending_torque } else { 0.0 };
+        n.pending_torque = motor.torque as f64;
+        n.enabled = motor.enabled;
+        n.peak_torque = n.peak_torque.max(motor.torque.abs());
+        if n.started_ns.is_none() && n.node.state() == State::Running {
+            n.started_ns = Some(self.t_ns);
+        }
+        let f = n.node.fault();
+        if f != n.last_fault {
+            if f != FaultCode::None {
+                n.faults.push(FaultEvent {
+                    node: i as u8 + 1,
+                    code: f,
+                    t_ns: self.t_ns,
+                });
+            }
+            n.last_fault = f;
+        }
+        self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
+        if i == 0 {
+            self.tick_count += 1;
+            let every = self.cfg.record_every.max(1) as u64;
+            if self.tick_count % every == 0 {
+                let q = self.plant.q;
+                self.samples.push(Sample {
+                    t_ns: self.t_ns,
+                    q: [q[0], q[1], q[2]],
+                    torque: [0, 1, 2].map(|k| self.nodes[k].node.stats.torque),
+                    reference: [0, 1, 2].map(|k| {
+                        let a = k; // each node's reference of its own axis
+                        self.nodes[k].node.stats.reference.q[a]
+                    }),
+                    state: [0, 1, 2].map(|k| self.nodes[k].node.state()),
+                });
+            }
+        }
+    }
+
+    /// Runs the machine up to true time `until_ns`.
+    pub fn run_until(&mut self, until_ns: u64) -> Result<(), SimError> {
+        loop {
+            // Next event: a node's control tick or communication service.
+            let mut next: Option<(u64, usize, bool)> = None;
+            for (i, n) in self.nodes.iter().enumerate() {
+                let t_tick = n.clock.true_ns(n.next_tick_us);
+                let t_comm = n.clock.true_ns(n.next_comm_us);
+                for (t, is_tick) in [(t_tick, true), (t_comm, false)] {
+                    if next.is_none_or(|x| t < x.0) {
+                        next = Some((t, i, is_tick));
+                    }
+                }
+            }
+            let Some((t, i, is_tick)) = next else {
+                return Ok(());
+            };
+            let t_stop = t.min(until_ns).max(self.t_ns);
+            let dt = (t_stop - self.t_ns) as f64 * 1e-9;
+            self.plant.advance(dt).map_err(|source| SimError::Plant {
+                t_s: self.t_ns as f64 * 1e-9,
+                source,
+            })?;
+            self.t_ns = t_stop;
+            self.bus.advance(self.t_ns);
+            if t > until_ns {
+                return Ok(());
+            }
+            if is_tick {
+                let local = self.nodes[i].next_tick_us;
+                self.service(i);
+                self.control_tick(i, local);
+                self.service(i);
+                self.nodes[i].next_tick_us += self.tick_us;
+            } else {
+                self.service(i);
+                self.nodes[i].next_comm_us += self.cfg.comm_interval_us;
+            }
+        }
+    }
+
+    /// Every fault event of every node, in time order.
+    pub fn faults(&self) -> Vec<FaultEvent> {
+        let mut v: Vec<FaultEvent> = self.nodes.iter().flat_map(|n| n.faults.clone()).collect();
+        v.sort_by_key(|f| f.t_ns);
+        v
+    }
+}

@@ -1,0 +1,293 @@
+//! Plans for tests and demos that do not need the planner: a C2 piecewise
+//! quintic (Hermite in position, velocity and acceleration at every knot)
+//! through the IK images of Cartesian via-points, with finite-difference knot
+//! velocities and accelerations and rest at both ends. Not optimal; smooth,
+//! realistic and cheap.
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::{KinematicsError, Pose};
+use triquint_shared::plan::{MaxAbs, Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
+use triquint_shared::{Limits, Robot, dynamics};
+
+/// Coefficients of the quintic with q, q', q'' = (q0, v0, a0) at 0 and (q1, v1, a1) at h.
+pub fn hermite5(q0: f64, v0: f64, a0: f64, q1: f64, v1: f64, a1: f64, h: f64) -> [f64; 6] {
+    let d = q1 - q0;
+    let (h2, h3) = (h * h, h * h * h);
+    [
+        q0,
+        v0,
+        a0 / 2.0,
+        (20.0 * d - (8.0 * v1 + 12.0 * v0) * h - (3.0 * a0 - a1) * h2) / (2.0 * h3),
+        (-30.0 * d + (14.0 * v1 + 16.0 * v0) * h + (3.0 * a0 - 2.0 * a1) * h2) / (2.0 * h3 * h),
+        (12.0 * d - 6.0 * (v1 + v0) * h + (a1 - a0) * h2) / (2.0 * h3 * h2),
+    ]
+}
+
+/// Jerk and snap at both ends of a Hermite quintic: (j(0), s(0), j(h), s(h)).
+fn ends(c: &[f64; 6], h: f64) -> [f64; 4] {
+    [
+        6.0 * c[3],
+        24.0 * c[4],
+        6.0 * c[3] + 24.0 * c[4] * h + 60.0 * c[5] * h * h,
+        24.0 * c[4] + 120.0 * c[5] * h,
+    ]
+}
+
+/// End jerk/snap of a segment are linear in its inputs (q0, v0, a0, q1, v1, a1):
+/// the response to each unit input.
+fn basis(hs: f64) -> [[f64; 4]; 6] {
+    let mut out = [[0.0; 4]; 6];
+    for (k, row) in out.iter_mut().enumerate() {
+        let mut x = [0.0; 6];
+        x[k] = 1.0;
+        *row = ends(&hermite5(x[0], x[1], x[2], x[3], x[4], x[5], hs), hs);
+    }
+    out
+}
+
+/// Knot velocities and accelerations of the C4 quintic spline through `q`
+/// (jerk and snap continuous at interior knots; rest at both ends): the
+/// interpolant with the least integral of squared jerk. One dense solve per joint.
+fn quintic_spline_derivatives(q: &[f64], h: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = q.len();
+    let mut v = vec![0.0; n];
+    let mut a = vec![0.0; n];
+    if n < 3 {
+        return (v, a);
+    }
+    let m = 2 * (n - 2);
+    let mut mat = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+    let idx = |i: usize, k: usize| 2 * (i - 1) + k;
+    for i in 1..n - 1 {
+        // Segment i−1 ends at knot i (its inputs 3..6), segment i starts there (0..3).
+        let (left, right) = (basis(h[i - 1]), basis(h[i]));
+        for (eq, le, re) in [(0, 2, 0), (1, 3, 1)] {
+            let row = idx(i, eq);
+            let terms = [
+                (i - 1, 0usize, &left, le, 1.0),
+                (i, 3, &left, le, 1.0),
+                (i, 0, &right, re, -1.0),
+                (i + 1, 3, &right, re, -1.0),
+            ];
+            for (knot, base, b, quantity, sign) in terms {
+                rhs[row] -= sign * b[base][quantity] * q[knot];
+                if knot > 0 && knot < n - 1 {
+                    mat[(row, idx(knot, 0))] += sign * b[base + 1][quantity];
+                    mat[(row, idx(knot, 1))] += sign * b[base + 2][quantity];
+                }
+            }
+        }
+    }
+    if let Some(sol) = mat.lu().solve(&rhs) {
+        for i in 1..n - 1 {
+            v[i] = sol[idx(i, 0)];
+            a[i] = sol[idx(i, 1)];
+        }
+    }
+    (v, a)
+}
+
+/// A plan through `points` (m) with the given intervals (s, rounded to whole µs).
+pub fn plan_through(
+    robot: &Robot,
+    limits: &Limits,
+    points: &[[f64; 3]],
+    intervals: &[f64],
+) -> Result<Plan, KinematicsError> {
+    let m = robot.model::<f64>();
+    let knots: Vec<Vector3<f64>> = points
+        .iter()
+        .map(|p| Pose::from_cartesian(&m, Vector3::from(*p)).map(|x| x.q))
+        .collect::<Result<_, _>>()?;
+    let h: Vec<f64> = intervals
+        .iter()
+        .map(|x| (x * 1e6).round().max(1.0) * 1e-6)
+        .collect();
+    let n = knots.len();
+    let mut v = vec![Vector3::zeros(); n];
+    let mut a = vec![Vector3::zeros(); n];
+    for j in 0..3 {
+        let q: Vec<f64> = knots.iter().map(|k| k[j]).collect();
+        let (vj, aj) = quintic_spline_derivatives(&q, &h);
+        for i in 0..n {
+            v[i][j] = vj[i];
+            a[i][j] = aj[i];
+        }
+    }
+    let mut segments = Vec::new();
+    let mut t0 = 0.0;
+    for i in 0..n.saturating_sub(1) {
+        let coeffs = [0, 1, 2].map(|j| {
+            hermite5(
+                knots[i][j],
+                v[i][j],
+                a[i][j],
+                knots[i + 1][j],
+                v[i + 1][j],
+                a[i + 1][j],
+                h[i],
+            )
+        });
+        segments.push(Segment {
+            t0_s: t0,
+            duration_s: h[i],
+            coeffs,
+        });
+        t0 += h[i];
+    }
+    let mut plan = Plan {
+        format: PLAN_FORMAT.to_string(),
+        objective: Objective::MinMaxJerk,
+        robot: robot.clone(),
+        limits: limits.clone(),
+        via_points_m: points.to_vec(),
+        knots_m: knots.iter().map(|k| [k[0], k[1], k[2]]).collect(),
+        intervals_s: h.clone(),
+        total_time_s: t0,
+        segments,
+        max_abs: MaxAbs::default(),
+        solver: SolverStats::default(),
+    };
+    plan.max_abs = sampled_max_abs(&plan)?;
+    Ok(plan)
+}
+
+/// Maxima of |v|, |a|, |jerk|, |τ| per joint, sampled (400 points per segment).
+pub fn sampled_max_abs(plan: &Plan) -> Result<MaxAbs, KinematicsError> {
+    let m = plan.robot.model::<f64>();
+    let mut out = MaxAbs::default();
+    for s in &plan.segments {
+        let q = s.quintic();
+        for k in 0..=400 {
+            let jm = q.eval(s.duration_s * k as f64 / 400.0);
+            let tau = dynamics::torque(&m, &jm.q, &jm.qd, &jm.qdd)?;
+            for j in 0..3 {
+                out.velocity[j] = out.velocity[j].max(jm.qd[j].abs());
+                out.acceleration[j] = out.acceleration[j].max(jm.qdd[j].abs());
+                out.jerk[j] = out.jerk[j].max(jm.qddd[j].abs());
+                out.torque[j] = out.torque[j].max(tau[j].abs());
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn mm(p: [f64; 3]) -> [f64; 3] {
+    p.map(|x| x * 1e-3)
+}
+
+/// Paper Case I (inverted U) with the paper's intervals.
+pub fn paper_case1() -> Result<Plan, KinematicsError> {
+    let pts = [
+        [-90.0, 90.0, 680.0],
+        [-90.0, 90.0, 660.0],
+        [-90.0, 90.0, 640.0],
+        [-60.0, 60.0, 620.0],
+        [-20.0, 20.0, 620.0],
+        [20.0, -20.0, 620.0],
+        [60.0, -60.0, 620.0],
+        [90.0, -90.0, 640.0],
+        [90.0, -90.0, 660.0],
+        [90.0, -90.0, 680.0],
+    ]
+    .map(mm);
+    let h = [
+        0.738, 0.238, 0.588, 0.370, 0.388, 0.623, 0.799, 0.267, 0.756,
+    ];
+    plan_through(&Robot::default(), &Limits::default(), &pts, &h)
+}
+
+/// Paper Case II (closed circle, r = 120 mm) with the paper's intervals.
+pub fn paper_case2() -> Result<Plan, KinematicsError> {
+    let pts = [
+        [-86.0, 83.66, 597.66],
+        [-43.0, 97.74, 654.74],
+        [0.0, 84.85, 684.85],
+        [43.0, 54.74, 697.74],
+        [86.0, -2.34, 683.66],
+        [86.0, -83.66, 602.34],
+        [43.0, -97.74, 545.26],
+        [0.0, -84.85, 515.15],
+        [-43.0, -54.74, 502.26],
+        [-86.0, 2.34, 516.34],
+        [-86.0, 83.66, 597.66],
+    ]
+    .map(mm);
+    let h = [
+        1.027, 0.229, 0.225, 0.347, 0.583, 0.455, 0.255, 0.212, 0.307, 1.359,
+    ];
+    plan_through(&Robot::default(), &Limits::default(), &pts, &h)
+}
+
+/// Via-points (mm) of the stress spiral: `n` points on a helix of radius
+/// 80 mm about the z axis, `turns` turns rising from 560 to 680 mm.
+pub fn spiral_points_mm(n: usize, turns: f64) -> Vec<[f64; 3]> {
+    (0..n)
+        .map(|i| {
+            let u = i as f64 / (n - 1).max(1) as f64;
+            let th = 2.0 * std::f64::consts::PI * turns * u;
+            let r = 80.0;
+            let round = |x: f64| (x * 100.0).round() / 100.0;
+            [
+                round(r * th.cos()),
+                round(r * th.sin()),
+                round(560.0 + 120.0 * u),
+            ]
+        })
+        .collect()
+}
+
+/// The stress plan: a long spiral with equal intervals.
+pub fn spiral(n: usize, turns: f64, total_time: f64) -> Result<Plan, KinematicsError> {
+    let pts: Vec<[f64; 3]> = spiral_points_mm(n, turns).into_iter().map(mm).collect();
+    // Slow in and out: longer first and last intervals so the rest-to-rest ends stay gentle.
+    let mut h = vec![1.0; n - 1];
+    h[0] = 3.0;
+    h[n - 2] = 3.0;
+    let sum: f64 = h.iter().sum();
+    let h: Vec<f64> = h.iter().map(|x| x * total_time / sum).collect();
+    let limits = Limits {
+        total_time,
+        ..Limits::default()
+    };
+    plan_through(&Robot::default(), &limits, &pts, &h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hermite_meets_its_end_conditions() {
+        let c = hermite5(0.1, 0.2, -0.3, 0.25, -0.1, 0.4, 0.7);
+        let k = [c[0], c[1], c[2], c[3], c[4], c[5]];
+        let [p, v, a, _] = triquint_shared::quintic::eval_poly(&k, 0.7);
+        assert!((p - 0.25).abs() < 1e-12 && (v + 0.1).abs() < 1e-12 && (a - 0.4).abs() < 1e-11);
+    }
+
+    #[test]
+    fn paper_plans_are_c2_and_within_limits() {
+        for plan in [paper_case1().unwrap(), paper_case2().unwrap()] {
+            for w in plan.segments.windows(2) {
+                let e = w[0].quintic().end();
+                let s = w[1].quintic().eval(0.0);
+                assert!((e.q - s.q).norm() < 1e-12);
+                assert!((e.qd - s.qd).norm() < 1e-10);
+                assert!((e.qdd - s.qdd).norm() < 1e-9);
+                assert!((e.qddd - s.qddd).norm() < 1e-7, "jerk continuous");
+            }
+            for j in 0..3 {
+                eprintln!("{:?}", plan.max_abs);
+                eprintln!("{:?}", plan.max_abs);
+                assert!(plan.max_abs.velocity[j] < plan.limits.velocity);
+                assert!(
+                    plan.max_abs.acceleration[j] < plan.limits.acceleration,
+                    "{:?}",
+                    plan.max_abs
+                );
+            }
+            assert!((plan.total_time_s - plan.intervals_s.iter().sum::<f64>()).abs() < 1e-9);
+        }
+    }
+}
