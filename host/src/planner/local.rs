@@ -509,7 +509,9 @@ impl Problem {
         let mut stalled = 0;
         for _ in 0..max_iter {
             let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
-            let lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
+            let mut lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
+            // A step only needs to be good, not exact: the merit is exact.
+            lp.tolerance = 1e-8;
             solves += 1;
             let Ok(sol) = lp.solve() else {
                 delta *= 0.25;

@@ -15,6 +15,8 @@ pub struct Lp {
     ineq: Rows,
     /// Three rows per second-order cone: (t, a, b) with ‖(a, b)‖ ≤ t.
     soc: Rows,
+    /// Relative accuracy asked of the solver.
+    pub tolerance: f64,
 }
 
 /// Primal and dual solution; `z` is ordered as the rows: equalities,
@@ -56,6 +58,7 @@ impl Lp {
         Self {
             vars,
             cost: vec![0.0; vars],
+            tolerance: 1e-11,
             ..Self::default()
         }
     }
@@ -129,9 +132,9 @@ impl Lp {
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .presolve_enable(false)
-            .tol_gap_abs(1e-11)
-            .tol_gap_rel(1e-11)
-            .tol_feas(1e-11)
+            .tol_gap_abs(self.tolerance)
+            .tol_gap_rel(self.tolerance)
+            .tol_feas(self.tolerance)
             .max_iter(200)
             .build()
             .map_err(|_| LpFailure(SolverStatus::NumericalError))?;

@@ -143,7 +143,12 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
     };
     let total: f64 = sol.h.iter().sum();
     let h = match job.objective {
-        Objective::MinMaxJerk => round_to_microseconds(&sol.h, total),
+        // Use the whole time budget (more time never raises the jerk), in whole µs.
+        Objective::MinMaxJerk => {
+            let stretch = job.limits.total_time / total;
+            let h: Vec<f64> = sol.h.iter().map(|x| x * stretch).collect();
+            round_to_microseconds(&h, job.limits.total_time)
+        }
         // Never shorter than the shortest feasible time: round every interval up.
         Objective::MinTime => sol
             .h

@@ -28,7 +28,7 @@ pub struct SearchOptions {
 impl Default for SearchOptions {
     fn default() -> Self {
         Self {
-            starts: 12,
+            starts: 8,
             seed: 1,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
             progress: false,
