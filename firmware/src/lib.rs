@@ -16,3 +16,5 @@ pub mod sync;
 
 pub use hal::{CanPort, Clock, Encoder, MotorOutput, RxFrame};
 pub use node::{Node, QUEUE_CAPACITY};
+#[cfg(test)]
+mod tests;

@@ -93,6 +93,10 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     hold: Option<Vector3<f32>>,
     hold_own: f32,
     integral: f32,
+    last_e: Option<f32>,
+    ev: f32,
+    last_ff: f32,
+    ff_active: bool,
     last_q: Option<f32>,
     vel: f32,
     enabled: bool,
@@ -133,6 +137,10 @@ impl<const Q: usize> Node<Q> {
             hold: None,
             hold_own: 0.0,
             integral: 0.0,
+            last_e: None,
+            ev: 0.0,
+            last_ff: 0.0,
+            ff_active: false,
             last_q: None,
             vel: 0.0,
             enabled: false,
@@ -401,11 +409,9 @@ impl<const Q: usize> Node<Q> {
     fn on_emergency(&mut self, code: FaultCode, local_us: u64) {
         match self.state {
             State::Running => self.begin_stop(StopReason::Fault(code), false, local_us),
-            State::Stopping => {
-                if !matches!(self.stop_reason, Some(StopReason::Fault(_))) {
-                    self.stop_reason = Some(StopReason::Fault(code));
-                    self.fault = code;
-                }
+            State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
+                self.stop_reason = Some(StopReason::Fault(code));
+                self.fault = code;
             }
             State::Loaded | State::Armed => self.fault_now(code),
             State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
@@ -648,13 +654,29 @@ impl<const Q: usize> Node<Q> {
             Some(r) => r,
             None => self.hold_reference(),
         };
+        // The torque computed now acts from the next tick on (and is held for
+        // one tick): evaluate the feedforward 1.5 ticks ahead on the path.
+        let ff_ref = if matches!(self.state, State::Running | State::Stopping) {
+            self.lookahead(host_ns + (1.5e9 * a.dt) as i64)
+                .unwrap_or(reference)
+        } else {
+            reference
+        };
 
         // Feedforward and PID on our own axis.
         let i = a.axis;
         let mut ff = 0.0;
         if a.cfg.feedforward != 0.0 && self.hold.is_some() {
-            match dynamics::torque(&a.model, &reference.q, &reference.qd, &reference.qdd) {
-                Ok(t) => ff = t[i],
+            match dynamics::torque(&a.model, &ff_ref.q, &ff_ref.qd, &ff_ref.qdd) {
+                Ok(t) => {
+                    // Identified friction of our slider, smoothed through zero speed.
+                    let v = ff_ref.qd[i];
+                    let x = (v * 1000.0).clamp(-20.0, 20.0);
+                    let e2 = libm::expf(2.0 * x);
+                    let sign = (e2 - 1.0) / (e2 + 1.0);
+                    let friction = a.cfg.friction_coulomb * sign + a.cfg.friction_viscous * v;
+                    ff = t[i] + friction * a.model.inv_ratio;
+                }
                 Err(_) => {
                     if matches!(self.state, State::Running) {
                         self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, now_us);
@@ -662,12 +684,28 @@ impl<const Q: usize> Node<Q> {
                 }
             }
         }
+        // Bumpless transfer: when the feedforward appears or vanishes (hold
+        // pose known, arm), move the step into the integral instead of the motor.
+        let lim = a.cfg.integral_limit;
+        if self.ff_active != (ff != 0.0) {
+            self.integral = (self.integral + self.last_ff - ff).clamp(-lim, lim);
+            self.ff_active = ff != 0.0;
+        }
+        self.last_ff = ff;
         let e = reference.q[i] - q;
-        let ev = reference.qd[i] - self.vel;
+        // Derivative of the error, through the same backward difference and
+        // filter as the measured velocity, so the filter's lag does not turn
+        // into a torque error when tracking is perfect.
+        let raw_ev = match self.last_e {
+            Some(l) => (e - l) / a.dt,
+            None => 0.0,
+        };
+        self.last_e = Some(e);
+        self.ev += a.vel_alpha * (raw_ev - self.ev);
+        let ev = self.ev;
         if self.state == State::Running && e.abs() > a.cfg.following_error_max {
             self.begin_stop(StopReason::Fault(FaultCode::FollowingError), false, now_us);
         }
-        let lim = a.cfg.integral_limit;
         self.integral = (self.integral + a.cfg.ki * e * a.dt).clamp(-lim, lim);
         let torque = (ff + a.cfg.kp * e + a.cfg.kd * ev + self.integral)
             .clamp(-a.cfg.max_torque, a.cfg.max_torque);
@@ -690,6 +728,18 @@ impl<const Q: usize> Node<Q> {
             m.q[a.axis] = self.hold_own;
         }
         m
+    }
+
+    /// The path motion at host time `host_ns` without changing any state.
+    fn lookahead(&self, host_ns: i64) -> Option<JointMotion<f32>> {
+        let mut sc = self.scaling;
+        let sc = sc.at(host_ns);
+        let seg = self
+            .queue
+            .iter()
+            .find(|g| sc.s_ns < g.end_ns())
+            .or_else(|| self.queue.back())?;
+        Some(scale(&seg.eval(sc.s_ns), sc.sigma, sc.sigma_d, sc.sigma_dd))
     }
 
     /// Reference on the path (Running/Stopping); handles queue advance, the

@@ -48,10 +48,15 @@ fn smooth(u: f32) -> (f32, f32, f32) {
     (s, d1, d2)
 }
 
-/// ∫₀ᵘ S = 2.5u⁴ − 3u⁵ + u⁶.
-fn smooth_integral(u: f32) -> f32 {
+/// ∫₀ᵘ S = 2.5u⁴ − 3u⁵ + u⁶, in f64: plan time needs ns resolution over
+/// seconds (only during a ramp, a few hundred operations per second).
+fn smooth_integral(u: f64) -> f64 {
     let u2 = u * u;
     u2 * u2 * (2.5 + u * (-3.0 + u))
+}
+
+fn ratio(dt: i64, ramp: i64) -> f64 {
+    dt.max(0) as f64 / ramp as f64
 }
 
 impl TimeScaling {
@@ -78,10 +83,9 @@ impl TimeScaling {
                 sigma_dd: 0.0,
             },
             Phase::Decel if dt < ramp => {
-                let u = (dt.max(0) as f32) / ramp as f32;
-                let (_, d1, d2) = smooth(u);
-                let (s, _, _) = smooth(u);
-                let ds = (t_s * (u - smooth_integral(u)) * 1e9) as i64;
+                let uf = ratio(dt, ramp);
+                let (s, d1, d2) = smooth(uf as f32);
+                let ds = (ramp as f64 * (uf - smooth_integral(uf))) as i64;
                 Scaled {
                     s_ns: self.s0_ns + ds,
                     sigma: 1.0 - s,
@@ -103,9 +107,9 @@ impl TimeScaling {
                 sigma_dd: 0.0,
             },
             Phase::Accel if dt < ramp => {
-                let u = (dt.max(0) as f32) / ramp as f32;
-                let (s, d1, d2) = smooth(u);
-                let ds = (t_s * smooth_integral(u) * 1e9) as i64;
+                let uf = ratio(dt, ramp);
+                let (s, d1, d2) = smooth(uf as f32);
+                let ds = (ramp as f64 * smooth_integral(uf)) as i64;
                 Scaled {
                     s_ns: self.s0_ns + ds,
                     sigma: s,

@@ -132,10 +132,12 @@ impl Bus {
                 }
             }
             // Arbitration when idle: among frames queued by the time the bus is free.
+            // Each station's controller offers the frame at the head of its
+            // FIFO (as SocketCAN and FIFO-mode controllers do).
             let earliest = self
                 .pending
                 .iter()
-                .filter_map(|q| q.iter().map(|x| x.1).min())
+                .filter_map(|q| q.front().map(|x| x.1))
                 .min();
             let Some(earliest) = earliest else {
                 return;
@@ -146,10 +148,11 @@ impl Bus {
             }
             let mut best: Option<(u16, usize, usize)> = None;
             for (s, q) in self.pending.iter().enumerate() {
-                for (i, (f, t)) in q.iter().enumerate() {
-                    if *t <= start && best.is_none_or(|b| f.id < b.0) {
-                        best = Some((f.id, s, i));
-                    }
+                if let Some((f, t)) = q.front()
+                    && *t <= start
+                    && best.is_none_or(|b| f.id < b.0)
+                {
+                    best = Some((f.id, s, 0));
                 }
             }
             let Some((_, s, i)) = best else {

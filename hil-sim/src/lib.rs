@@ -2,6 +2,7 @@
 //! core, an in-process CAN bus that carries the exact protocol frames with
 //! arbitration and a bit-time model, and a plant built from an independent
 //! (Lagrangian) formulation with deliberately different parameters.
+#![allow(clippy::needless_range_loop)]
 
 pub mod bus;
 pub mod metrics;

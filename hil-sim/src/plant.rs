@@ -155,3 +155,4 @@ mod tests {
         assert!(p.qd.iter().all(|v| *v < 0.0));
     }
 }
+

@@ -98,6 +98,7 @@ pub struct SimNode {
     next_comm_us: u64,
     pending_torque: f64,
     enabled: bool,
+    motor: SimMotor,
     last_fault: FaultCode,
     /// True time of the first Running tick.
     pub started_ns: Option<u64>,
@@ -144,6 +145,7 @@ pub struct Sim {
     pub plant: Plant,
     pub nodes: Vec<SimNode>,
     t_ns: u64,
+    plant_t_ns: u64,
     tick_us: u64,
     tick_count: u64,
     pub samples: Vec<Sample>,
@@ -165,6 +167,7 @@ impl Sim {
                 next_comm_us: 0,
                 pending_torque: 0.0,
                 enabled: false,
+                motor: SimMotor::default(),
                 last_fault: FaultCode::None,
                 started_ns: None,
                 faults: Vec::new(),
@@ -176,6 +179,7 @@ impl Sim {
             plant: Plant::new(robot, cfg.plant.clone(), q0),
             nodes,
             t_ns: 0,
+            plant_t_ns: 0,
             tick_us,
             tick_count: 0,
             samples: Vec::new(),
@@ -229,14 +233,15 @@ impl Sim {
     fn control_tick(&mut self, i: usize, local_us: u64) {
         let cpm = self.cfg.counts_per_metre;
         let counts = (self.plant.q[i] * cpm).floor() as i64;
-        let mut motor = SimMotor::default();
         let n = &mut self.nodes[i];
+        let mut motor = std::mem::take(&mut n.motor);
         n.node.tick(local_us, &mut SimEncoder(counts), &mut motor);
         // One-tick actuation delay: last tick's command acts from now on.
         self.plant.tau[i] = if n.enabled { n.pending_torque } else { 0.0 };
         n.pending_torque = motor.torque as f64;
         n.enabled = motor.enabled;
         n.peak_torque = n.peak_torque.max(motor.torque.abs());
+        n.motor = motor;
         if n.started_ns.is_none() && n.node.state() == State::Running {
             n.started_ns = Some(self.t_ns);
         }
@@ -289,17 +294,19 @@ impl Sim {
                 return Ok(());
             };
             let t_stop = t.min(until_ns).max(self.t_ns);
-            let dt = (t_stop - self.t_ns) as f64 * 1e-9;
-            self.plant.advance(dt).map_err(|source| SimError::Plant {
-                t_s: self.t_ns as f64 * 1e-9,
-                source,
-            })?;
             self.t_ns = t_stop;
             self.bus.advance(self.t_ns);
             if t > until_ns {
                 return Ok(());
             }
             if is_tick {
+                // The plant only matters at control ticks: integrate lazily.
+                let dt = self.t_ns.saturating_sub(self.plant_t_ns) as f64 * 1e-9;
+                self.plant.advance(dt).map_err(|source| SimError::Plant {
+                    t_s: self.t_ns as f64 * 1e-9,
+                    source,
+                })?;
+                self.plant_t_ns = self.t_ns;
                 let local = self.nodes[i].next_tick_us;
                 self.service(i);
                 self.control_tick(i, local);
@@ -319,3 +326,4 @@ impl Sim {
         v
     }
 }
+

@@ -238,6 +238,11 @@ pub fn spiral_points_mm(n: usize, turns: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The stress spiral of `examples/spiral.toml`: points, turns, total time (s).
+pub const SPIRAL_POINTS: usize = 121;
+pub const SPIRAL_TURNS: f64 = 3.0;
+pub const SPIRAL_TIME: f64 = 30.0;
+
 /// The stress plan: a long spiral with equal intervals.
 pub fn spiral(n: usize, turns: f64, total_time: f64) -> Result<Plan, KinematicsError> {
     let pts: Vec<[f64; 3]> = spiral_points_mm(n, turns).into_iter().map(mm).collect();
@@ -257,6 +262,32 @@ pub fn spiral(n: usize, turns: f64, total_time: f64) -> Result<Plan, KinematicsE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Plans for `triquint simulate` without the planner, committed under
+    /// testdata/protocol/plans/ (TRIQUINT_BLESS=1 rewrites them).
+    #[test]
+    fn committed_test_plans_are_current() {
+        let dir =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata/protocol/plans");
+        for (name, plan) in [
+            ("case1-spline.json", paper_case1().unwrap()),
+            ("case2-spline.json", paper_case2().unwrap()),
+            (
+                "spiral-spline.json",
+                spiral(SPIRAL_POINTS, SPIRAL_TURNS, SPIRAL_TIME).unwrap(),
+            ),
+        ] {
+            let text = serde_json::to_string_pretty(&plan).unwrap() + "\n";
+            let path = dir.join(name);
+            if std::env::var_os("TRIQUINT_BLESS").is_some() {
+                std::fs::create_dir_all(&dir).unwrap();
+                std::fs::write(&path, &text).unwrap();
+            } else {
+                let committed = std::fs::read_to_string(&path).unwrap();
+                assert!(committed == text, "{name} is stale (TRIQUINT_BLESS=1)");
+            }
+        }
+    }
 
     #[test]
     fn hermite_meets_its_end_conditions() {

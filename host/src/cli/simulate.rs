@@ -1,17 +1,253 @@
 //! `triquint simulate PLAN.json`: runs a plan on the in-process virtual hardware.
 
-use clap::Args;
+use std::path::{Path, PathBuf};
 
-use crate::exit::{CliError, CliResult};
+use clap::Args;
+use serde::Serialize;
+use triquint_shared::plan::{PLAN_FORMAT, Plan};
+use triquint_sim::metrics::plan_position;
+use triquint_sim::plot::{Series, line_chart};
+
+use crate::exit::{CliError, CliResult, write_atomic};
+use crate::upload::sim_port::{SimReport, SimulateError, SimulateOptions, simulate};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
     /// Plan file written by `triquint plan`.
-    pub plan: std::path::PathBuf,
+    pub plan: PathBuf,
+    /// CAN-FD (64-byte segment frames, 1/5 Mbit/s) instead of classic CAN at 1 Mbit/s.
+    #[arg(long)]
+    pub fd: bool,
+    /// Drives run feedback only (same gains).
+    #[arg(long)]
+    pub no_feedforward: bool,
+    /// Control tick rate of the drives (Hz), 1000 to 10000.
+    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
+    pub rate: f64,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write tracking-error and torque plots (SVG) into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 }
 
-pub fn run(_args: &SimulateArgs) -> CliResult {
-    Err(CliError::device(
-        "the in-process simulation is not built yet",
-    ))
+#[derive(Serialize)]
+struct JsonFault {
+    node: u8,
+    code: u8,
+    name: &'static str,
+    t_s: f64,
+}
+
+#[derive(Serialize)]
+struct JsonReport {
+    rms_error_m: [f64; 3],
+    max_error_m: [f64; 3],
+    peak_torque_nm: [f64; 3],
+    bus_load: f64,
+    frames: u64,
+    faults: Vec<JsonFault>,
+    completed: bool,
+}
+
+/// Reads and checks a plan file (exit 2 when it is not one).
+pub fn read_plan(path: &Path) -> CliResult<Plan> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    let plan: Plan = serde_json::from_str(&text)
+        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    if plan.format != PLAN_FORMAT {
+        return Err(CliError::bad_input(format!(
+            "{}: format `{}`, expected `{PLAN_FORMAT}`",
+            path.display(),
+            plan.format
+        )));
+    }
+    if plan.segments.is_empty() {
+        return Err(CliError::bad_input(format!(
+            "{}: no segments",
+            path.display()
+        )));
+    }
+    plan.robot.validate().map_err(CliError::bad_input)?;
+    plan.limits.validate().map_err(CliError::bad_input)?;
+    Ok(plan)
+}
+
+fn to_cli(e: SimulateError) -> CliError {
+    match e {
+        SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
+        SimulateError::Upload(u) if u.is_motion_fault() => CliError::motion_fault(u),
+        SimulateError::Plan(m) => CliError::bad_input(m),
+        other => CliError::device(other),
+    }
+}
+
+pub fn run(args: &SimulateArgs) -> CliResult {
+    if !(1000.0..=10000.0).contains(&args.rate) {
+        return Err(CliError::bad_input(format!(
+            "--rate {}: must be 1000 to 10000 Hz",
+            args.rate
+        )));
+    }
+    let plan = read_plan(&args.plan)?;
+    let opts = SimulateOptions {
+        fd: args.fd,
+        feedforward: !args.no_feedforward,
+        rate_hz: args.rate,
+        ..SimulateOptions::default()
+    };
+    let report = simulate(&plan, &opts).map_err(to_cli)?;
+    if let Some(dir) = &args.plot {
+        write_plots(dir, &plan, &report)?;
+    }
+    let start_s = report.start_us as f64 * 1e-6;
+    let faults: Vec<JsonFault> = report
+        .faults_on_nodes
+        .iter()
+        .map(|f| JsonFault {
+            node: f.node,
+            code: f.code as u8,
+            name: f.code.name(),
+            t_s: f.t_ns as f64 * 1e-9 - start_s,
+        })
+        .collect();
+    if args.json {
+        let j = JsonReport {
+            rms_error_m: report.tracking.rms_error_m,
+            max_error_m: report.tracking.max_error_m,
+            peak_torque_nm: report.peak_torque_nm,
+            bus_load: report.bus_load,
+            frames: report.frames,
+            faults,
+            completed: report.completed,
+        };
+        println!(
+            "{}",
+            serde_json::to_string(&j).map_err(|e| CliError::device(e.to_string()))?
+        );
+    } else {
+        print_human(&plan, &opts, &report, &faults);
+    }
+    if report.completed && report.faults_on_nodes.is_empty() {
+        Ok(())
+    } else {
+        let first = report.faults_on_nodes.first();
+        Err(CliError::motion_fault(match first {
+            Some(f) => format!(
+                "node {} faulted: {} ({}) at {:.3} s",
+                f.node,
+                f.code.name(),
+                f.code as u8,
+                f.t_ns as f64 * 1e-9 - start_s
+            ),
+            None => "the plan did not complete".to_string(),
+        }))
+    }
+}
+
+fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[JsonFault]) {
+    println!(
+        "{} segments, {:.3} s, {} CAN, {} Hz control, feedforward {}",
+        plan.segments.len(),
+        plan.total_time_s,
+        if opts.fd {
+            "CAN-FD 1/5 Mbit/s"
+        } else {
+            "classic 1 Mbit/s"
+        },
+        opts.rate_hz,
+        if opts.feedforward { "on" } else { "off" }
+    );
+    println!("axis   RMS error (µm)   max error (µm)   peak torque (N·m)");
+    for j in 0..3 {
+        println!(
+            "q{}     {:>14.3}   {:>14.3}   {:>17.4}",
+            j + 1,
+            r.tracking.rms_error_m[j] * 1e6,
+            r.tracking.max_error_m[j] * 1e6,
+            r.peak_torque_nm[j]
+        );
+    }
+    println!(
+        "bus load {:.2} % over {:.3} s; {} frames ({} segment frames, {} per segment, {} retransmissions)",
+        r.bus_load * 100.0,
+        r.sim_time_s,
+        r.frames,
+        r.segment_frames,
+        r.frames_per_segment,
+        r.retransmits
+    );
+    println!(
+        "start skew {:.1} µs (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
+        r.start_skew_ns as f64 * 1e-3,
+        r.tick_ns as f64 * 1e-3,
+        r.stop_time_s,
+        r.f32_eval_error_m
+    );
+    if faults.is_empty() {
+        println!("completed: {}, no faults", r.completed);
+    } else {
+        for f in faults {
+            println!(
+                "fault: node {} {} ({}) at {:.3} s",
+                f.node, f.name, f.code, f.t_s
+            );
+        }
+    }
+}
+
+fn write_plots(dir: &Path, plan: &Plan, r: &SimReport) -> CliResult {
+    let start = r.start_us * 1000;
+    let colours = ["#d62728", "#1f77b4", "#2ca02c"];
+    let labels = ["q1", "q2", "q3"];
+    let t = |ns: u64| (ns as f64 - start as f64) * 1e-9;
+    let err: Vec<Series> = (0..3)
+        .map(|j| Series {
+            label: labels[j],
+            colour: colours[j],
+            points: r
+                .samples
+                .iter()
+                .filter(|s| s.t_ns >= start)
+                .map(|s| {
+                    let ts = t(s.t_ns);
+                    (ts, (s.q[j] - plan_position(plan, ts)[j]) * 1e6)
+                })
+                .collect(),
+        })
+        .collect();
+    let torque: Vec<Series> = (0..3)
+        .map(|j| Series {
+            label: labels[j],
+            colour: colours[j],
+            points: r
+                .samples
+                .iter()
+                .map(|s| (t(s.t_ns), s.torque[j] as f64))
+                .collect(),
+        })
+        .collect();
+    write_atomic(
+        &dir.join("tracking_error.svg"),
+        line_chart(
+            "Tracking error (plant − plan)",
+            "time since start (s)",
+            "error (µm)",
+            &err,
+        )
+        .as_bytes(),
+    )?;
+    write_atomic(
+        &dir.join("torque.svg"),
+        line_chart(
+            "Motor torque command",
+            "time since start (s)",
+            "torque (N·m)",
+            &torque,
+        )
+        .as_bytes(),
+    )?;
+    Ok(())
 }

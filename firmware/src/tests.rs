@@ -1,0 +1,527 @@
+//! State-machine, queue and stop tests of the node core, driven by frames and
+//! ticks with a perfect (or deliberately wrong) encoder.
+
+extern crate std;
+use std::vec::Vec;
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::Pose;
+use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
+use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
+use triquint_shared::protocol::{
+    Command, CommandCode, Emergency, FaultCode, Frame, Msg, Reject, State, TimeSync, WireSegment,
+    config_write_frame, decode,
+};
+use triquint_shared::quintic::Quintic;
+use triquint_shared::{Limits, Robot};
+
+use crate::hal::{Encoder, MotorOutput, RxFrame};
+use crate::node::Node;
+use crate::scaling::Phase;
+
+const CAP: usize = 4;
+const TICK: u64 = 1000;
+
+struct Enc(i64);
+impl Encoder for Enc {
+    fn read_counts(&mut self) -> i64 {
+        self.0
+    }
+}
+struct Motor(f32, bool);
+impl MotorOutput for Motor {
+    fn set_torque(&mut self, t: f32) {
+        self.0 = t;
+    }
+    fn enable(&mut self, on: bool) {
+        self.1 = on;
+    }
+}
+
+/// One node (axis 1 = node 2) with host time = local time.
+struct Rig {
+    node: Node<CAP>,
+    cfg: DriveConfig,
+    t: u64,
+    /// Encoder offset from the reference (m).
+    offset: f32,
+    /// Where the axis stands before it is armed (m).
+    parked: f32,
+    sync_seq: u8,
+    next_sync: u64,
+    syncing: bool,
+    sent: Vec<Frame>,
+    max_stop_jerk: f32,
+}
+
+fn q_at(z: f64, x: f64) -> Vector3<f64> {
+    let m = Robot::default().model::<f64>();
+    Pose::from_cartesian(&m, Vector3::new(x, -x, z)).unwrap().q
+}
+
+/// Rest-to-rest segments between poses, `h` seconds each.
+fn segments(n: usize, h: f64) -> Vec<WireSegment> {
+    (0..n)
+        .map(|i| {
+            let a = q_at(0.62 + 0.01 * i as f64, 0.01 * i as f64);
+            let b = q_at(0.62 + 0.01 * (i + 1) as f64, 0.01 * (i + 1) as f64);
+            let mut coeffs = [[0.0; 6]; 3];
+            for j in 0..3 {
+                let d = b[j] - a[j];
+                coeffs[j] = [
+                    a[j],
+                    0.0,
+                    0.0,
+                    10.0 * d / h.powi(3),
+                    -15.0 * d / h.powi(4),
+                    6.0 * d / h.powi(5),
+                ];
+            }
+            let mut flags = 0;
+            if i == 0 {
+                flags |= FLAG_FIRST;
+            }
+            if i + 1 == n {
+                flags |= FLAG_LAST;
+            }
+            WireSegment::from_quintic(
+                i as u16,
+                &Quintic {
+                    coeffs,
+                    duration: h,
+                },
+                flags,
+            )
+            .unwrap()
+        })
+        .collect()
+}
+
+impl Rig {
+    fn new() -> Self {
+        Self::with_stop_time(0.4)
+    }
+
+    fn with_stop_time(stop: f64) -> Self {
+        let cfg = DriveConfig::new(
+            &Robot::default(),
+            &Limits::default(),
+            1,
+            &DriveSettings::default(),
+            stop,
+            0.2,
+        );
+        let mut r = Self {
+            node: Node::new(2),
+            cfg,
+            t: 1_000_000,
+            offset: 0.0,
+            parked: 0.0,
+            sync_seq: 0,
+            next_sync: 0,
+            syncing: true,
+            sent: Vec::new(),
+            max_stop_jerk: 0.0,
+        };
+        r.tick();
+        r
+    }
+
+    fn rx(&mut self, f: Frame) {
+        self.node.on_frame(&RxFrame {
+            frame: f,
+            timestamp_us: self.t,
+        });
+        while let Some(f) = self.node.pop_tx() {
+            self.sent.push(f);
+        }
+    }
+
+    fn configure(&mut self) {
+        for (k, v) in self.cfg.to_values().iter().enumerate() {
+            self.rx(config_write_frame(2, k as u8, *v));
+        }
+        let crc = self.cfg.crc();
+        self.command(CommandCode::ConfigCommit, crc);
+        assert_eq!(self.node.config_crc(), crc);
+    }
+
+    fn command(&mut self, c: CommandCode, arg: u32) -> u8 {
+        let n = self.sent.len();
+        self.rx(Command {
+            command: c as u8,
+            token: 1,
+            arg,
+        }
+        .to_frame(0));
+        self.sent[n..]
+            .iter()
+            .filter_map(|f| match decode(f) {
+                Ok((Msg::CommandAck(a), _)) => Some(a.result),
+                _ => None,
+            })
+            .next_back()
+            .unwrap_or(255)
+    }
+
+    fn tick(&mut self) {
+        if self.syncing && self.t >= self.next_sync {
+            self.sync_seq = self.sync_seq.wrapping_add(1);
+            let prev = self.next_sync.saturating_sub(20_000) as u32;
+            self.rx(TimeSync {
+                seq: self.sync_seq,
+                prev_tx_us: prev,
+            }
+            .to_frame(0));
+            self.next_sync = self.t + 20_000;
+        }
+        let reference = self.node.stats.reference.q[1];
+        let q = match self.node.state() {
+            State::Idle | State::Loaded => self.parked + self.offset,
+            _ => reference + self.offset,
+        };
+        let counts = (q as f64 * self.cfg.counts_per_metre as f64).round() as i64;
+        let mut m = Motor(0.0, false);
+        self.node.tick(self.t, &mut Enc(counts), &mut m);
+        if self.node.state() == State::Stopping {
+            let j = self.node.stats.reference.qddd.amax();
+            self.max_stop_jerk = self.max_stop_jerk.max(j);
+        }
+        while let Some(f) = self.node.pop_tx() {
+            self.sent.push(f);
+        }
+        self.t += TICK;
+    }
+
+    fn run(&mut self, ms: u64) {
+        for _ in 0..ms {
+            self.tick();
+        }
+    }
+
+    fn send_segment(&mut self, s: &WireSegment) -> Option<(Reject, u8)> {
+        let n = self.sent.len();
+        for f in s.frames(false) {
+            self.rx(f);
+        }
+        self.acks_since(n).last().copied()
+    }
+
+    fn acks_since(&self, n: usize) -> Vec<(Reject, u8)> {
+        self.sent[n..]
+            .iter()
+            .filter_map(|f| match decode(f) {
+                Ok((Msg::SegmentAck(a), _)) => Reject::from_u8(a.result).map(|r| (r, a.depth)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn emergencies(&self) -> Vec<u8> {
+        self.sent
+            .iter()
+            .filter_map(|f| match decode(f) {
+                Ok((Msg::Emergency(e), 2)) => Some(e.code),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Configured, synced (with a settled hold position at the plan start), loaded.
+    fn loaded(segs: &[WireSegment]) -> Self {
+        Self::loaded_with(Self::new(), segs)
+    }
+
+    fn loaded_with(mut r: Self, segs: &[WireSegment]) -> Self {
+        r.parked = segs[0].normalised_f32()[1][0];
+        r.configure();
+        r.run(100);
+        for s in segs.iter().take(CAP) {
+            assert_eq!(r.send_segment(s).map(|a| a.0), Some(Reject::Accepted));
+        }
+        r
+    }
+
+    fn start(&mut self) {
+        assert_eq!(self.command(CommandCode::Arm, 0), 0, "arm");
+        assert_eq!(self.node.state(), State::Armed);
+        let at = (self.t + 10_000) as u32;
+        assert_eq!(self.command(CommandCode::Start, at), 0, "start");
+    }
+}
+
+#[test]
+fn happy_path_through_every_state_to_completion() {
+    let segs = segments(6, 0.3);
+    let mut r = Rig::new();
+    r.parked = segs[0].normalised_f32()[1][0];
+    assert_eq!(r.node.state(), State::Idle);
+    r.configure();
+    r.run(100);
+    assert!(r.node.is_synced());
+    assert_eq!(r.send_segment(&segs[0]), Some((Reject::Accepted, 1)));
+    assert_eq!(r.node.state(), State::Loaded);
+    for s in &segs[1..4] {
+        assert_eq!(r.send_segment(s).map(|a| a.0), Some(Reject::Accepted));
+    }
+    // Queue full: the fifth is refused, not lost.
+    assert_eq!(
+        r.send_segment(&segs[4]).map(|a| a.0),
+        Some(Reject::QueueFull)
+    );
+    r.start();
+    r.run(9);
+    assert_eq!(r.node.state(), State::Armed);
+    r.run(2);
+    assert_eq!(r.node.state(), State::Running);
+    // Stream the rest as the queue drains (flow control by queue depth).
+    let mut next = 4;
+    for _ in 0..3000 {
+        if next < segs.len() && r.node.queue_depth() < CAP {
+            assert_eq!(
+                r.send_segment(&segs[next]).map(|a| a.0),
+                Some(Reject::Accepted)
+            );
+            next += 1;
+        }
+        r.tick();
+        if r.node.state() == State::Idle {
+            break;
+        }
+    }
+    assert_eq!(next, segs.len());
+    assert_eq!(r.node.state(), State::Idle, "completed");
+    assert_eq!(r.node.fault(), FaultCode::None);
+    assert!(r.emergencies().is_empty());
+    // Holds the plan's end.
+    let end = segs[5].normalised_f64()[1].iter().sum::<f64>();
+    assert!((r.node.stats.reference.q[1] as f64 - end).abs() < 1e-6);
+}
+
+#[test]
+fn segments_are_rejected_with_reasons() {
+    let segs = segments(4, 0.3);
+    let mut r = Rig::new();
+    // No configuration yet: wrong state.
+    assert_eq!(
+        r.send_segment(&segs[0]).map(|a| a.0),
+        Some(Reject::WrongState)
+    );
+    r.configure();
+    r.run(50);
+    assert_eq!(
+        r.send_segment(&segs[0]).map(|a| a.0),
+        Some(Reject::Accepted)
+    );
+    assert_eq!(
+        r.send_segment(&segs[0]).map(|a| a.0),
+        Some(Reject::Duplicate)
+    );
+    assert_eq!(
+        r.send_segment(&segs[2]).map(|a| a.0),
+        Some(Reject::OutOfOrder)
+    );
+    // A corrupted part: the CRC over the whole segment catches it.
+    let n = r.sent.len();
+    for (k, mut f) in segs[1].frames(false).enumerate() {
+        if k == 9 {
+            f.data[5] ^= 0x01;
+        }
+        r.rx(f);
+    }
+    assert_eq!(r.acks_since(n).last().map(|a| a.0), Some(Reject::BadCrc));
+    // A jump in position.
+    let mut bad = segs[2];
+    bad.seq = 1;
+    bad.flags = 0;
+    assert_eq!(
+        r.send_segment(&bad).map(|a| a.0),
+        Some(Reject::Discontinuous)
+    );
+    // The right one still goes in.
+    assert_eq!(
+        r.send_segment(&segs[1]).map(|a| a.0),
+        Some(Reject::Accepted)
+    );
+    assert_eq!(r.node.next_seq(), 2);
+    assert!(r.node.stats.reason_counts[Reject::Duplicate as usize] >= 1);
+    assert!(r.node.stats.rejects >= 4);
+}
+
+#[test]
+fn arm_is_refused_without_sync_far_from_start_or_empty() {
+    let segs = segments(2, 0.3);
+    // Not synced.
+    let mut r = Rig::new();
+    r.syncing = false;
+    r.configure();
+    r.run(20);
+    r.send_segment(&segs[0]);
+    assert_eq!(r.command(CommandCode::Arm, 0), FaultCode::NotSynced as u8);
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.emergencies(), std::vec![FaultCode::NotSynced as u8]);
+    assert_eq!(r.command(CommandCode::ClearFault, 0), 0);
+    assert_eq!(r.node.state(), State::Idle);
+    assert_eq!(r.node.next_seq(), 0);
+    // Far from the plan start.
+    let mut r = Rig::loaded(&segs);
+    r.offset = 1e-3;
+    r.run(5);
+    assert_eq!(r.command(CommandCode::Arm, 0), FaultCode::ArmTooFar as u8);
+    assert_eq!(r.node.fault(), FaultCode::ArmTooFar);
+    // Arm in Idle: wrong state, no fault.
+    let mut r = Rig::new();
+    r.configure();
+    assert_eq!(r.command(CommandCode::Arm, 0), FaultCode::WrongState as u8);
+    assert_eq!(r.node.state(), State::Idle);
+}
+
+#[test]
+fn start_in_the_past_faults_and_stop_disarms() {
+    let segs = segments(2, 0.3);
+    let mut r = Rig::loaded(&segs);
+    assert_eq!(r.command(CommandCode::Arm, 0), 0);
+    assert_eq!(r.command(CommandCode::Stop, 0), 0);
+    assert_eq!(r.node.state(), State::Loaded);
+    assert_eq!(r.command(CommandCode::Arm, 0), 0);
+    let past = (r.t - 50_000) as u32;
+    assert_eq!(
+        r.command(CommandCode::Start, past),
+        FaultCode::StartInPast as u8
+    );
+    assert_eq!(r.node.state(), State::Fault);
+    // Reset is refused in Fault; ClearFault then Reset work.
+    assert_eq!(
+        r.command(CommandCode::Reset, 0),
+        FaultCode::WrongState as u8
+    );
+    assert_eq!(r.command(CommandCode::ClearFault, 0), 0);
+    assert_eq!(r.command(CommandCode::Reset, 0), 0);
+    assert_eq!(r.node.state(), State::Idle);
+}
+
+/// Underrun: only part of a longer plan arrives; the node stops along the
+/// path with a jerk-limited time-scaling, inside the buffered path, then faults.
+#[test]
+fn underrun_stops_along_the_path_with_bounded_jerk() {
+    let h = 0.8;
+    let segs = segments(8, h);
+    // The plan's own maxima (rest-to-rest quintics: 1.875Δ/h, 5.774Δ/h², 60Δ/h³).
+    let delta = segs
+        .iter()
+        .flat_map(|s| {
+            let b = s.normalised_f64();
+            (0..3).map(move |j| b[j][1..].iter().sum::<f64>().abs())
+        })
+        .fold(0.0, f64::max);
+    let (v, a, j) = (
+        1.875 * delta / h,
+        5.7735 * delta / (h * h),
+        60.0 * delta / h.powi(3),
+    );
+    let limit = Limits::default().jerk;
+    let ts = triquint_shared::protocol::config::stop_time(v, a, j, limit);
+    let mut r = Rig::loaded_with(Rig::with_stop_time(ts), &segs[..3]);
+    r.start();
+    let mut stop_at = None;
+    for _ in 0..6000 {
+        r.tick();
+        if stop_at.is_none() && r.node.state() == State::Stopping {
+            stop_at = Some(r.t);
+        }
+        if r.node.state() == State::Fault {
+            break;
+        }
+    }
+    assert!(stop_at.is_some(), "underrun detected");
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::Underrun);
+    assert_eq!(r.emergencies(), std::vec![FaultCode::Underrun as u8]);
+    // At rest, on the path, inside what was buffered (3 segments).
+    assert_eq!(r.node.scaling_phase(), Phase::Rest);
+    assert_eq!(r.node.stats.reference.qd.amax(), 0.0);
+    let end_of_buffer = segs[2].normalised_f64()[1].iter().sum::<f64>();
+    let rest = r.node.stats.reference.q[1] as f64;
+    let start = segs[0].normalised_f64()[1][0];
+    assert!((rest - start).abs() < (end_of_buffer - start).abs());
+    // The stop is jerk-limited: the measured joint jerk (q'''σ³ + 3q''σσ̇ + q'σ̈)
+    // stays within the configured jerk limit.
+    std::eprintln!(
+        "plan jerk {j:.3}, stop time {ts:.3} s, max jerk during the stop {:.3} m/s³",
+        r.max_stop_jerk
+    );
+    assert!(r.max_stop_jerk > 0.0);
+    assert!(
+        (r.max_stop_jerk as f64) <= limit * 1.001,
+        "stop jerk {} > {limit}",
+        r.max_stop_jerk
+    );
+}
+
+#[test]
+fn commanded_stop_feed_hold_resume_and_emergencies() {
+    let segs = segments(4, 0.3);
+    // Stop → Stopping → Idle, queue flushed.
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(200);
+    assert_eq!(r.node.state(), State::Running);
+    assert_eq!(r.command(CommandCode::Stop, 0), 0);
+    assert_eq!(r.node.state(), State::Stopping);
+    r.run(450);
+    assert_eq!(r.node.state(), State::Idle);
+    assert_eq!(r.node.queue_depth(), 0);
+    assert_eq!(r.node.fault(), FaultCode::None);
+    // Feed hold then resume: completes.
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(200);
+    assert_eq!(r.command(CommandCode::FeedHold, 0), 0);
+    r.run(450);
+    assert_eq!(r.node.scaling_phase(), Phase::Rest);
+    assert_eq!(r.node.state(), State::Running);
+    let held = r.node.stats.reference.q;
+    r.run(300);
+    assert_eq!(r.node.stats.reference.q, held);
+    assert_eq!(r.command(CommandCode::Resume, 0), 0);
+    r.run(1500);
+    assert_eq!(r.node.state(), State::Idle);
+    assert_eq!(r.node.fault(), FaultCode::None);
+    // A peer's emergency while running: stop along the path, then Fault.
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(200);
+    r.rx(Emergency {
+        code: FaultCode::FollowingError as u8,
+        state: State::Stopping as u8,
+        segment: 0,
+        plan_time_us: 0,
+    }
+    .to_frame(3));
+    assert_eq!(r.node.state(), State::Stopping);
+    r.run(450);
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::PeerEmergency);
+}
+
+#[test]
+fn following_error_and_lost_sync_stop_with_their_codes() {
+    let segs = segments(4, 0.3);
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(100);
+    r.offset = 2e-3;
+    r.run(2);
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_eq!(r.node.fault(), FaultCode::FollowingError);
+    r.run(500);
+    assert_eq!(r.node.state(), State::Fault);
+
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(100);
+    r.syncing = false;
+    r.run(600);
+    assert!(matches!(r.node.state(), State::Stopping | State::Fault));
+    assert_eq!(r.node.fault(), FaultCode::LostSync);
+}

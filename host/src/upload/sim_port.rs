@@ -1,0 +1,191 @@
+//! The session over the in-process virtual hardware, and the simulation run
+//! behind `triquint simulate`.
+
+use nalgebra::Vector3;
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::{DriveSettings, stop_time};
+use triquint_shared::protocol::segment::parts_per_segment;
+use triquint_shared::protocol::{DriveConfig, Frame};
+use triquint_sim::metrics::{self, Tracking};
+use triquint_sim::sim::{Sample, SimError};
+use triquint_sim::{Sim, SimConfig, testplan};
+
+use super::session::{FaultReport, Session, SessionOptions, UploadError};
+use super::{CanPort, PortError, Received};
+
+/// The host's station on the in-process bus.
+pub struct SimPort<'a> {
+    pub sim: &'a mut Sim,
+    /// Host transmit queue length (like a SocketCAN txqueuelen).
+    pub tx_queue: usize,
+}
+
+impl CanPort for SimPort<'_> {
+    fn now_us(&mut self) -> u64 {
+        self.sim.now_ns() / 1000
+    }
+    fn send(&mut self, frame: &Frame) -> Result<bool, PortError> {
+        if self.sim.host_pending() >= self.tx_queue {
+            return Ok(false);
+        }
+        self.sim.host_send(*frame);
+        Ok(true)
+    }
+    fn recv(&mut self) -> Result<Option<Received>, PortError> {
+        Ok(self.sim.host_receive().map(|d| Received {
+            frame: d.frame,
+            t_us: d.t_ns / 1000,
+            own: d.own,
+        }))
+    }
+}
+
+/// Options of a simulation run.
+#[derive(Clone, Debug)]
+pub struct SimulateOptions {
+    pub fd: bool,
+    pub feedforward: bool,
+    pub rate_hz: f64,
+    pub sim: SimConfig,
+    pub session: SessionOptions,
+    pub settings: DriveSettings,
+    /// Initial joint position minus the plan's start (m).
+    pub start_offset_m: [f64; 3],
+    /// Host poll interval (µs).
+    pub host_poll_us: u64,
+}
+
+impl Default for SimulateOptions {
+    fn default() -> Self {
+        Self {
+            fd: false,
+            feedforward: true,
+            rate_hz: 1000.0,
+            sim: SimConfig::default(),
+            session: SessionOptions::default(),
+            settings: DriveSettings::default(),
+            start_offset_m: [0.0; 3],
+            host_poll_us: 100,
+        }
+    }
+}
+
+/// Why a simulation could not run to an outcome.
+#[derive(Debug, thiserror::Error)]
+pub enum SimulateError {
+    #[error(transparent)]
+    Upload(#[from] UploadError),
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error("plan: {0}")]
+    Plan(String),
+    #[error("the simulation did not finish within {0:.1} s of simulated time")]
+    Timeout(f64),
+}
+
+/// What a run measured.
+#[derive(Clone, Debug)]
+pub struct SimReport {
+    pub completed: bool,
+    pub faults: Vec<FaultReport>,
+    pub tracking: Tracking,
+    pub peak_torque_nm: [f64; 3],
+    /// Busy fraction of the bus over the whole run.
+    pub bus_load: f64,
+    /// Bus load while streaming segments during motion (start to plan end).
+    pub frames: u64,
+    pub segment_frames: u64,
+    pub frames_per_segment: usize,
+    pub retransmits: u64,
+    /// True-time spread of the nodes' first Running tick (ns).
+    pub start_skew_ns: u64,
+    pub tick_ns: u64,
+    pub f32_eval_error_m: f64,
+    pub start_us: u64,
+    pub sim_time_s: f64,
+    pub stop_time_s: f64,
+    pub samples: Vec<Sample>,
+    pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
+}
+
+/// Per-node configurations for a plan: gains from the settings' bandwidth,
+/// stop times from the plan's own maxima (sampled, not trusted from the file).
+pub fn configs_for(
+    plan: &Plan,
+    settings: &DriveSettings,
+) -> Result<([DriveConfig; 3], f64), SimulateError> {
+    let m = testplan::sampled_max_abs(plan).map_err(|e| SimulateError::Plan(e.to_string()))?;
+    let mx = |a: [f64; 3]| a.iter().fold(0.0f64, |x, y| x.max(*y));
+    let (v, a, j) = (mx(m.velocity), mx(m.acceleration), mx(m.jerk));
+    let ts = stop_time(v, a, j, plan.limits.jerk);
+    let tq = stop_time(v, a, 0.0, 3.0 * plan.limits.jerk);
+    let cfgs = [0, 1, 2].map(|i| DriveConfig::new(&plan.robot, &plan.limits, i, settings, ts, tq));
+    Ok((cfgs, ts))
+}
+
+/// Uploads `plan` through the host session to three simulated drives and runs it.
+pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, SimulateError> {
+    let mut settings = opts.settings.clone();
+    settings.control_rate = opts.rate_hz;
+    settings.feedforward = opts.feedforward;
+    let (configs, ts) = configs_for(plan, &settings)?;
+    let mut sim_cfg = opts.sim.clone();
+    sim_cfg.fd = opts.fd;
+    sim_cfg.rate_hz = opts.rate_hz;
+    sim_cfg.counts_per_metre = settings.counts_per_metre[0];
+    // Record at most 1 kHz.
+    sim_cfg.record_every = (opts.rate_hz / 1000.0).round().max(1.0) as u32;
+    let q0 = plan
+        .segments
+        .first()
+        .map(|s| s.quintic().eval(0.0).q)
+        .ok_or_else(|| SimulateError::Plan("the plan has no segments".into()))?
+        + Vector3::from(opts.start_offset_m);
+    let mut sim = Sim::new(&plan.robot, q0, sim_cfg);
+    let mut sopts = opts.session.clone();
+    sopts.fd = opts.fd;
+    let mut session = Session::new(plan, configs, sopts)?;
+    let limit_s = plan.total_time_s + 30.0;
+    let outcome = loop {
+        let mut port = SimPort {
+            sim: &mut sim,
+            tx_queue: 32,
+        };
+        if let Some(o) = session.poll(&mut port)? {
+            break o;
+        }
+        let t = sim.now_ns() + opts.host_poll_us * 1000;
+        if t as f64 * 1e-9 > limit_s {
+            return Err(SimulateError::Timeout(limit_s));
+        }
+        sim.run_until(t)?;
+    };
+    let start_ns = outcome.start_us * 1000;
+    let tracking = metrics::tracking(plan, start_ns, &sim.samples);
+    let started: Vec<u64> = sim.nodes.iter().filter_map(|n| n.started_ns).collect();
+    let skew = match (started.iter().min(), started.iter().max()) {
+        (Some(a), Some(b)) if started.len() == 3 => b - a,
+        _ => u64::MAX,
+    };
+    let now = sim.now_ns().max(1);
+    Ok(SimReport {
+        completed: outcome.completed,
+        faults: outcome.faults.clone(),
+        tracking,
+        peak_torque_nm: [0, 1, 2].map(|i| sim.nodes[i].peak_torque as f64),
+        bus_load: sim.bus.busy_ns() as f64 / now as f64,
+        frames: sim.bus.frames(),
+        segment_frames: outcome.segment_frames_sent,
+        frames_per_segment: parts_per_segment(opts.fd),
+        retransmits: outcome.retransmits,
+        start_skew_ns: skew,
+        tick_ns: (1e9 / opts.rate_hz) as u64,
+        f32_eval_error_m: metrics::f32_eval_error(plan, 1000),
+        start_us: outcome.start_us,
+        sim_time_s: now as f64 * 1e-9,
+        stop_time_s: ts,
+        faults_on_nodes: sim.faults(),
+        samples: std::mem::take(&mut sim.samples),
+    })
+}
+
