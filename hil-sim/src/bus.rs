@@ -52,6 +52,7 @@ pub struct Bus {
     in_flight: Option<(usize, Frame, u64)>,
     idle_from: u64,
     busy_ns: u64,
+    segment_busy_ns: u64,
     frames: u64,
     dropped: u64,
     rng: ChaCha8Rng,
@@ -68,6 +69,7 @@ impl Bus {
             in_flight: None,
             idle_from: 0,
             busy_ns: 0,
+            segment_busy_ns: 0,
             frames: 0,
             dropped: 0,
             rng,
@@ -163,6 +165,9 @@ impl Bus {
             };
             let d = self.duration(&frame);
             self.busy_ns += d;
+            if frame.id == 0x100 || frame.id == 0x110 {
+                self.segment_busy_ns += d;
+            }
             self.in_flight = Some((s, frame, start + d));
         }
     }
@@ -170,6 +175,10 @@ impl Bus {
     /// Busy time so far (ns).
     pub fn busy_ns(&self) -> u64 {
         self.busy_ns
+    }
+    /// Busy time spent on segment parts (ns).
+    pub fn segment_busy_ns(&self) -> u64 {
+        self.segment_busy_ns
     }
     pub fn frames(&self) -> u64 {
         self.frames

@@ -155,4 +155,3 @@ mod tests {
         assert!(p.qd.iter().all(|v| *v < 0.0));
     }
 }
-

@@ -171,9 +171,10 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
         );
     }
     println!(
-        "bus load {:.2} % over {:.3} s; {} frames ({} segment frames, {} per segment, {} retransmissions)",
+        "bus load {:.2} % over {:.3} s (segments {:.2} %); {} frames ({} segment frames, {} per segment, {} retransmissions)",
         r.bus_load * 100.0,
         r.sim_time_s,
+        r.segment_bus_load * 100.0,
         r.frames,
         r.segment_frames,
         r.frames_per_segment,

@@ -5,6 +5,8 @@
 
 pub mod session;
 pub mod sim_port;
+#[cfg(test)]
+mod tests;
 
 pub use session::{FaultReport, Outcome, Session, SessionOptions, UploadError};
 

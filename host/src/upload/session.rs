@@ -566,7 +566,7 @@ impl Session {
                 } else {
                     let nodes = self.nodes;
                     self.timeout(now, "reporting its configuration", |i| {
-                        !nodes[i].heartbeat_at.is_some_and(|t| t > since)
+                        nodes[i].heartbeat_at.is_none_or(|t| t <= since)
                     })?;
                 }
             }

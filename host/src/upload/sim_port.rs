@@ -92,7 +92,8 @@ pub struct SimReport {
     pub peak_torque_nm: [f64; 3],
     /// Busy fraction of the bus over the whole run.
     pub bus_load: f64,
-    /// Bus load while streaming segments during motion (start to plan end).
+    /// Share of the bus taken by segment parts over the whole run.
+    pub segment_bus_load: f64,
     pub frames: u64,
     pub segment_frames: u64,
     pub frames_per_segment: usize,
@@ -174,6 +175,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         tracking,
         peak_torque_nm: [0, 1, 2].map(|i| sim.nodes[i].peak_torque as f64),
         bus_load: sim.bus.busy_ns() as f64 / now as f64,
+        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
         frames: sim.bus.frames(),
         segment_frames: outcome.segment_frames_sent,
         frames_per_segment: parts_per_segment(opts.fd),
@@ -188,4 +190,3 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         samples: std::mem::take(&mut sim.samples),
     })
 }
-

@@ -1,0 +1,218 @@
+//! End-to-end tests: the host session uploads plans over the in-process bus
+//! to three firmware nodes driving the Lagrangian plant.
+
+use triquint_firmware::QUEUE_CAPACITY;
+use triquint_shared::Robot;
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::{Command, CommandCode, FaultCode, config_write_frame};
+use triquint_sim::{Sim, SimConfig, testplan};
+
+use super::session::{Session, SessionOptions, UploadError};
+use super::sim_port::{SimPort, SimReport, SimulateError, SimulateOptions, configs_for, simulate};
+
+fn run(plan: &Plan, f: impl FnOnce(&mut SimulateOptions)) -> Result<SimReport, SimulateError> {
+    let mut o = SimulateOptions::default();
+    f(&mut o);
+    simulate(plan, &o)
+}
+
+fn assert_clean(r: &SimReport, what: &str) {
+    assert!(
+        r.completed,
+        "{what}: not completed, faults {:?}",
+        r.faults_on_nodes
+    );
+    assert!(
+        r.faults.is_empty() && r.faults_on_nodes.is_empty(),
+        "{what}: {:?}",
+        r.faults
+    );
+    assert!(
+        r.start_skew_ns <= r.tick_ns,
+        "{what}: axes started {} ns apart (tick {} ns)",
+        r.start_skew_ns,
+        r.tick_ns
+    );
+}
+
+#[test]
+fn paper_cases_complete_on_classic_and_fd() {
+    for (name, plan) in [
+        ("case I", testplan::paper_case1().unwrap()),
+        ("case II", testplan::paper_case2().unwrap()),
+    ] {
+        for fd in [false, true] {
+            let r = run(&plan, |o| o.fd = fd).unwrap();
+            let what = format!("{name} fd={fd}");
+            assert_clean(&r, &what);
+            let per = if fd { 2 } else { 20 };
+            assert_eq!(r.frames_per_segment, per);
+            assert_eq!(
+                r.segment_frames,
+                (plan.segments.len() as u64 + r.retransmits) * per as u64,
+                "{what}"
+            );
+            for j in 0..3 {
+                assert!(r.tracking.rms_error_m[j] < 5e-6, "{what}: {:?}", r.tracking);
+                assert!(
+                    r.tracking.max_error_m[j] < 50e-6,
+                    "{what}: {:?}",
+                    r.tracking
+                );
+            }
+            assert!(
+                r.bus_load > 0.0 && r.bus_load < 0.2,
+                "{what}: load {}",
+                r.bus_load
+            );
+        }
+    }
+}
+
+#[test]
+fn feedforward_cuts_case2_tracking_error_at_least_threefold() {
+    let plan = testplan::paper_case2().unwrap();
+    let ff = run(&plan, |_| {}).unwrap();
+    let fb = run(&plan, |o| o.feedforward = false).unwrap();
+    assert_clean(&ff, "ff");
+    assert_clean(&fb, "no ff");
+    for j in 0..3 {
+        let ratio = fb.tracking.rms_error_m[j] / ff.tracking.rms_error_m[j];
+        eprintln!(
+            "axis {}: RMS {:.3} µm with FF, {:.3} µm without, ratio {ratio:.1}",
+            j + 1,
+            ff.tracking.rms_error_m[j] * 1e6,
+            fb.tracking.rms_error_m[j] * 1e6
+        );
+        assert!(ratio >= 3.0, "axis {}: ratio {ratio}", j + 1);
+    }
+}
+
+#[test]
+fn stress_spiral_completes_on_classic_can_with_flow_control() {
+    let plan = testplan::spiral(
+        testplan::SPIRAL_POINTS,
+        testplan::SPIRAL_TURNS,
+        testplan::SPIRAL_TIME,
+    )
+    .unwrap();
+    assert!(plan.segments.len() >= 10 * QUEUE_CAPACITY);
+    let r = run(&plan, |_| {}).unwrap();
+    assert_clean(&r, "spiral");
+    eprintln!(
+        "spiral: {} segments, bus load {:.4} (segments {:.4}), {} frames, {} retransmissions",
+        plan.segments.len(),
+        r.bus_load,
+        r.segment_bus_load,
+        r.frames,
+        r.retransmits
+    );
+}
+
+#[test]
+fn lost_frames_are_retransmitted() {
+    let plan = testplan::paper_case1().unwrap();
+    let r = run(&plan, |o| {
+        o.sim.bus.rx_drop = 0.01;
+        o.sim.bus.seed = 3;
+    })
+    .unwrap();
+    assert_clean(&r, "lossy bus");
+    assert!(r.retransmits > 0, "no retransmission on a lossy bus");
+}
+
+#[test]
+fn stalled_host_underruns_and_every_node_stops_on_the_path() {
+    let plan = testplan::paper_case2().unwrap();
+    let r = run(&plan, |o| o.session.stall_after = Some(4)).unwrap();
+    assert!(!r.completed);
+    let first = r.faults_on_nodes.first().expect("a fault");
+    assert_eq!(first.code, FaultCode::Underrun);
+    // Every node detected the underrun itself (same buffered path).
+    let underruns = r
+        .faults_on_nodes
+        .iter()
+        .filter(|f| f.code == FaultCode::Underrun)
+        .count();
+    assert!(underruns >= 1);
+    // At the end the machine is at rest, close to the path.
+    let last = r.samples.last().unwrap();
+    let prev = &r.samples[r.samples.len() - 20];
+    for j in 0..3 {
+        assert!(
+            (last.q[j] - prev.q[j]).abs() < 1e-6,
+            "axis {j} still moving"
+        );
+        assert!((last.q[j] - last.reference[j] as f64).abs() < 20e-6);
+    }
+}
+
+#[test]
+fn arm_is_refused_away_from_the_plan_start() {
+    let plan = testplan::paper_case1().unwrap();
+    let e = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap_err();
+    match e {
+        SimulateError::Upload(u @ UploadError::Refused { node: 2, .. }) => {
+            assert!(u.is_motion_fault());
+            assert!(u.to_string().contains("ArmTooFar"), "{u}");
+        }
+        other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn a_node_with_another_configuration_is_named() {
+    let plan = testplan::paper_case1().unwrap();
+    let settings = DriveSettings::default();
+    let (configs, _) = configs_for(&plan, &settings).unwrap();
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let mut sim = Sim::new(&Robot::default(), q0, SimConfig::default());
+    // Node 3 was configured elsewhere with a different gain.
+    for (i, c) in configs.iter().enumerate() {
+        let node = i as u8 + 1;
+        let mut c = *c;
+        if node == 3 {
+            c.kp *= 1.5;
+        }
+        for (k, v) in c.to_values().iter().enumerate() {
+            sim.host_send(config_write_frame(node, k as u8, *v));
+        }
+        sim.host_send(
+            Command {
+                command: CommandCode::ConfigCommit as u8,
+                token: 1,
+                arg: c.crc(),
+            }
+            .to_frame(node),
+        );
+    }
+    sim.run_until(50_000_000).unwrap();
+    while sim.host_receive().is_some() {}
+    let opts = SessionOptions {
+        configure: false,
+        ..SessionOptions::default()
+    };
+    let mut s = Session::new(&plan, configs, opts).unwrap();
+    let err = loop {
+        let mut port = SimPort {
+            sim: &mut sim,
+            tx_queue: 32,
+        };
+        match s.poll(&mut port) {
+            Ok(None) => {}
+            Ok(Some(_)) => panic!("uploaded to a node with another configuration"),
+            Err(e) => break e,
+        }
+        let t = sim.now_ns() + 100_000;
+        sim.run_until(t).unwrap();
+    };
+    assert!(err.is_config());
+    match err {
+        UploadError::ConfigMismatch { node, param, .. } => {
+            assert_eq!(node, 3);
+            assert_eq!(param, "kp");
+        }
+        other => panic!("{other}"),
+    }
+}
