@@ -95,6 +95,7 @@ mod tests {
                 let rel = (a - b).norm() / a.norm().max(1e-3);
                 worst = worst.max(rel);
             }
+            std::eprintln!("virtual work vs Lagrangian: worst relative {worst:e}");
             assert!(worst < 1e-6, "worst relative disagreement {worst:e}");
         }
     }
@@ -137,6 +138,7 @@ mod tests {
                 worst = worst.max((power - de).abs() / scale);
             }
         }
+        std::eprintln!("power balance: worst relative residual {worst:e}");
         assert!(worst < 1e-7, "power balance residual {worst:e}");
     }
 
@@ -183,6 +185,7 @@ mod tests {
                 worst = worst.max((a[i] - b[i]).abs() / tol);
             }
         }
+        std::eprintln!("f32 vs f64 torque: worst {worst:.4} of the tolerance");
         assert!(worst <= 1.0, "f32 torque error {worst} × tolerance");
     }
 }

@@ -266,6 +266,7 @@ pub(crate) mod tests {
                 assert!(err <= 0.01, "{r:?} axis {i}: {q_mm} vs {q_table}");
             }
         }
+        std::eprintln!("IK vs paper tables: worst {worst:.5} mm");
         assert!(worst <= 0.0051, "worst {worst} mm exceeds table rounding");
     }
 
@@ -288,6 +289,7 @@ pub(crate) mod tests {
             let back = Pose::from_joints(&m, q).unwrap().r;
             worst = worst.max((back - r).norm());
         }
+        std::eprintln!("FK(IK(r)) worst error {worst:e} m");
         assert!(worst < 1e-9, "FK(IK(r)) worst error {worst} m");
     }
 

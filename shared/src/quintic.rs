@@ -146,6 +146,9 @@ mod tests {
                 wa = wa.max((a.qdd[0] - b.qdd[0] as f64).abs() / amax);
             }
         }
+        std::eprintln!(
+            "f32 vs f64 quintic: position {wp:e} m, velocity {wv:e}, acceleration {wa:e} of peak"
+        );
         assert!(wp < 1e-6, "position error {wp:e} m");
         assert!(wv < 1e-5, "velocity error {wv:e} of the segment's peak");
         assert!(wa < 1e-5, "acceleration error {wa:e} of the segment's peak");
