@@ -216,3 +216,14 @@ fn a_node_with_another_configuration_is_named() {
         other => panic!("{other}"),
     }
 }
+
+#[test]
+fn case2_at_10_khz_tracks_as_well_as_at_1_khz() {
+    let plan = testplan::paper_case2().unwrap();
+    let fast = run(&plan, |o| o.rate_hz = 10_000.0).unwrap();
+    assert_clean(&fast, "10 kHz");
+    assert!(fast.start_skew_ns <= 100_000);
+    for j in 0..3 {
+        assert!(fast.tracking.max_error_m[j] < 10e-6, "{:?}", fast.tracking);
+    }
+}
