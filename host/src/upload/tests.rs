@@ -151,7 +151,11 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
 #[test]
 fn arm_is_refused_away_from_the_plan_start() {
     let plan = testplan::paper_case1().unwrap();
-    let e = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap_err();
+    let e = run(&plan, |o| {
+        o.start_offset_m = [0.0, 1e-3, 0.0];
+        o.strict = true;
+    })
+    .unwrap_err();
     match e {
         SimulateError::Upload(u @ UploadError::Refused { node: 2, .. }) => {
             assert!(u.is_motion_fault());
@@ -159,6 +163,17 @@ fn arm_is_refused_away_from_the_plan_start() {
         }
         other => panic!("{other}"),
     }
+    // Not strict (the CLI): a report with the fault, nothing completed.
+    let r = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap();
+    assert!(!r.completed);
+    let first = r.faults_on_nodes.first().expect("fault");
+    assert_eq!((first.node, first.code), (2, FaultCode::ArmTooFar));
+    // The other nodes were armed and faulted on node 2's emergency.
+    assert!(
+        r.faults_on_nodes
+            .iter()
+            .any(|f| f.node != 2 && f.code == FaultCode::PeerEmergency)
+    );
 }
 
 #[test]
