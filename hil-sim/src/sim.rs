@@ -104,6 +104,8 @@ pub struct SimNode {
     pub started_ns: Option<u64>,
     pub faults: Vec<FaultEvent>,
     pub peak_torque: f32,
+    /// Largest |joint jerk| of the reference while Stopping (m/s³).
+    pub max_stop_jerk: f32,
 }
 
 struct SimEncoder(i64);
@@ -172,6 +174,7 @@ impl Sim {
                 started_ns: None,
                 faults: Vec::new(),
                 peak_torque: 0.0,
+                max_stop_jerk: 0.0,
             })
             .collect::<Vec<_>>();
         let mut sim = Self {
@@ -264,6 +267,9 @@ impl Sim {
         n.enabled = motor.enabled;
         n.peak_torque = n.peak_torque.max(motor.torque.abs());
         n.motor = motor;
+        if n.node.state() == State::Stopping {
+            n.max_stop_jerk = n.max_stop_jerk.max(n.node.stats.reference.qddd.amax());
+        }
         if n.started_ns.is_none() && n.node.state() == State::Running {
             n.started_ns = Some(self.t_ns);
         }

@@ -108,6 +108,8 @@ pub struct SimReport {
     pub start_us: u64,
     pub sim_time_s: f64,
     pub stop_time_s: f64,
+    /// Largest joint jerk of any node's reference while stopping (m/s³).
+    pub max_stop_jerk: f64,
     pub samples: Vec<Sample>,
     pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
 }
@@ -205,6 +207,11 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
         stop_time_s: ts,
+        max_stop_jerk: sim
+            .nodes
+            .iter()
+            .map(|n| n.max_stop_jerk as f64)
+            .fold(0.0, f64::max),
         faults_on_nodes: sim.faults(),
         samples: std::mem::take(&mut sim.samples),
     })

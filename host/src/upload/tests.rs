@@ -136,6 +136,20 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
         .filter(|f| f.code == FaultCode::Underrun)
         .count();
     assert!(underruns >= 1);
+    // The stop is jerk-limited: within the limit, or within the plan's own
+    // jerk plus half the limit when the plan already uses more than half.
+    let plan_jerk = testplan::sampled_max_abs(&plan)
+        .unwrap()
+        .jerk
+        .iter()
+        .fold(0.0f64, |a, b| a.max(*b));
+    let lim = plan.limits.jerk;
+    eprintln!(
+        "underrun stop: plan jerk {plan_jerk:.3}, stop time {:.3} s, max jerk while stopping {:.3} m/s³",
+        r.stop_time_s, r.max_stop_jerk
+    );
+    assert!(r.max_stop_jerk > 0.0);
+    assert!(r.max_stop_jerk <= lim.max(plan_jerk + 0.5 * lim) * 1.001);
     // At the end the machine is at rest, close to the path.
     let last = r.samples.last().unwrap();
     let prev = &r.samples[r.samples.len() - 20];
