@@ -91,8 +91,11 @@ impl Plant {
 
     /// Integrates `dt` seconds with RK4 steps no longer than `max_step_s`.
     pub fn advance(&mut self, dt: f64) -> Result<(), KinematicsError> {
-        if self.braked || dt <= 0.0 {
+        if self.braked {
             self.qd = Vector3::zeros();
+            return Ok(());
+        }
+        if dt <= 0.0 {
             return Ok(());
         }
         let n = (dt / self.cfg.max_step_s).ceil().max(1.0) as usize;
@@ -149,6 +152,10 @@ mod tests {
         p.tau = dynamics::torque(&m, &q0, &Vector3::zeros(), &Vector3::zeros()).unwrap();
         p.advance(0.1).unwrap();
         assert!((p.q - q0).norm() < 1e-9, "{}", (p.q - q0).norm());
+        // A zero-length step changes nothing (two drives ticking at one instant).
+        let v = p.qd;
+        p.advance(0.0).unwrap();
+        assert_eq!(p.qd, v);
         // And without torque it falls.
         p.tau = Vector3::zeros();
         p.advance(0.05).unwrap();

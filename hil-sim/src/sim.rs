@@ -104,6 +104,8 @@ pub struct SimNode {
     pub started_ns: Option<u64>,
     pub faults: Vec<FaultEvent>,
     pub peak_torque: f32,
+    /// Largest |joint jerk| of the reference while Stopping (m/s³).
+    pub max_stop_jerk: f32,
 }
 
 struct SimEncoder(i64);
@@ -172,6 +174,7 @@ impl Sim {
                 started_ns: None,
                 faults: Vec::new(),
                 peak_torque: 0.0,
+                max_stop_jerk: 0.0,
             })
             .collect::<Vec<_>>();
         let mut sim = Self {
@@ -214,7 +217,29 @@ impl Sim {
         self.bus.receive(0)
     }
 
+    /// Records a change of node `i`'s fault code at the current time.
+    fn note_fault(&mut self, i: usize) {
+        let t_ns = self.t_ns;
+        let n = &mut self.nodes[i];
+        let f = n.node.fault();
+        if f != n.last_fault {
+            if f != FaultCode::None {
+                n.faults.push(FaultEvent {
+                    node: i as u8 + 1,
+                    code: f,
+                    t_ns,
+                });
+            }
+            n.last_fault = f;
+        }
+    }
+
     fn service(&mut self, i: usize) {
+        self.service_frames(i);
+        self.note_fault(i);
+    }
+
+    fn service_frames(&mut self, i: usize) {
         let station = i + 1;
         let n = &mut self.nodes[i];
         while let Some(d) = self.bus.receive(station) {
@@ -242,19 +267,11 @@ impl Sim {
         n.enabled = motor.enabled;
         n.peak_torque = n.peak_torque.max(motor.torque.abs());
         n.motor = motor;
+        if n.node.state() == State::Stopping {
+            n.max_stop_jerk = n.max_stop_jerk.max(n.node.stats.reference.qddd.amax());
+        }
         if n.started_ns.is_none() && n.node.state() == State::Running {
             n.started_ns = Some(self.t_ns);
-        }
-        let f = n.node.fault();
-        if f != n.last_fault {
-            if f != FaultCode::None {
-                n.faults.push(FaultEvent {
-                    node: i as u8 + 1,
-                    code: f,
-                    t_ns: self.t_ns,
-                });
-            }
-            n.last_fault = f;
         }
         self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
         if i == 0 {
@@ -310,6 +327,7 @@ impl Sim {
                 let local = self.nodes[i].next_tick_us;
                 self.service(i);
                 self.control_tick(i, local);
+                self.note_fault(i);
                 self.service(i);
                 self.nodes[i].next_tick_us += self.tick_us;
             } else {

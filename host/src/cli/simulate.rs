@@ -78,6 +78,9 @@ pub fn read_plan(path: &Path) -> CliResult<Plan> {
 fn to_cli(e: SimulateError) -> CliError {
     match e {
         SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
+        SimulateError::Upload(u @ crate::upload::UploadError::Segment { .. }) => {
+            CliError::bad_input(u)
+        }
         SimulateError::Upload(u) if u.is_motion_fault() => CliError::motion_fault(u),
         SimulateError::Plan(m) => CliError::bad_input(m),
         other => CliError::device(other),

@@ -40,7 +40,7 @@ impl Default for SessionOptions {
             fd: false,
             configure: true,
             window: 4,
-            retransmit_timeout_us: 20_000,
+            retransmit_timeout_us: 50_000,
             max_retransmits: 5,
             sync_period_us: 100_000,
             fast_sync_period_us: 10_000,

@@ -10,7 +10,7 @@ use triquint_sim::metrics::{self, Tracking};
 use triquint_sim::sim::{Sample, SimError};
 use triquint_sim::{Sim, SimConfig, testplan};
 
-use super::session::{FaultReport, Session, SessionOptions, UploadError};
+use super::session::{FaultReport, Outcome, Session, SessionOptions, UploadError};
 use super::{CanPort, PortError, Received};
 
 /// The host's station on the in-process bus.
@@ -53,6 +53,8 @@ pub struct SimulateOptions {
     pub start_offset_m: [f64; 3],
     /// Host poll interval (µs).
     pub host_poll_us: u64,
+    /// Return a refused Arm as an error instead of a report with the fault.
+    pub strict: bool,
 }
 
 impl Default for SimulateOptions {
@@ -66,6 +68,7 @@ impl Default for SimulateOptions {
             settings: DriveSettings::default(),
             start_offset_m: [0.0; 3],
             host_poll_us: 100,
+            strict: false,
         }
     }
 }
@@ -105,6 +108,8 @@ pub struct SimReport {
     pub start_us: u64,
     pub sim_time_s: f64,
     pub stop_time_s: f64,
+    /// Largest joint jerk of any node's reference while stopping (m/s³).
+    pub max_stop_jerk: f64,
     pub samples: Vec<Sample>,
     pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
 }
@@ -152,8 +157,24 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
             sim: &mut sim,
             tx_queue: 32,
         };
-        if let Some(o) = session.poll(&mut port)? {
-            break o;
+        match session.poll(&mut port) {
+            Ok(Some(o)) => break o,
+            Ok(None) => {}
+            // A motion fault before the start (arm refused): let the nodes'
+            // emergencies play out and report it like any other fault.
+            Err(e) if e.is_motion_fault() && !opts.strict => {
+                sim.run_until(sim.now_ns() + 50_000_000)?;
+                break Outcome {
+                    completed: false,
+                    faults: session.faults().to_vec(),
+                    start_us: session.start_us(),
+                    frames_sent: 0,
+                    segment_frames_sent: 0,
+                    retransmits: 0,
+                    rejects_seen: 0,
+                };
+            }
+            Err(e) => return Err(e.into()),
         }
         let t = sim.now_ns() + opts.host_poll_us * 1000;
         if t as f64 * 1e-9 > limit_s {
@@ -186,6 +207,11 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
         stop_time_s: ts,
+        max_stop_jerk: sim
+            .nodes
+            .iter()
+            .map(|n| n.max_stop_jerk as f64)
+            .fold(0.0, f64::max),
         faults_on_nodes: sim.faults(),
         samples: std::mem::take(&mut sim.samples),
     })

@@ -136,6 +136,20 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
         .filter(|f| f.code == FaultCode::Underrun)
         .count();
     assert!(underruns >= 1);
+    // The stop is jerk-limited: within the limit, or within the plan's own
+    // jerk plus half the limit when the plan already uses more than half.
+    let plan_jerk = testplan::sampled_max_abs(&plan)
+        .unwrap()
+        .jerk
+        .iter()
+        .fold(0.0f64, |a, b| a.max(*b));
+    let lim = plan.limits.jerk;
+    eprintln!(
+        "underrun stop: plan jerk {plan_jerk:.3}, stop time {:.3} s, max jerk while stopping {:.3} m/s³",
+        r.stop_time_s, r.max_stop_jerk
+    );
+    assert!(r.max_stop_jerk > 0.0);
+    assert!(r.max_stop_jerk <= lim.max(plan_jerk + 0.5 * lim) * 1.001);
     // At the end the machine is at rest, close to the path.
     let last = r.samples.last().unwrap();
     let prev = &r.samples[r.samples.len() - 20];
@@ -151,7 +165,11 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
 #[test]
 fn arm_is_refused_away_from_the_plan_start() {
     let plan = testplan::paper_case1().unwrap();
-    let e = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap_err();
+    let e = run(&plan, |o| {
+        o.start_offset_m = [0.0, 1e-3, 0.0];
+        o.strict = true;
+    })
+    .unwrap_err();
     match e {
         SimulateError::Upload(u @ UploadError::Refused { node: 2, .. }) => {
             assert!(u.is_motion_fault());
@@ -159,6 +177,17 @@ fn arm_is_refused_away_from_the_plan_start() {
         }
         other => panic!("{other}"),
     }
+    // Not strict (the CLI): a report with the fault, nothing completed.
+    let r = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap();
+    assert!(!r.completed);
+    let first = r.faults_on_nodes.first().expect("fault");
+    assert_eq!((first.node, first.code), (2, FaultCode::ArmTooFar));
+    // The other nodes were armed and faulted on node 2's emergency.
+    assert!(
+        r.faults_on_nodes
+            .iter()
+            .any(|f| f.node != 2 && f.code == FaultCode::PeerEmergency)
+    );
 }
 
 #[test]
@@ -214,5 +243,16 @@ fn a_node_with_another_configuration_is_named() {
             assert_eq!(param, "kp");
         }
         other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn case2_at_10_khz_tracks_as_well_as_at_1_khz() {
+    let plan = testplan::paper_case2().unwrap();
+    let fast = run(&plan, |o| o.rate_hz = 10_000.0).unwrap();
+    assert_clean(&fast, "10 kHz");
+    assert!(fast.start_skew_ns <= 100_000);
+    for j in 0..3 {
+        assert!(fast.tracking.max_error_m[j] < 10e-6, "{:?}", fast.tracking);
     }
 }
