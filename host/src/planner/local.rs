@@ -20,6 +20,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use triquint_shared::kinematics::Pose;
+use triquint_shared::quintic::eval_poly;
 use triquint_shared::{Limits, Model, dynamics};
 
 use super::lp::Lp;
@@ -171,12 +172,6 @@ impl Problem {
         [0, 1, 2].map(|j| [0, 1, 2].map(|r| self.knots.functional(&x[j], j, k, u, r, h[k])))
     }
 
-    /// Motor torques at (segment k, u), or None outside the workspace.
-    fn torque_at(&self, f: &[[Affine; 3]; 3]) -> Option<Vector3<f64>> {
-        let v = |r: usize| Vector3::new(f[0][r].value, f[1][r].value, f[2][r].value);
-        dynamics::torque(&self.model, &v(0), &v(1), &v(2)).ok()
-    }
-
     /// Exact figures of (h, x) and the cut points at its local extrema.
     fn figures(&self, h: &[f64], x: &[Vec<f64>; 3], torque_samples: usize) -> Figures {
         let mut fig = Figures {
@@ -220,11 +215,15 @@ impl Problem {
                 }
             }
             // Torque on a grid; cuts at each axis's local maxima of |τ|.
+            // Samples from the power coefficients: one Horner pass per joint.
+            let coeffs = [0, 1, 2].map(|j| self.knots.coefficients(&x[j], j, k, hk));
             let taus: Vec<Vector3<f64>> = (0..=torque_samples)
                 .map(|i| {
-                    let u = i as f64 / torque_samples as f64;
-                    let f = self.motion_forms(h, x, k, u);
-                    self.torque_at(&f).unwrap_or(Vector3::repeat(f64::INFINITY))
+                    let t = hk * i as f64 / torque_samples as f64;
+                    let m = coeffs.map(|c| eval_poly(&c, t));
+                    let v = |r: usize| Vector3::new(m[0][r], m[1][r], m[2][r]);
+                    dynamics::torque(&self.model, &v(0), &v(1), &v(2))
+                        .unwrap_or(Vector3::repeat(f64::INFINITY))
                 })
                 .collect();
             let lim = self.limits.torque;
