@@ -204,6 +204,15 @@ pub fn round_to_microseconds(h: &[f64], total_time: f64) -> Vec<f64> {
             us[i] -= 1;
         }
     }
+    // Per-interval rounding must not lose time the optimum spends: the total
+    // is the rounded sum, topped up where rounding took the most.
+    let target = ((h.iter().sum::<f64>() * 1e6).round() as i64).min(budget);
+    while us.iter().sum::<i64>() < target {
+        let residue = |i: usize| h[i] * 1e6 - us[i] as f64;
+        if let Some(i) = (0..us.len()).max_by(|&a, &b| residue(a).total_cmp(&residue(b))) {
+            us[i] += 1;
+        }
+    }
     us.into_iter().map(|v| v as f64 * 1e-6).collect()
 }
 
@@ -309,4 +318,34 @@ pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     p.total_time = t;
     let guess = p.inner(&h, &x)?;
     Some(p.local_search(&guess, 200, 1e-9))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_to_microseconds;
+
+    #[test]
+    fn rounding_keeps_the_whole_budget_and_never_exceeds_it() {
+        // 96 intervals that sum to 30 s but each round down by 0.4 µs.
+        let h: Vec<f64> = (0..96)
+            .map(|i| {
+                if i < 95 {
+                    0.3125004
+                } else {
+                    30.0 - 95.0 * 0.3125004
+                }
+            })
+            .collect();
+        let r = round_to_microseconds(&h, 30.0);
+        let total: i64 = r.iter().map(|x| (x * 1e6).round() as i64).sum();
+        assert_eq!(total, 30_000_000);
+        for (a, b) in r.iter().zip(&h) {
+            assert!((a - b).abs() <= 1.000_001e-6, "{a} vs {b}");
+        }
+        // Never above the budget, even when the optimum overshoots it slightly.
+        let over: Vec<f64> = h.iter().map(|x| x * (1.0 + 1e-7)).collect();
+        let r = round_to_microseconds(&over, 30.0);
+        let total: i64 = r.iter().map(|x| (x * 1e6).round() as i64).sum();
+        assert_eq!(total, 30_000_000);
+    }
 }
