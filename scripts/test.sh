@@ -26,4 +26,7 @@ cargo test --workspace --locked
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
 
+step "on-target test (QEMU mps2-an386) and the board images"
+./scripts/qemu-test.sh
+
 step "all tests passed in $(( $(date +%s) - start )) s"

@@ -10,6 +10,7 @@
 
 pub mod hal;
 pub mod node;
+pub mod ns;
 pub mod scaling;
 pub mod segment;
 pub mod sync;

@@ -13,6 +13,7 @@ use triquint_shared::protocol::{
 use triquint_shared::quintic::JointMotion;
 
 use crate::hal::{Encoder, MotorOutput, RxFrame};
+use crate::ns::{to_f32, to_i64};
 use crate::scaling::{Phase, TimeScaling};
 use crate::segment::{Seg, scale};
 use crate::sync::SyncEstimator;
@@ -37,11 +38,10 @@ pub enum StopReason {
     Fault(FaultCode),
 }
 
-/// The active configuration and what is derived from it once.
+/// What is derived once from the active configuration. Small on purpose:
+/// the tick copies it; the configuration and model stay in the node.
 #[derive(Clone, Copy, Debug)]
 struct Active {
-    cfg: DriveConfig,
-    model: Model<f32>,
     crc: u32,
     axis: usize,
     dt: f32,
@@ -79,6 +79,9 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     written: [f32; PARAM_COUNT],
     written_mask: u64,
     active: Option<Active>,
+    /// The committed configuration and its robot model (valid with `active`).
+    cfg: DriveConfig,
+    model: Model<f32>,
     queue: Deque<Seg, Q>,
     asm: Reassembler,
     next_seq: u16,
@@ -109,6 +112,12 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     pub stats: Stats,
 }
 
+/// x limited to ±lim. Unlike `f32::clamp`, no panic path (clamp asserts
+/// min ≤ max), so the control tick has none.
+fn limit(x: f32, lim: f32) -> f32 {
+    x.max(-lim).min(lim)
+}
+
 fn seq_diff(a: u16, b: u16) -> i16 {
     a.wrapping_sub(b) as i16
 }
@@ -123,6 +132,19 @@ impl<const Q: usize> Node<Q> {
             written: [0.0; PARAM_COUNT],
             written_mask: 0,
             active: None,
+            cfg: DriveConfig::from_values(&[0.0; PARAM_COUNT]),
+            model: Model {
+                rho_u: [Vector3::zeros(); 3],
+                l: 0.0,
+                l2: 0.0,
+                platform_mass: 0.0,
+                strut_mass: 0.0,
+                slider_mass: 0.0,
+                rotor_inertia: 0.0,
+                ratio: 0.0,
+                inv_ratio: 0.0,
+                gravity: 0.0,
+            },
             queue: Deque::new(),
             asm: Reassembler::default(),
             next_seq: 0,
@@ -170,13 +192,13 @@ impl<const Q: usize> Node<Q> {
         self.next_seq
     }
     pub fn config_crc(&self) -> u32 {
-        self.active.map(|a| a.crc).unwrap_or(0)
+        self.active.as_ref().map(|a| a.crc).unwrap_or(0)
     }
     pub fn config(&self) -> Option<DriveConfig> {
-        self.active.map(|a| a.cfg)
+        self.active.as_ref().map(|_| self.cfg)
     }
     pub fn is_synced(&self) -> bool {
-        match self.active {
+        match &self.active {
             Some(a) => self.sync.is_synced(self.last_local_us, a.sync_timeout_us),
             None => self.sync.is_synced(self.last_local_us, 500_000),
         }
@@ -514,9 +536,9 @@ impl<const Q: usize> Node<Q> {
         let wc = 2.0 * core::f32::consts::PI * cfg.velocity_filter * dt;
         let ns = |s: f32| (s as f64 * 1e9) as i64;
         let us = |s: f32| (s as f64 * 1e6) as u64;
+        self.cfg = cfg;
+        self.model = robot.model::<f32>();
         self.active = Some(Active {
-            cfg,
-            model: robot.model::<f32>(),
             crc,
             axis: (cfg.axis as usize).min(2),
             dt,
@@ -559,7 +581,7 @@ impl<const Q: usize> Node<Q> {
         let start = front.start_q();
         let own = start[a.axis];
         match self.last_q {
-            Some(q) if (q - own).abs() <= a.cfg.arm_tolerance => {}
+            Some(q) if (q - own).abs() <= self.cfg.arm_tolerance => {}
             _ => {
                 self.fault_now(FaultCode::ArmTooFar);
                 return FaultCode::ArmTooFar;
@@ -600,7 +622,7 @@ impl<const Q: usize> Node<Q> {
             motor.enable(false);
             motor.set_torque(0.0);
             self.enabled = false;
-            self.last_q = Some(enc.read_counts() as f32 * 1e-9);
+            self.last_q = Some(to_f32(enc.read_counts()) * 1e-9);
             self.periodic(now_us);
             return;
         };
@@ -610,7 +632,7 @@ impl<const Q: usize> Node<Q> {
             self.integral = 0.0;
             self.last_q = None;
         }
-        let q = enc.read_counts() as f32 * a.inv_cpm;
+        let q = to_f32(enc.read_counts()) * a.inv_cpm;
         let raw_v = match self.last_q {
             Some(l) => (q - l) / a.dt,
             None => 0.0,
@@ -657,25 +679,26 @@ impl<const Q: usize> Node<Q> {
         // The torque computed now acts from the next tick on (and is held for
         // one tick): evaluate the feedforward 1.5 ticks ahead on the path.
         let ff_ref = if matches!(self.state, State::Running | State::Stopping) {
-            self.lookahead(host_ns + (1.5e9 * a.dt) as i64)
+            self.lookahead(host_ns + to_i64(1.5e9 * a.dt))
                 .unwrap_or(reference)
         } else {
             reference
         };
 
-        // Feedforward and PID on our own axis.
-        let i = a.axis;
+        // Feedforward and PID on our own axis (`min` lets the compiler drop
+        // the bounds checks: no panic path in the tick).
+        let i = a.axis.min(2);
         let mut ff = 0.0;
-        if a.cfg.feedforward != 0.0 && self.hold.is_some() {
-            match dynamics::torque(&a.model, &ff_ref.q, &ff_ref.qd, &ff_ref.qdd) {
+        if self.cfg.feedforward != 0.0 && self.hold.is_some() {
+            match dynamics::torque(&self.model, &ff_ref.q, &ff_ref.qd, &ff_ref.qdd) {
                 Ok(t) => {
                     // Identified friction of our slider, smoothed through zero speed.
                     let v = ff_ref.qd[i];
                     let x = (v * 1000.0).clamp(-20.0, 20.0);
                     let e2 = libm::expf(2.0 * x);
                     let sign = (e2 - 1.0) / (e2 + 1.0);
-                    let friction = a.cfg.friction_coulomb * sign + a.cfg.friction_viscous * v;
-                    ff = t[i] + friction * a.model.inv_ratio;
+                    let friction = self.cfg.friction_coulomb * sign + self.cfg.friction_viscous * v;
+                    ff = t[i] + friction * self.model.inv_ratio;
                 }
                 Err(_) => {
                     if matches!(self.state, State::Running) {
@@ -686,9 +709,9 @@ impl<const Q: usize> Node<Q> {
         }
         // Bumpless transfer: when the feedforward appears or vanishes (hold
         // pose known, arm), move the step into the integral instead of the motor.
-        let lim = a.cfg.integral_limit;
+        let lim = self.cfg.integral_limit;
         if self.ff_active != (ff != 0.0) {
-            self.integral = (self.integral + self.last_ff - ff).clamp(-lim, lim);
+            self.integral = limit(self.integral + self.last_ff - ff, lim);
             self.ff_active = ff != 0.0;
         }
         self.last_ff = ff;
@@ -703,13 +726,15 @@ impl<const Q: usize> Node<Q> {
         self.last_e = Some(e);
         self.ev += a.vel_alpha * (raw_ev - self.ev);
         let ev = self.ev;
-        if self.state == State::Running && e.abs() > a.cfg.following_error_max {
+        if self.state == State::Running && e.abs() > self.cfg.following_error_max {
             self.begin_stop(StopReason::Fault(FaultCode::FollowingError), false, now_us);
         }
-        self.integral = (self.integral + a.cfg.ki * e * a.dt).clamp(-lim, lim);
-        let torque = (ff + a.cfg.kp * e + a.cfg.kd * ev + self.integral)
-            .clamp(-a.cfg.max_torque, a.cfg.max_torque);
-        motor.set_torque(torque * a.cfg.direction);
+        self.integral = limit(self.integral + self.cfg.ki * e * a.dt, lim);
+        let torque = limit(
+            ff + self.cfg.kp * e + self.cfg.kd * ev + self.integral,
+            self.cfg.max_torque,
+        );
+        motor.set_torque(torque * self.cfg.direction);
 
         self.stats.torque = torque;
         self.stats.following_error = e;
@@ -724,8 +749,8 @@ impl<const Q: usize> Node<Q> {
         if let Some(h) = self.hold {
             m.q = h;
         }
-        if let Some(a) = self.active {
-            m.q[a.axis] = self.hold_own;
+        if let Some(a) = &self.active {
+            m.q[a.axis.min(2)] = self.hold_own;
         }
         m
     }
@@ -760,7 +785,7 @@ impl<const Q: usize> Node<Q> {
         let path = front.eval(sc.s_ns);
         let m = scale(&path, sc.sigma, sc.sigma_d, sc.sigma_dd);
         self.hold = Some(m.q);
-        self.hold_own = m.q[a.axis];
+        self.hold_own = m.q[a.axis.min(2)];
 
         let at_rest = self.scaling.phase == Phase::Rest;
         let last_queued = self.queue.back().map(|b| b.last).unwrap_or(false);
@@ -802,7 +827,7 @@ impl<const Q: usize> Node<Q> {
     }
 
     fn periodic(&mut self, now_us: u64) {
-        let (hb_us, tel_us) = match self.active {
+        let (hb_us, tel_us) = match &self.active {
             Some(a) => (a.heartbeat_us.max(1000), a.telemetry_us),
             None => (100_000, 0),
         };
@@ -817,7 +842,11 @@ impl<const Q: usize> Node<Q> {
             };
             let f = hb.to_frame(self.node_id);
             self.send(f);
-            let timeout = self.active.map(|a| a.sync_timeout_us).unwrap_or(500_000);
+            let timeout = self
+                .active
+                .as_ref()
+                .map(|a| a.sync_timeout_us)
+                .unwrap_or(500_000);
             let ext = HeartbeatExt {
                 next_seq: self.next_seq,
                 rejects: self.stats.rejects,
@@ -828,6 +857,9 @@ impl<const Q: usize> Node<Q> {
             };
             let f = ext.to_frame(self.node_id);
             self.send(f);
+            // At most one group of periodic frames per tick (bounds the
+            // tick's worst case): telemetry due now goes out next tick.
+            return;
         }
         if tel_us > 0 && now_us >= self.next_telemetry_us {
             self.next_telemetry_us = now_us + tel_us;

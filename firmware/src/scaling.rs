@@ -4,6 +4,8 @@
 //! s = s₀ + T·(u − 2.5u⁴ + 3u⁵ − u⁶), at rest after T/2 of plan time.
 //! Resume uses σ = S(u): s = s₀ + T·(2.5u⁴ − 3u⁵ + u⁶).
 
+use crate::ns::{to_f32, to_i64};
+
 /// Phase of the time-scaling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
@@ -48,15 +50,31 @@ fn smooth(u: f32) -> (f32, f32, f32) {
     (s, d1, d2)
 }
 
-/// ∫₀ᵘ S = 2.5u⁴ − 3u⁵ + u⁶, in f64: plan time needs ns resolution over
-/// seconds (only during a ramp, a few hundred operations per second).
-fn smooth_integral(u: f64) -> f64 {
-    let u2 = u * u;
-    u2 * u2 * (2.5 + u * (-3.0 + u))
+/// T·∫₀ˣ S = T·(2.5x⁴ − 3x⁵ + x⁶) for the ramp fraction x = x_ns/T ≤ 1/2 (ns).
+/// Only this correction (≤ 0.08 T) is in f32; the rest of the plan time is
+/// integer, so s keeps ns resolution over seconds and the tick uses no f64.
+fn correction(x_ns: i64, ramp: i64) -> i64 {
+    let x = to_f32(x_ns) / to_f32(ramp);
+    let x2 = x * x;
+    to_i64(to_f32(ramp) * (x2 * x2 * (2.5 + x * (-3.0 + x))))
 }
 
-fn ratio(dt: i64, ramp: i64) -> f64 {
-    dt.max(0) as f64 / ramp as f64
+/// Plan time covered after `dt` of a ramp of length `ramp` (both ns), for
+/// σ = 1 − S (decelerating) or σ = S. Past the middle it uses the symmetry
+/// ∫₀ᵘ S = 1/2 − v + ∫₀ᵛ S with v = 1 − u, so the f32 part stays small.
+fn ramp_distance(dt: i64, ramp: i64, decel: bool) -> i64 {
+    let dt = dt.max(0).min(ramp);
+    let rest = ramp - dt;
+    match (decel, dt <= rest) {
+        (true, true) => dt - correction(dt, ramp),
+        (true, false) => ramp / 2 - correction(rest, ramp),
+        (false, true) => correction(dt, ramp),
+        (false, false) => dt - ramp / 2 + correction(rest, ramp),
+    }
+}
+
+fn fraction(dt: i64, ramp: i64) -> f32 {
+    to_f32(dt.max(0).min(ramp)) / to_f32(ramp)
 }
 
 impl TimeScaling {
@@ -74,7 +92,7 @@ impl TimeScaling {
     pub fn at(&mut self, t_ns: i64) -> Scaled {
         let dt = t_ns - self.t0_ns;
         let ramp = self.ramp_ns.max(1);
-        let t_s = ramp as f32 * 1e-9;
+        let t_s = to_f32(ramp) * 1e-9;
         match self.phase {
             Phase::Nominal => Scaled {
                 s_ns: self.s0_ns + dt.max(0),
@@ -83,9 +101,8 @@ impl TimeScaling {
                 sigma_dd: 0.0,
             },
             Phase::Decel if dt < ramp => {
-                let uf = ratio(dt, ramp);
-                let (s, d1, d2) = smooth(uf as f32);
-                let ds = (ramp as f64 * (uf - smooth_integral(uf))) as i64;
+                let (s, d1, d2) = smooth(fraction(dt, ramp));
+                let ds = ramp_distance(dt, ramp, true);
                 Scaled {
                     s_ns: self.s0_ns + ds,
                     sigma: 1.0 - s,
@@ -107,9 +124,8 @@ impl TimeScaling {
                 sigma_dd: 0.0,
             },
             Phase::Accel if dt < ramp => {
-                let uf = ratio(dt, ramp);
-                let (s, d1, d2) = smooth(uf as f32);
-                let ds = (ramp as f64 * smooth_integral(uf)) as i64;
+                let (s, d1, d2) = smooth(fraction(dt, ramp));
+                let ds = ramp_distance(dt, ramp, false);
                 Scaled {
                     s_ns: self.s0_ns + ds,
                     sigma: s,
@@ -201,5 +217,32 @@ mod tests {
         assert_eq!(ts.phase, Phase::Nominal);
         // 200 ms (decel) + 200 ms (accel) of plan time + 600 ms at σ = 1.
         assert!((end.s_ns - 1_000_000_000).abs() < 100, "{}", end.s_ns);
+    }
+
+    #[test]
+    fn plan_time_is_monotone_and_exact_at_10_khz() {
+        for ramp in [1_000_000i64, 200_000_001, 2_000_000_000] {
+            for decel in [true, false] {
+                let mut last = 0;
+                for k in 0..=ramp / 100_000 + 1 {
+                    let s = ramp_distance(k * 100_000, ramp, decel);
+                    assert!(
+                        s >= last,
+                        "ramp {ramp} decel {decel} tick {k}: {s} < {last}"
+                    );
+                    last = s;
+                }
+                assert!((last - ramp / 2).abs() <= 1, "ramp {ramp}: ends at {last}");
+            }
+            // Decelerating and accelerating distances add up to the time elapsed.
+            for k in 0..=100 {
+                let dt = ramp * k / 100;
+                let sum = ramp_distance(dt, ramp, true) + ramp_distance(dt, ramp, false);
+                assert!(
+                    (sum - dt).abs() <= 1 + ramp / 1_000_000_000 * 16,
+                    "{sum} vs {dt}"
+                );
+            }
+        }
     }
 }

@@ -1,6 +1,8 @@
 //! Queued segments in drive precision (f32, normalised time) and their evaluation.
 
 use nalgebra::Vector3;
+
+use crate::ns::to_f32;
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::quintic::{JointMotion, eval_poly};
@@ -52,9 +54,10 @@ impl Seg {
     /// q, q', q'', q''' (derivatives with respect to plan time) at plan time `s_ns`,
     /// clamped into the segment.
     pub fn eval(&self, s_ns: i64) -> JointMotion<f32> {
-        let d = (s_ns - self.start_ns).clamp(0, self.duration_ns);
+        // max/min, not clamp: clamp has a panic path (min > max).
+        let d = (s_ns - self.start_ns).max(0).min(self.duration_ns);
         let tau = if self.duration_ns > 0 {
-            d as f32 / self.duration_ns as f32
+            to_f32(d) / to_f32(self.duration_ns)
         } else {
             0.0
         };

@@ -1,0 +1,126 @@
+//! On-target test of the triquint firmware core on QEMU's mps2-an386
+//! (Cortex-M4F): replays the golden plans and frames, compares every f32 bit,
+//! measures instructions per control tick, and exits through semihosting
+//! (status 0 pass, 1 fail).
+#![no_std]
+#![no_main]
+
+mod count;
+mod golden;
+mod tick;
+
+use cortex_m_rt::entry;
+use cortex_m_semihosting::{debug, hprintln};
+use panic_semihosting as _;
+
+static GOLDEN: &[u8] = include_bytes!("../../../../testdata/firmware/golden.bin");
+
+/// Instructions per control tick allowed in the worst case (issue 8).
+const BUDGET: u32 = 3000;
+/// SysTick counts per 1024 instructions under `-icount shift=10` (1024 ns per
+/// instruction) at the 25 MHz core clock: 25.6 × 1024.
+const ICOUNT_PER_K: u32 = 26_214;
+
+#[entry]
+fn main() -> ! {
+    let p = cortex_m::Peripherals::take().expect("peripherals");
+    let cnt = count::Counter::new(p.SYST);
+    let pass = match golden::replay(GOLDEN, &cnt) {
+        Ok(f) => {
+            hprintln!(
+                "golden: {} plan evaluations and {} ticks, {} frames: every f32 bit equal",
+                f.evals,
+                f.ticks,
+                f.rx_frames
+            );
+            let icount = cnt.per_k().abs_diff(ICOUNT_PER_K) <= ICOUNT_PER_K / 100;
+            hprintln!(
+                "instructions (calibration {} counts / 1024 instructions{})",
+                cnt.per_k(),
+                if icount {
+                    ""
+                } else {
+                    ": NOT under -icount shift=10, figures meaningless"
+                }
+            );
+            let mean = |s: u64, n: u32| s / n.max(1) as u64;
+            hprintln!(
+                "  quintic, 3 axes + time-scaling      mean {:5}  max {:5}",
+                mean(f.quintic_sum, f.evals),
+                f.quintic_max
+            );
+            hprintln!(
+                "  inverse dynamics (IK + Jacobians)   mean {:5}  max {:5}",
+                mean(f.dynamics_sum, f.evals),
+                f.dynamics_max
+            );
+            hprintln!(
+                "  tick, Running at sigma = 1          mean {:5}  max {:5}  ({} ticks)",
+                mean(f.running_sum, f.running_ticks),
+                f.running_max,
+                f.running_ticks
+            );
+            hprintln!(
+                "  tick, stop/hold/resume ramps                   max {:5}",
+                f.ramp_max
+            );
+            hprintln!(
+                "  tick, segment switch                           max {:5}  ({} ticks)",
+                f.switch_max,
+                f.switch_ticks
+            );
+            hprintln!(
+                "  tick, idle / armed                             max {:5}",
+                f.idle_max
+            );
+            hprintln!(
+                "  CAN frame (on_frame), while moving             max {:5}",
+                f.rx_moving_max
+            );
+            hprintln!(
+                "  CAN frame (on_frame), any (config commit)      max {:5}",
+                f.rx_max
+            );
+            hprintln!(
+                "  worst tick                                         {:5}",
+                f.worst_tick
+            );
+            hprintln!(
+                "  worst tick + frames handed over before it, moving  {:5}",
+                f.handoff_max
+            );
+            if !icount {
+                false
+            } else if f.worst_tick > BUDGET {
+                hprintln!(
+                    "FAIL: worst tick {} instructions > budget {}",
+                    f.worst_tick,
+                    BUDGET
+                );
+                false
+            } else {
+                true
+            }
+        }
+        Err(e) => {
+            hprintln!(
+                "FAIL: {} at byte {}: want {:#010x}, got {:#010x}",
+                e.what,
+                e.offset,
+                e.want,
+                e.got
+            );
+            false
+        }
+    };
+    let _ = cnt.release();
+    hprintln!("{}", if pass { "PASS" } else { "FAIL" });
+    debug::exit(if pass {
+        debug::EXIT_SUCCESS
+    } else {
+        debug::EXIT_FAILURE
+    });
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}

@@ -1,0 +1,57 @@
+//! Integer ↔ f32 conversion for the control tick. Cortex-M4F converts i32 in
+//! one instruction but i64 only through a soft-float routine (≈ 25–50
+//! instructions); tick values (ns within a segment or ramp, encoder counts)
+//! almost always fit in i32. Same rounding either way, so results are
+//! identical bit for bit.
+
+/// `x as f32`, through i32 when it fits.
+#[inline(always)]
+pub fn to_f32(x: i64) -> f32 {
+    if x == x as i32 as i64 {
+        x as i32 as f32
+    } else {
+        x as f32
+    }
+}
+
+/// `x as i64` (truncating, saturating), through i32 when in range.
+#[inline(always)]
+pub fn to_i64(x: f32) -> i64 {
+    if x.abs() < 2.0e9 {
+        x as i32 as i64
+    } else {
+        x as i64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{to_f32, to_i64};
+
+    #[test]
+    fn same_integer_as_the_plain_conversion() {
+        for bits in (0..u32::MAX).step_by(9_973) {
+            let x = f32::from_bits(bits);
+            assert_eq!(to_i64(x), x as i64, "{x:e}");
+        }
+    }
+
+    #[test]
+    fn same_bits_as_the_plain_conversion() {
+        let mut x: i64 = 1;
+        for k in 0..20_000i64 {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            for v in [
+                x,
+                x >> (k % 63),
+                -(x >> (k % 63)),
+                i32::MAX as i64 + k,
+                i32::MIN as i64 - k,
+            ] {
+                assert_eq!(to_f32(v).to_bits(), (v as f32).to_bits(), "{v}");
+            }
+        }
+    }
+}

@@ -1,0 +1,440 @@
+//! Golden vectors for the on-target test (`firmware/boards/qemu-mps2-an386`):
+//! the host runs the firmware core on recorded inputs and stores every f32
+//! result bit for bit in `testdata/firmware/golden.bin`; the Cortex-M4F image
+//! replays the same inputs and must reproduce the same bits. The f64 side
+//! (within 1 µm of the plan) is checked here, on the host.
+//!
+//! `TRIQUINT_BLESS=1 cargo test -p triquint-firmware --test golden` rewrites the file;
+//! otherwise the test fails when the stored vectors are stale.
+//!
+//! Record format (little endian; one tag byte per record), read by the
+//! image's `golden.rs`:
+//! - `M` 18 × f32: `Model<f32>` (rho_u[0..3] xyz, l, l2, platform, strut,
+//!   slider masses, rotor inertia, ratio, inv_ratio, gravity)
+//! - `S` seq u16, flags u16, duration_us u32, start_ns i64, 18 × i64: a segment
+//! - `E` s_ns i64, σ, σ̇, σ̈ f32 → 12 × f32 (q, q̇, q̈, q⃛ after scaling),
+//!   ok u8, 3 × f32 torque: evaluation of the last segment
+//! - `N` node id u8: a fresh node
+//! - `F` timestamp_us u32, id u16, len u8, fd u8, payload → tx count u8,
+//!   tx hash u32 (only when the count is not 0)
+//! - `T` now_us u32, counts i32 → torque f32, enabled | state << 1 u8,
+//!   tx count u8, tx hash u32 (only when the count is not 0)
+//! - `Z` end
+
+use std::path::PathBuf;
+
+use nalgebra::Vector3;
+use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
+use triquint_shared::dynamics;
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
+use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
+use triquint_shared::protocol::{
+    Command, CommandCode, Frame, State, TimeSync, WireSegment, config_write_frame,
+};
+use triquint_shared::quintic::JointMotion;
+use triquint_shared::{Limits, Model, Robot};
+
+use triquint_firmware::segment::{Seg, scale};
+
+const PLANS: [&str; 3] = ["case1-spline", "case2-spline", "spiral-spline"];
+/// The drive under test: node 2, axis 1.
+const NODE: u8 = 2;
+/// Control period (µs): 10 kHz, the rate of the real board.
+const TICK_US: u64 = 100;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn load_plan(name: &str) -> Plan {
+    let p = root().join(format!("testdata/protocol/plans/{name}.json"));
+    let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+fn wire_segments(plan: &Plan) -> Vec<WireSegment> {
+    let n = plan.segments.len();
+    plan.segments
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let mut flags = 0;
+            if i == 0 {
+                flags |= FLAG_FIRST;
+            }
+            if i + 1 == n {
+                flags |= FLAG_LAST;
+            }
+            WireSegment::from_quintic(i as u16, &s.quintic(), flags)
+                .expect("plan segment on the wire")
+        })
+        .collect()
+}
+
+/// FNV-1a over the frames a node queued for transmission.
+fn tx_hash(frames: &[Frame]) -> u32 {
+    let mut h: u32 = 0x811C_9DC5;
+    let mut eat = |b: u8| {
+        h ^= b as u32;
+        h = h.wrapping_mul(0x0100_0193);
+    };
+    for f in frames {
+        for b in f.id.to_le_bytes() {
+            eat(b);
+        }
+        eat(f.len);
+        eat(f.fd as u8);
+        for &b in f.payload() {
+            eat(b);
+        }
+    }
+    h
+}
+
+#[derive(Default)]
+struct Out(Vec<u8>);
+impl Out {
+    fn u8(&mut self, x: u8) {
+        self.0.push(x);
+    }
+    fn u16(&mut self, x: u16) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn u32(&mut self, x: u32) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn u64(&mut self, x: u64) {
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+    fn f32(&mut self, x: f32) {
+        self.u32(x.to_bits());
+    }
+    fn v3(&mut self, v: &Vector3<f32>) {
+        for k in 0..3 {
+            self.f32(v[k]);
+        }
+    }
+    fn motion(&mut self, m: &JointMotion<f32>) {
+        for v in [&m.q, &m.qd, &m.qdd, &m.qddd] {
+            self.v3(v);
+        }
+    }
+}
+
+fn model_record(out: &mut Out, m: &Model<f32>) {
+    out.u8(b'M');
+    for r in &m.rho_u {
+        out.v3(r);
+    }
+    for x in [
+        m.l,
+        m.l2,
+        m.platform_mass,
+        m.strut_mass,
+        m.slider_mass,
+        m.rotor_inertia,
+        m.ratio,
+        m.inv_ratio,
+        m.gravity,
+    ] {
+        out.f32(x);
+    }
+}
+
+/// Golden plans: every segment of the three test plans, sampled and scaled,
+/// with the feedforward. Returns the worst f32-vs-f64 position error (m).
+fn golden_plans(out: &mut Out) -> f64 {
+    let m32 = Robot::default().model::<f32>();
+    model_record(out, &m32);
+    let mut worst: f64 = 0.0;
+    // Time-scalings: nominal, and a few ramp states (σ, σ̇, σ̈).
+    let scalings = [
+        (1.0f32, 0.0f32, 0.0f32),
+        (0.5, -3.75, 0.0),
+        (0.1, 1.2, -20.0),
+    ];
+    for name in PLANS {
+        let plan = load_plan(name);
+        assert!(
+            plan.robot == Robot::default(),
+            "{name}: golden plans assume the default robot"
+        );
+        let mut start = 0i64;
+        for (w, seg64) in wire_segments(&plan).iter().zip(&plan.segments) {
+            let seg = Seg::from_wire(w, start);
+            out.u8(b'S');
+            out.u16(w.seq);
+            out.u16(w.flags);
+            out.u32(w.duration_us);
+            out.u64(start as u64);
+            for row in &w.coeffs {
+                for &c in row {
+                    out.u64(c as u64);
+                }
+            }
+            let q64 = seg64.quintic();
+            for i in 0..=16i64 {
+                // Include points just outside the segment (clamped).
+                let d = (seg.duration_ns * i) / 16 + if i == 16 { 1000 } else { 0 };
+                let s_ns = start + d - if i == 0 { 1000 } else { 0 };
+                let (sg, sd, sdd) = scalings[i as usize % scalings.len()];
+                let m = scale(&seg.eval(s_ns), sg, sd, sdd);
+                out.u8(b'E');
+                out.u64(s_ns as u64);
+                for x in [sg, sd, sdd] {
+                    out.f32(x);
+                }
+                out.motion(&m);
+                match dynamics::torque(&m32, &m.q, &m.qd, &m.qdd) {
+                    Ok(t) => {
+                        out.u8(1);
+                        out.v3(&t);
+                    }
+                    Err(_) => {
+                        out.u8(0);
+                        out.v3(&Vector3::zeros());
+                    }
+                }
+                // f64 side: the drive's f32 position against the plan.
+                let t_s = (s_ns - start).clamp(0, seg.duration_ns) as f64 * 1e-9;
+                let p = q64.eval(t_s);
+                for j in 0..3 {
+                    worst = worst.max((p.q[j] - m.q[j] as f64).abs());
+                }
+            }
+            start += seg.duration_ns;
+        }
+    }
+    worst
+}
+
+struct Enc(i64);
+impl Encoder for Enc {
+    fn read_counts(&mut self) -> i64 {
+        self.0
+    }
+}
+#[derive(Default)]
+struct Motor {
+    torque: f32,
+    enabled: bool,
+}
+impl MotorOutput for Motor {
+    fn set_torque(&mut self, t: f32) {
+        self.torque = t;
+    }
+    fn enable(&mut self, on: bool) {
+        self.enabled = on;
+    }
+}
+
+/// Replays inputs into one node and records its outputs.
+struct Recorder {
+    node: Node,
+    motor: Motor,
+    out: Out,
+    now: u64,
+    sync_seq: u8,
+    next_sync: u64,
+    /// Deterministic encoder noise (LCG).
+    noise: u32,
+    cpm: f64,
+    ticks: u64,
+    /// States visited, in order.
+    states: Vec<State>,
+}
+
+impl Recorder {
+    fn drain(&mut self) -> (u8, u32) {
+        let mut sent = Vec::new();
+        while let Some(f) = self.node.pop_tx() {
+            sent.push(f);
+        }
+        (sent.len() as u8, tx_hash(&sent))
+    }
+
+    fn rx(&mut self, f: Frame) {
+        self.node.on_frame(&RxFrame {
+            frame: f,
+            timestamp_us: self.now,
+        });
+        let (n, h) = self.drain();
+        let o = &mut self.out;
+        o.u8(b'F');
+        o.u32(self.now as u32);
+        o.u16(f.id);
+        o.u8(f.len);
+        o.u8(f.fd as u8);
+        o.0.extend_from_slice(f.payload());
+        o.u8(n);
+        if n > 0 {
+            o.u32(h);
+        }
+    }
+
+    fn command(&mut self, c: CommandCode, arg: u32) {
+        self.rx(Command {
+            command: c as u8,
+            token: 7,
+            arg,
+        }
+        .to_frame(0));
+    }
+
+    fn tick(&mut self) {
+        // Host time = local time + 3 s; syncs every 20 ms.
+        if self.now >= self.next_sync {
+            self.sync_seq = self.sync_seq.wrapping_add(1);
+            let prev = (self.next_sync + 3_000_000).saturating_sub(20_000) as u32;
+            self.rx(TimeSync {
+                seq: self.sync_seq,
+                prev_tx_us: prev,
+            }
+            .to_frame(0));
+            self.next_sync = self.now + 20_000;
+        }
+        // The axis follows last tick's reference, with ±3 counts of noise.
+        self.noise = self
+            .noise
+            .wrapping_mul(1_664_525)
+            .wrapping_add(1_013_904_223);
+        let jitter = (self.noise >> 29) as i64 - 3;
+        let q = self.node.stats.reference.q[1] as f64;
+        let counts = (q * self.cpm).round() as i64 + jitter;
+        self.node.tick(self.now, &mut Enc(counts), &mut self.motor);
+        let (n, h) = self.drain();
+        let o = &mut self.out;
+        o.u8(b'T');
+        o.u32(self.now as u32);
+        o.u32(counts as i32 as u32);
+        o.f32(self.motor.torque);
+        o.u8(self.motor.enabled as u8 | (self.node.state() as u8) << 1);
+        o.u8(n);
+        if n > 0 {
+            o.u32(h);
+        }
+        self.now += TICK_US;
+        self.ticks += 1;
+        if self.states.last() != Some(&self.node.state()) {
+            self.states.push(self.node.state());
+        }
+    }
+
+    fn run_us(&mut self, us: u64) {
+        for _ in 0..us / TICK_US {
+            self.tick();
+        }
+    }
+}
+
+/// Golden frames: node 2 configured over CAN at 10 kHz, the first part of
+/// Case I uploaded (classic frames before the start, CAN-FD while running),
+/// armed, started, held, resumed and stopped. Returns the states visited.
+fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
+    let plan = load_plan("case1-spline");
+    let settings = DriveSettings {
+        control_rate: 1e6 / TICK_US as f64,
+        ..DriveSettings::default()
+    };
+    let cfg = DriveConfig::new(&plan.robot, &Limits::default(), 1, &settings, 0.2, 0.1);
+    let mut r = Recorder {
+        node: Node::new(NODE),
+        motor: Motor::default(),
+        out,
+        now: 1_000_000,
+        sync_seq: 0,
+        next_sync: 1_000_000,
+        noise: 12345,
+        cpm: cfg.counts_per_metre as f64,
+        ticks: 0,
+        states: Vec::new(),
+    };
+    r.out.u8(b'N');
+    r.out.u8(NODE);
+    // Park the axis at the plan's start, unconfigured (motor off).
+    let segs = wire_segments(&plan);
+    r.node.stats.reference.q = Seg::from_wire(&segs[0], 0).start_q();
+    r.run_us(60_000);
+    for (k, v) in cfg.to_values().iter().enumerate() {
+        r.rx(config_write_frame(NODE, k as u8, *v));
+    }
+    r.command(CommandCode::ConfigCommit, cfg.crc());
+    assert_eq!(r.node.config_crc(), cfg.crc(), "configuration committed");
+    r.run_us(20_000);
+    let mut next = 0;
+    for w in segs.iter().take(3) {
+        for f in w.frames(false) {
+            r.rx(f);
+        }
+        next += 1;
+    }
+    r.run_us(5_000);
+    r.command(CommandCode::Arm, 0);
+    let host_now = (r.now + 3_000_000) as u32;
+    r.command(CommandCode::Start, host_now + 20_000);
+    // Run 1.1 s (two segment switches), topping the queue up over CAN-FD
+    // right before ticks, as the CAN task hands segments over.
+    for _ in 0..11_000 {
+        if r.node.queue_depth() < 3 && next < segs.len() {
+            for f in segs[next].frames(true) {
+                r.rx(f);
+            }
+            next += 1;
+        }
+        r.tick();
+    }
+    r.command(CommandCode::FeedHold, 0);
+    r.run_us(250_000);
+    r.command(CommandCode::Resume, 0);
+    for _ in 0..3_000 {
+        if r.node.queue_depth() < 3 && next < segs.len() {
+            for f in segs[next].frames(true) {
+                r.rx(f);
+            }
+            next += 1;
+        }
+        r.tick();
+    }
+    r.command(CommandCode::Stop, 0);
+    r.run_us(250_000);
+    r.out.u8(b'Z');
+    let ticks = r.ticks;
+    (r.out, r.states, ticks)
+}
+
+#[test]
+fn golden_vectors_are_current_and_within_a_micrometre() {
+    let mut out = Out::default();
+    out.0.extend_from_slice(b"TQG1");
+    let worst = golden_plans(&mut out);
+    eprintln!("golden plans: f32 drive position vs f64 plan, worst {worst:e} m");
+    assert!(worst < 1e-6, "f32 position {worst:e} m from the plan");
+    let (out, states, ticks) = golden_frames(out);
+    eprintln!("golden frames: {ticks} ticks, states {states:?}");
+    for s in [
+        State::Loaded,
+        State::Armed,
+        State::Running,
+        State::Stopping,
+        State::Idle,
+    ] {
+        assert!(
+            states.contains(&s),
+            "the scenario never reached {s:?}: {states:?}"
+        );
+    }
+    let path = root().join("testdata/firmware/golden.bin");
+    if std::env::var_os("TRIQUINT_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, &out.0).unwrap();
+        eprintln!("wrote {} ({} bytes)", path.display(), out.0.len());
+    } else {
+        let stored = std::fs::read(&path).unwrap_or_default();
+        assert!(
+            stored == out.0,
+            "{} is stale: rerun with TRIQUINT_BLESS=1 and the QEMU test",
+            path.display()
+        );
+    }
+}

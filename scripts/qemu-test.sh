@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# On-target test of the firmware core on QEMU's mps2-an386 (Cortex-M4F):
+#  1. the golden vectors on the host (firmware/tests/golden.rs) are current;
+#  2. the test image replays them bit for bit and stays within the tick budget
+#     (exit status from semihosting; -icount shift=10 counts instructions);
+#  3. the control tick's call graph reaches no f64 soft-float and no panic, and
+#     a deliberately bad build (feature bad-tick) is rejected by the same check;
+#  4. where the tick's instructions go (tick_profile.py), and image sizes.
+# Installs what it needs (apt qemu-system-arm, rustup target and llvm-tools).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+step() { printf '\n==> %s\n' "$*"; }
+
+step "tools: qemu-system-arm, thumbv7em-none-eabihf, llvm-tools"
+if ! command -v qemu-system-arm >/dev/null; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get -o DPkg::Lock::Timeout=600 update -qq
+    apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends qemu-system-arm >/dev/null
+fi
+if ! command -v addr2line >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends binutils >/dev/null
+fi
+rustup target add thumbv7em-none-eabihf >/dev/null
+rustup component add llvm-tools >/dev/null
+bin="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin"
+objdump="$bin/llvm-objdump"
+size="$bin/llvm-size"
+
+step "golden vectors are current (host f32 results; f64 plan within 1 µm)"
+cargo test --locked -p triquint-firmware --test golden -- --nocapture 2>&1 | grep -E "golden|test result"
+
+cd "$root/firmware/boards/qemu-mps2-an386"
+elf=target/thumbv7em-none-eabihf/release/triquint-qemu-mps2-an386
+step "QEMU image: fmt, clippy, build"
+cargo fmt --check
+cargo clippy --locked --release -- -D warnings
+cargo build --locked --release
+
+step "QEMU mps2-an386: golden replay and tick budget (exit status from the image)"
+cargo run --locked --release
+
+step "ELF check: control tick reaches no f64 soft-float and no panic"
+python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_control_tick
+echo "(for information: the CAN receive path, which commits configurations in f64)"
+python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_can_rx | tail -1 || true
+
+step "where the tick's instructions go (QEMU block trace)"
+python3 "$root/scripts/tick_profile.py" "$objdump" "$elf" triquint_control_tick -- \
+    qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none -serial none \
+    -semihosting-config enable=on,target=native -icount shift=10 \
+    -d in_asm,exec,nochain -D /dev/stdout -kernel "$elf"
+
+step "image size"
+"$size" "$elf"
+
+step "the ELF check rejects a deliberately bad tick (feature bad-tick)"
+cargo build --locked --release --features bad-tick 2>&1 | tail -1
+if python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_control_tick; then
+    echo "FAIL: the check accepted a tick with an f64 operation and a panic path" >&2
+    exit 1
+fi
+echo "ok: the bad build was rejected"
+cargo build --locked --release 2>&1 | tail -1
