@@ -24,6 +24,9 @@ use triquint_shared::protocol::config::config_crc;
 pub const QUEUE_CAPACITY: usize = 8;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 64;
+/// A command repeated (same code, token, argument) within this time is a
+/// duplicate frame: CAN resends a frame whose ACK slot a receiver missed.
+pub const REPEAT_WINDOW_US: u64 = 100_000;
 /// Largest allowed jump between a segment's start and the previous end (m).
 pub const CONTINUITY_TOL: f32 = 10e-6;
 
@@ -86,7 +89,8 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     asm: Reassembler,
     next_seq: u16,
     queued_end_ns: i64,
-    prev_end: Option<Vector3<f32>>,
+    /// End motion (q, q', q'', q''') of the last accepted segment.
+    prev_end: Option<JointMotion<f32>>,
     sync: SyncEstimator,
     scaling: TimeScaling,
     stop_reason: Option<StopReason>,
@@ -109,6 +113,15 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     errors: (u8, u8),
     outbox: Deque<Frame, OUTBOX>,
     dropped_tx: u32,
+    /// The last command executed and its answer: a CAN frame can arrive twice
+    /// (a transmitter that missed the ACK resends it), so a repeat of the
+    /// same command, token and argument within [`REPEAT_WINDOW_US`] is
+    /// answered again, not executed again.
+    last_command: Option<(Command, CommandAck, u64)>,
+    /// Receive time (µs) of the command being handled.
+    command_rx_us: u64,
+    /// Local time (µs) of the last heartbeat of each node (index node − 1).
+    peer_seen_us: [Option<u64>; 3],
     pub stats: Stats,
 }
 
@@ -116,6 +129,40 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
 /// min ≤ max), so the control tick has none.
 fn limit(x: f32, lim: f32) -> f32 {
     x.max(-lim).min(lim)
+}
+
+/// Relative tolerance on the configured velocity, acceleration and jerk
+/// limits, and on the jump of q', q'', q''' between segments (as a fraction
+/// of those limits): f32 evaluation of an exact plan stays far inside it.
+pub const LIMIT_TOL: f32 = 0.01;
+
+/// Velocity, acceleration and jerk of every axis within the configured
+/// limits, checked at 65 points of the segment (a safety net behind the
+/// host's exact verification, not a replacement for it).
+fn within_limits(seg: &Seg, cfg: &DriveConfig) -> bool {
+    let k = 1.0 + LIMIT_TOL;
+    let (v, a, j) = (
+        cfg.max_velocity * k,
+        cfg.max_acceleration * k,
+        cfg.max_jerk * k,
+    );
+    (0..=64).all(|i| {
+        let m = seg.eval(seg.start_ns + seg.duration_ns * i / 64);
+        m.q.iter().all(|x| x.is_finite())
+            && m.qd.amax() <= v
+            && m.qdd.amax() <= a
+            && m.qddd.amax() <= j
+    })
+}
+
+/// The new segment starts where the previous one ended, in position (within
+/// [`CONTINUITY_TOL`]) and in velocity, acceleration and jerk (within
+/// [`LIMIT_TOL`] of the limits): C3 continuity.
+fn c3_continuous(prev: &JointMotion<f32>, next: &JointMotion<f32>, cfg: &DriveConfig) -> bool {
+    (prev.q - next.q).amax() <= CONTINUITY_TOL
+        && (prev.qd - next.qd).amax() <= LIMIT_TOL * cfg.max_velocity
+        && (prev.qdd - next.qdd).amax() <= LIMIT_TOL * cfg.max_acceleration
+        && (prev.qddd - next.qddd).amax() <= LIMIT_TOL * cfg.max_jerk
 }
 
 fn seq_diff(a: u16, b: u16) -> i16 {
@@ -172,6 +219,9 @@ impl<const Q: usize> Node<Q> {
             errors: (0, 0),
             outbox: Deque::new(),
             dropped_tx: 0,
+            peer_seen_us: [None; 3],
+            last_command: None,
+            command_rx_us: 0,
             stats: Stats::default(),
         }
     }
@@ -209,6 +259,18 @@ impl<const Q: usize> Node<Q> {
     }
     pub fn scaling_phase(&self) -> Phase {
         self.scaling.phase
+    }
+    /// The segment the reference is taken from while Running or Stopping:
+    /// (sequence number, CRC-32 of its body as received).
+    pub fn executing(&self) -> Option<(u16, u32)> {
+        match self.state {
+            State::Running | State::Stopping => self.queue.front().map(|s| (s.seq, s.crc)),
+            _ => None,
+        }
+    }
+    /// Plan time of the last reference (ns).
+    pub fn plan_ns(&self) -> i64 {
+        self.plan_ns
     }
     /// Frames the controller refused and the outbox could not keep.
     pub fn dropped_tx(&self) -> u32 {
@@ -258,6 +320,7 @@ impl<const Q: usize> Node<Q> {
                 let _ = e;
                 self.on_emergency(code, rx.timestamp_us);
             }
+            Msg::Heartbeat(h) if node != self.node_id => self.on_peer_heartbeat(node, &h, rx),
             Msg::Command(c) if for_me => self.on_command(&c, rx.timestamp_us),
             Msg::ConfigWrite { index, value } if for_me => {
                 if let Some(slot) = self.written.get_mut(index as usize) {
@@ -347,13 +410,20 @@ impl<const Q: usize> Node<Q> {
         }
         let start = if first { 0 } else { self.queued_end_ns };
         let seg = Seg::from_wire(w, start);
+        if self.active.is_none() {
+            return Err(Reject::WrongState);
+        }
+        if !within_limits(&seg, &self.cfg) {
+            return Err(Reject::Invalid);
+        }
+        let begin = seg.eval(seg.start_ns);
         if let Some(prev) = self.prev_end
             && !first
-            && (seg.start_q() - prev).amax() > CONTINUITY_TOL
+            && !c3_continuous(&prev, &begin, &self.cfg)
         {
             return Err(Reject::Discontinuous);
         }
-        self.prev_end = Some(seg.end_q());
+        self.prev_end = Some(seg.eval(seg.end_ns()));
         self.queued_end_ns = seg.end_ns();
         self.next_seq = self.next_seq.wrapping_add(1);
         if self.queue.push_back(seg).is_err() {
@@ -383,6 +453,7 @@ impl<const Q: usize> Node<Q> {
             state: self.state as u8,
             value,
         };
+        self.last_command = Some((*c, a, self.command_rx_us));
         let f = a.to_frame(self.node_id);
         self.send(f);
     }
@@ -441,7 +512,65 @@ impl<const Q: usize> Node<Q> {
         }
     }
 
+    /// Peer supervision: a peer that reports a fault (its Emergency may have
+    /// been lost) or has lost its configuration (it was reset) stops us too.
+    fn on_peer_heartbeat(&mut self, node: u8, h: &Heartbeat, rx: &RxFrame) {
+        let Some(slot) = (node as usize)
+            .checked_sub(1)
+            .and_then(|i| self.peer_seen_us.get_mut(i))
+        else {
+            return;
+        };
+        *slot = Some(rx.timestamp_us);
+        if self.state != State::Running {
+            return;
+        }
+        let peer = State::from_u8(h.state);
+        if h.fault != FaultCode::None as u8 && h.fault != FaultCode::QuickStop as u8 {
+            self.on_emergency(FaultCode::PeerEmergency, rx.timestamp_us);
+        } else if h.config_crc == 0 || self.peer_left_behind(peer, rx.timestamp_us) {
+            self.on_emergency(FaultCode::PeerLost, rx.timestamp_us);
+        }
+    }
+
+    /// A peer still Loaded or Armed (it missed the Start) well after we
+    /// started, or Idle before our plan's last segment: it is not moving
+    /// with us. The margins cover the start skew (one tick) and the end skew.
+    fn peer_left_behind(&self, peer: Option<State>, local_us: u64) -> bool {
+        const MARGIN_NS: i64 = 20_000_000;
+        let (Some(t), Some(t0)) = (self.sync.host_ns(local_us), self.stats.started_at_ns) else {
+            return false;
+        };
+        match peer {
+            Some(State::Loaded | State::Armed) => t - t0 > MARGIN_NS,
+            Some(State::Idle) => self
+                .queue
+                .back()
+                .is_some_and(|b| !b.last || self.plan_ns + MARGIN_NS < b.end_ns()),
+            _ => false,
+        }
+    }
+
+    /// A peer (seen at least once) whose heartbeat has been missing for the
+    /// sync timeout.
+    fn peer_silent(&self, a: &Active, now_us: u64) -> bool {
+        self.peer_seen_us
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i + 1 != self.node_id as usize)
+            .any(|(_, t)| t.is_some_and(|t| now_us.saturating_sub(t) > a.sync_timeout_us))
+    }
+
     fn on_command(&mut self, c: &Command, local_us: u64) {
+        self.command_rx_us = local_us;
+        if let Some((last, ack, at)) = self.last_command
+            && last == *c
+            && local_us.saturating_sub(at) < REPEAT_WINDOW_US
+        {
+            let f = ack.to_frame(self.node_id);
+            self.send(f);
+            return;
+        }
         let Some(code) = CommandCode::from_u8(c.command) else {
             self.command_ack(c, FaultCode::BadCommand, 0);
             return;
@@ -654,6 +783,9 @@ impl<const Q: usize> Node<Q> {
                 }
                 _ => {}
             }
+        }
+        if self.state == State::Running && self.peer_silent(&a, now_us) {
+            self.begin_stop(StopReason::Fault(FaultCode::PeerLost), false, now_us);
         }
         let host_ns = host.unwrap_or(0);
 

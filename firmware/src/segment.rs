@@ -20,6 +20,8 @@ pub struct Seg {
     pub b: [[f32; 6]; 3],
     pub first: bool,
     pub last: bool,
+    /// CRC-32 of the received body: which segment, bit for bit, this is.
+    pub crc: u32,
 }
 
 impl Seg {
@@ -34,6 +36,7 @@ impl Seg {
             b: w.normalised_f32(),
             first: w.flags & FLAG_FIRST != 0,
             last: w.flags & FLAG_LAST != 0,
+            crc: w.body_crc(),
         }
     }
 

@@ -11,7 +11,18 @@ pub struct SyncEstimator {
     /// Rate correction: host advances (1 + ppb·1e-9) µs per local µs.
     ppb: i64,
     samples: u32,
+    /// Local receive time (µs) of the sync that produced the latest accepted sample.
+    good_us: Option<u64>,
+    /// Local receive time (µs) of the last sync received (paired or not).
+    rx_us: Option<u64>,
+    /// Samples discarded as outliers since the last accepted one.
+    pub outliers: u32,
 }
+
+/// A sample whose host time differs from the prediction by more than this (µs)
+/// is a late or corrupted sync, not a clock: it is discarded. Clocks within
+/// ±1000 ppm drift at most 100 µs per 100 ms sync period.
+pub const OUTLIER_US: i64 = 500;
 
 impl SyncEstimator {
     pub fn reset(&mut self) {
@@ -20,6 +31,7 @@ impl SyncEstimator {
 
     /// A TimeSync (`seq`, host transmit time of `seq − 1`) received at local time `local_us`.
     pub fn on_sync(&mut self, seq: u8, prev_tx_us: u32, local_us: u64) {
+        self.rx_us = Some(local_us);
         if let Some((pseq, plocal)) = self.pending
             && pseq.wrapping_add(1) == seq
         {
@@ -31,6 +43,16 @@ impl SyncEstimator {
                 }
                 None => prev_tx_us as i64,
             };
+            // Once synced, a sample far from the prediction is a late receive
+            // timestamp or a corrupted frame: keep the old time base.
+            if self.samples >= 2
+                && let Some(est) = self.host_us(plocal)
+                && (host - est).abs() > OUTLIER_US
+            {
+                self.outliers = self.outliers.saturating_add(1);
+                self.pending = Some((seq, local_us));
+                return;
+            }
             if let Some((ha, la)) = self.a {
                 let dl = plocal as i64 - la as i64;
                 if dl > 1000 {
@@ -48,6 +70,8 @@ impl SyncEstimator {
             }
             self.a = Some((host, plocal));
             self.samples = self.samples.saturating_add(1);
+            self.good_us = Some(local_us);
+            self.outliers = 0;
         }
         self.pending = Some((seq, local_us));
     }
@@ -65,11 +89,18 @@ impl SyncEstimator {
         Some(ha * 1000 + dl_ns + dl_ns.saturating_mul(self.ppb) / 1_000_000_000)
     }
 
-    /// Synchronised: offset and rate known, last sample younger than `timeout_us`.
+    /// Synchronised: offset and rate known, a sync received no more than
+    /// `timeout_us` ago (one lost sync is ridden out on the rate estimate),
+    /// and an accepted sample no more than 4 × `timeout_us` ago (a stream of
+    /// outliers is not a time base).
     pub fn is_synced(&self, local_us: u64, timeout_us: u64) -> bool {
-        match self.a {
-            Some((_, la)) => self.samples >= 2 && local_us.saturating_sub(la) <= timeout_us,
-            None => false,
+        match (self.good_us, self.rx_us) {
+            (Some(g), Some(r)) => {
+                self.samples >= 2
+                    && local_us.saturating_sub(r) <= timeout_us
+                    && local_us.saturating_sub(g) <= 4 * timeout_us
+            }
+            _ => false,
         }
     }
 
@@ -106,6 +137,38 @@ mod tests {
         assert!((est - 2_950_000).abs() <= 2, "{est}");
         assert!((s.rate_ppb() + 150_000).abs() < 20_000, "{}", s.rate_ppb());
         assert!(s.lost(local(4_000_000.0) as u64, 500_000));
+    }
+
+    #[test]
+    fn late_sync_is_discarded_and_silence_times_out_from_the_last_good_sync() {
+        let mut s = SyncEstimator::default();
+        for k in 0..5u64 {
+            s.on_sync(
+                k as u8,
+                (k * 100_000).saturating_sub(100_000) as u32,
+                7 + k * 100_000,
+            );
+        }
+        let before = s.host_us(450_007).unwrap();
+        // Sync 5 is received 30 ms late; sync 6 pairs host time 500 000 with it.
+        s.on_sync(5, 400_000, 530_007);
+        s.on_sync(6, 500_000, 600_007);
+        assert_eq!(s.outliers, 1);
+        assert!((s.host_us(450_007).unwrap() - before).abs() <= 1);
+        // The timeout runs from the last sync received.
+        assert!(s.is_synced(600_007 + 250_000, 250_000));
+        assert!(!s.is_synced(600_007 + 250_001, 250_000));
+        // Outliers only: no longer synced 4 timeouts after the last good sample
+        // (sync 5 at 530 007 paired sync 4's times and was good).
+        for k in 7..20u64 {
+            s.on_sync(
+                k as u8,
+                (k * 100_000 - 100_000 + 30_000) as u32,
+                7 + k * 100_000,
+            );
+        }
+        assert!(s.outliers > 5);
+        assert!(!s.is_synced(1_900_007, 250_000));
     }
 
     #[test]

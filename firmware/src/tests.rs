@@ -52,6 +52,7 @@ struct Rig {
     syncing: bool,
     sent: Vec<Frame>,
     max_stop_jerk: f32,
+    token: u8,
 }
 
 fn q_at(z: f64, x: f64) -> Vector3<f64> {
@@ -59,12 +60,15 @@ fn q_at(z: f64, x: f64) -> Vector3<f64> {
     Pose::from_cartesian(&m, Vector3::new(x, -x, z)).unwrap().q
 }
 
-/// Rest-to-rest segments between poses, `h` seconds each.
+/// Rest-to-rest segments of equal joint steps, `h` seconds each: equal
+/// steps make the end jerk 60Δ/h³ equal on both sides of every knot (C3).
 fn segments(n: usize, h: f64) -> Vec<WireSegment> {
+    let q0 = q_at(0.62, 0.0);
+    let step = q_at(0.63, 0.01) - q0;
     (0..n)
         .map(|i| {
-            let a = q_at(0.62 + 0.01 * i as f64, 0.01 * i as f64);
-            let b = q_at(0.62 + 0.01 * (i + 1) as f64, 0.01 * (i + 1) as f64);
+            let a = q0 + step * i as f64;
+            let b = q0 + step * (i + 1) as f64;
             let mut coeffs = [[0.0; 6]; 3];
             for j in 0..3 {
                 let d = b[j] - a[j];
@@ -103,9 +107,17 @@ impl Rig {
     }
 
     fn with_stop_time(stop: f64) -> Self {
+        // The test segments are short rest-to-rest moves: limits wide enough
+        // for the node's own limit check to accept them.
+        let limits = Limits {
+            velocity: 1.0,
+            acceleration: 10.0,
+            jerk: 50.0,
+            ..Limits::default()
+        };
         let cfg = DriveConfig::new(
             &Robot::default(),
-            &Limits::default(),
+            &limits,
             1,
             &DriveSettings::default(),
             stop,
@@ -122,6 +134,7 @@ impl Rig {
             syncing: true,
             sent: Vec::new(),
             max_stop_jerk: 0.0,
+            token: 0,
         };
         r.tick();
         r
@@ -148,9 +161,10 @@ impl Rig {
 
     fn command(&mut self, c: CommandCode, arg: u32) -> u8 {
         let n = self.sent.len();
+        self.token = self.token.wrapping_add(1);
         self.rx(Command {
             command: c as u8,
-            token: 1,
+            token: self.token,
             arg,
         }
         .to_frame(0));

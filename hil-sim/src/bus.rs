@@ -42,6 +42,8 @@ pub struct Delivery {
     pub t_ns: u64,
     /// The station's own frame (transmit confirmation).
     pub own: bool,
+    /// The station that sent it.
+    pub from: usize,
 }
 
 /// The bus. Station 0 is the host, 1–3 the nodes.
@@ -129,6 +131,7 @@ impl Bus {
                             frame,
                             t_ns: done,
                             own: s == station,
+                            from: station,
                         });
                     }
                 }

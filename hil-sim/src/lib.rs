@@ -5,6 +5,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bus;
+pub mod faults;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
@@ -12,5 +13,6 @@ pub mod sim;
 pub mod testplan;
 
 pub use bus::{Bus, BusConfig, Delivery};
+pub use faults::{Fault, FaultInjector, FaultWindow};
 pub use plant::{Plant, PlantConfig};
 pub use sim::{Sim, SimConfig};

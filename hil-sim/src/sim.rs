@@ -10,6 +10,7 @@ use triquint_shared::kinematics::KinematicsError;
 use triquint_shared::protocol::{FaultCode, Frame, State};
 
 use crate::bus::{Bus, BusConfig, Delivery};
+use crate::faults::{BABBLER, FaultInjector, FaultWindow};
 use crate::plant::{Plant, PlantConfig};
 
 /// Everything configurable about the virtual hardware.
@@ -106,6 +107,13 @@ pub struct SimNode {
     pub peak_torque: f32,
     /// Largest |joint jerk| of the reference while Stopping (m/s³).
     pub max_stop_jerk: f32,
+    /// Segments the node took its reference from, in order: (true time of
+    /// the first tick, sequence number, CRC-32 of the body it received).
+    pub executed: Vec<(u64, u16, u32)>,
+    /// State changes seen at control ticks: (true time, new state).
+    pub states: Vec<(u64, State)>,
+    /// True time an Emergency frame of another station first reached this node.
+    pub emergency_rx_ns: Option<u64>,
 }
 
 struct SimEncoder(i64);
@@ -151,9 +159,47 @@ pub struct Sim {
     tick_us: u64,
     tick_count: u64,
     pub samples: Vec<Sample>,
+    /// Fault injection between the bus and the stations (see [`Sim::with_faults`]).
+    pub faults: Option<FaultInjector>,
 }
 
 impl Sim {
+    /// A machine whose bus passes every frame through a seeded fault layer;
+    /// the bus gets a fifth station for a babbling node.
+    pub fn with_faults(
+        robot: &Robot,
+        q0: Vector3<f64>,
+        cfg: SimConfig,
+        windows: Vec<FaultWindow>,
+        seed: u64,
+    ) -> Self {
+        let mut sim = Self::new(robot, q0, cfg);
+        sim.bus = Bus::new(sim.cfg.bus.clone(), BABBLER + 1);
+        sim.faults = Some(FaultInjector::new(windows, seed, BABBLER + 1));
+        sim
+    }
+
+    /// Power-cycles node `i` (0–2): it restarts Idle, unconfigured, motor off,
+    /// with its clock running on.
+    pub fn reset_node(&mut self, i: usize) {
+        let n = &mut self.nodes[i];
+        n.node = Node::new(i as u8 + 1);
+        n.pending_torque = 0.0;
+        n.enabled = false;
+        n.motor = SimMotor::default();
+    }
+
+    /// Next delivery from the bus to `station`, through the fault layer.
+    fn next_delivery(&mut self, station: usize) -> Option<Delivery> {
+        let Some(inj) = self.faults.as_mut() else {
+            return self.bus.receive(station);
+        };
+        while let Some(d) = self.bus.receive(station) {
+            inj.deliver(station, d, self.t_ns);
+        }
+        inj.ready(station, self.t_ns)
+    }
+
     /// A machine at joint position `q0`, nodes unconfigured, brakes on.
     pub fn new(robot: &Robot, q0: Vector3<f64>, cfg: SimConfig) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.clock_seed);
@@ -175,6 +221,9 @@ impl Sim {
                 faults: Vec::new(),
                 peak_torque: 0.0,
                 max_stop_jerk: 0.0,
+                executed: Vec::new(),
+                states: Vec::new(),
+                emergency_rx_ns: None,
             })
             .collect::<Vec<_>>();
         let mut sim = Self {
@@ -186,6 +235,7 @@ impl Sim {
             tick_us,
             tick_count: 0,
             samples: Vec::new(),
+            faults: None,
             cfg,
         };
         for n in &mut sim.nodes {
@@ -214,7 +264,7 @@ impl Sim {
 
     /// Next frame delivered to the host (including its own, as transmit confirmations).
     pub fn host_receive(&mut self) -> Option<Delivery> {
-        self.bus.receive(0)
+        self.next_delivery(0)
     }
 
     /// Records a change of node `i`'s fault code at the current time.
@@ -241,15 +291,23 @@ impl Sim {
 
     fn service_frames(&mut self, i: usize) {
         let station = i + 1;
-        let n = &mut self.nodes[i];
-        while let Some(d) = self.bus.receive(station) {
+        while let Some(d) = self.next_delivery(station) {
+            let n = &mut self.nodes[i];
+            if (0x010..=0x013).contains(&d.frame.id) && d.from != station {
+                n.emergency_rx_ns.get_or_insert(d.t_ns);
+            }
             let rx = RxFrame {
                 frame: d.frame,
                 timestamp_us: n.clock.local_us(d.t_ns),
             };
             n.node.on_frame(&rx);
         }
-        while self.bus.pending(station) < self.cfg.tx_mailboxes {
+        let bus_off = self
+            .faults
+            .as_ref()
+            .is_some_and(|f| f.bus_off(station, self.t_ns));
+        let n = &mut self.nodes[i];
+        while !bus_off && self.bus.pending(station) < self.cfg.tx_mailboxes {
             let Some(f) = n.node.pop_tx() else { break };
             self.bus.send(station, f, self.t_ns);
         }
@@ -272,6 +330,15 @@ impl Sim {
         }
         if n.started_ns.is_none() && n.node.state() == State::Running {
             n.started_ns = Some(self.t_ns);
+        }
+        let st = n.node.state();
+        if n.states.last().is_none_or(|x| x.1 != st) {
+            n.states.push((self.t_ns, st));
+        }
+        if let Some((seq, crc)) = n.node.executing()
+            && n.executed.last().is_none_or(|x| (x.1, x.2) != (seq, crc))
+        {
+            n.executed.push((self.t_ns, seq, crc));
         }
         self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
         if i == 0 {
@@ -312,6 +379,9 @@ impl Sim {
             };
             let t_stop = t.min(until_ns).max(self.t_ns);
             self.t_ns = t_stop;
+            if let Some(f) = self.faults.as_mut() {
+                f.feed_babbler(&mut self.bus, self.t_ns);
+            }
             self.bus.advance(self.t_ns);
             if t > until_ns {
                 return Ok(());

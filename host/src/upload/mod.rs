@@ -3,6 +3,7 @@
 //! SocketCAN: the [`Session`] is a non-blocking state machine driven by
 //! [`Session::poll`] over any [`CanPort`].
 
+pub mod fault_run;
 pub mod session;
 pub mod sim_port;
 #[cfg(test)]

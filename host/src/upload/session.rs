@@ -171,6 +171,8 @@ struct InFlight {
     sent_at: u64,
     tries: u32,
     acked: [bool; 3],
+    /// Resend requested by a rejection (not counted as a try).
+    early: bool,
 }
 
 /// One upload of one plan to the three nodes.
@@ -197,6 +199,10 @@ pub struct Session {
     retransmits: u64,
     rejects_seen: u64,
 }
+
+/// A segment is resent on a rejection only if its last transmission is older
+/// than this: a full window of classic segments takes about 11 ms on the wire.
+const RESEND_GUARD_US: u64 = 15_000;
 
 fn node_index(node: u8) -> Option<usize> {
     (1..=3).contains(&node).then(|| node as usize - 1)
@@ -254,6 +260,11 @@ impl Session {
 
     pub fn faults(&self) -> &[FaultReport] {
         &self.faults
+    }
+
+    /// Segments retransmitted so far.
+    pub fn retransmits(&self) -> u64 {
+        self.retransmits
     }
 
     /// Host time (µs) of the start (0 before).
@@ -326,10 +337,18 @@ impl Session {
                     }
                     Some(Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete) => {
                         self.rejects_seen += 1;
-                        // Retransmit at once.
-                        if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == a.seq as usize)
+                        // Resend at once the segment this node needs next (the
+                        // rejected one may only be queued behind a lost one),
+                        // unless it went out moments ago and may be on its way.
+                        // A resend on a rejection is not a timeout: it does not
+                        // use up the segment's tries.
+                        let need = a.next_seq as usize;
+                        if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == need)
+                            && !f.acked[i]
+                            && rx.t_us.saturating_sub(f.sent_at) > RESEND_GUARD_US
                         {
                             f.sent_at = 0;
+                            f.early = true;
                         }
                     }
                     Some(Reject::QueueFull) => {
@@ -427,7 +446,10 @@ impl Session {
                     });
                 }
                 let seq = f.seq;
-                self.in_flight[k].tries += 1;
+                if !f.early {
+                    self.in_flight[k].tries += 1;
+                }
+                self.in_flight[k].early = false;
                 self.in_flight[k].sent_at = now;
                 self.retransmits += 1;
                 self.queue_segment(seq);
@@ -450,6 +472,7 @@ impl Session {
                 sent_at: now,
                 tries: 1,
                 acked: [false; 3],
+                early: false,
             });
             self.next_to_send += 1;
         }

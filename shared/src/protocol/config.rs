@@ -258,7 +258,7 @@ impl Default for DriveSettings {
             following_error_max: 1.0e-3,
             arm_tolerance: 0.2e-3,
             underrun_margin: 0.05,
-            sync_timeout: 0.5,
+            sync_timeout: 0.25,
             control_rate: 1000.0,
             telemetry_rate: 50.0,
             heartbeat_period: 0.1,

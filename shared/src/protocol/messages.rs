@@ -35,7 +35,7 @@ code_enum! {
         LostSync = 2,
         /// |position reference − encoder| exceeded the configured bound.
         FollowingError = 3,
-        /// Another node sent an Emergency frame.
+        /// Another node sent an Emergency frame or a heartbeat with a fault.
         PeerEmergency = 4,
         /// The host sent an Emergency frame (emergency stop).
         HostEmergency = 5,
@@ -59,6 +59,8 @@ code_enum! {
         BadCommand = 14,
         /// Commanded quick stop (not an error; reported for the record).
         QuickStop = 15,
+        /// A peer node fell silent (no heartbeat within the sync timeout) or lost its configuration (reset) while running.
+        PeerLost = 16,
     }
 }
 

@@ -244,6 +244,12 @@ impl WireSegment {
         b
     }
 
+    /// CRC-32 of the encoded body (the value carried in word 19): identifies
+    /// exactly which bits a node received.
+    pub fn body_crc(&self) -> u32 {
+        crc32(&self.encode_body()[..CRC_OFFSET])
+    }
+
     /// Decodes a body, checking its CRC.
     pub fn decode_body(b: &[u8; BODY_LEN]) -> Result<Self, Reject> {
         let crc = u32::from_le_bytes([b[116], b[117], b[118], b[119]]);
@@ -347,10 +353,11 @@ impl Reassembler {
             self.body[..wbytes].copy_from_slice(&data[2..2 + wbytes]);
             self.next_part = 1;
             if self.body[0] != seq8 {
+                // Header and body disagree: a damaged frame, worth a retransmission.
                 self.clear();
                 return PartEvent::Rejected {
                     seq: None,
-                    reason: Reject::Invalid,
+                    reason: Reject::OutOfOrder,
                 };
             }
             if abandoned {

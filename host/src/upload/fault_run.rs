@@ -1,0 +1,431 @@
+//! One plan run on the virtual hardware under a seeded fault scenario, with
+//! everything the fault tests and the soak check: what each node executed
+//! (sequence and body CRC, against the host's segments), when it detected
+//! the fault, when every axis was at rest, the jerk of the stop, and the
+//! fault codes in the Emergency frames and heartbeats on the bus.
+
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
+use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
+use triquint_sim::faults::FaultStats;
+use triquint_sim::{FaultWindow, Sim, SimConfig};
+
+use super::session::{Session, SessionOptions};
+use super::sim_port::{SimPort, configs_for};
+
+/// A segment made bad on purpose before the upload.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BadSegment {
+    /// Segment k's jerk-carrying coefficients ×10: beyond the limits.
+    Limits(usize),
+    /// Segment k starts with a velocity 0.02 m/s off its predecessor's end (not C3).
+    Kink(usize),
+}
+
+/// What goes wrong during one run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scenario {
+    /// Bus-level faults (see [`triquint_sim::faults`]).
+    pub windows: Vec<FaultWindow>,
+    pub seed: u64,
+    pub fd: bool,
+    /// The host process dies at this true time (ns): no more frames from it.
+    pub host_killed_ns: Option<u64>,
+    /// Node index (0–2) power-cycled at a true time (ns).
+    pub node_reset: Option<(usize, u64)>,
+    /// At this time a rogue copy of the host sends the next 12 segments at
+    /// once, ignoring flow control (more than a node's queue holds).
+    pub burst_ns: Option<u64>,
+    pub bad_segment: Option<BadSegment>,
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Ending {
+    /// Every node executed every segment, bit for bit, in order, and is Idle.
+    Completed,
+    /// Every running axis came to rest along the path with a fault code.
+    Stopped,
+    /// Nothing moved: refused or faulted before the start.
+    NotStarted,
+    /// Anything else (a test failure).
+    Unsafe,
+}
+
+/// What one run measured.
+#[derive(Clone, Debug)]
+pub struct FaultRun {
+    pub ending: Ending,
+    /// Final fault code of each node (None = no fault).
+    pub codes: [FaultCode; 3],
+    /// Executions of a segment whose (sequence, CRC) is not the host's
+    /// segment of that sequence number, or of the deliberately bad segment.
+    pub corrupted_executions: usize,
+    /// Every node executed segments 0..n in order with the host's CRCs.
+    pub executed_whole_plan: bool,
+    /// First fault on any node (true ns).
+    pub first_fault_ns: Option<u64>,
+    /// From the first fault until every running axis is at rest (ns).
+    pub stop_time_ns: Option<u64>,
+    /// Largest joint jerk of any node's reference while stopping (m/s³).
+    pub max_stop_jerk: f64,
+    /// The stop's jerk budget (m/s³): max(limit, plan's jerk + limit/2).
+    pub stop_jerk_bound: f64,
+    /// Largest delay from an Emergency frame reaching a running node to its
+    /// first stopping control tick, in ticks.
+    pub emergency_to_stop_ticks: Option<f64>,
+    /// Each stopped node came to rest inside the plan time it had buffered.
+    pub stopped_within_buffer: bool,
+    /// Fault codes carried by Emergency frames and heartbeats on the bus
+    /// (sending node, code).
+    pub emergency_codes: Vec<(u8, FaultCode)>,
+    pub heartbeat_codes: Vec<(u8, FaultCode)>,
+    /// The last TimeSync on the bus (true ns) and the first LostSync fault.
+    pub last_sync_ns: Option<u64>,
+    pub lost_sync_ns: Option<u64>,
+    pub host_error: Option<String>,
+    pub retransmits: u64,
+    /// Segment rejections counted by the nodes, by reason index.
+    pub rejects: [u32; 9],
+    pub injected: FaultStats,
+    pub tick_ns: u64,
+    pub max_tracking_error_m: f64,
+    /// True time (ns) of the first Running tick of any node.
+    pub start_ns: Option<u64>,
+    /// The stop ramp T_s the drives were configured with (ns): at rest after it.
+    pub stop_ramp_ns: u64,
+    /// The drives' sync (and peer heartbeat) timeout (ns).
+    pub sync_timeout_ns: u64,
+}
+
+/// The wire segments the host sends for `plan` (same encoding as the session).
+pub fn wire_segments(plan: &Plan) -> Vec<WireSegment> {
+    let n = plan.segments.len();
+    plan.segments
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| {
+            let mut flags = 0;
+            if i == 0 {
+                flags |= FLAG_FIRST;
+            }
+            if i + 1 == n {
+                flags |= FLAG_LAST;
+            }
+            WireSegment::from_quintic(i as u16, &s.quintic(), flags).ok()
+        })
+        .collect()
+}
+
+fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
+    let mut p = plan.clone();
+    match bad {
+        BadSegment::Limits(k) => {
+            if let Some(s) = p.segments.get_mut(k) {
+                for row in s.coeffs.iter_mut() {
+                    for c in &mut row[3..] {
+                        *c *= 10.0;
+                    }
+                }
+            }
+        }
+        BadSegment::Kink(k) => {
+            if let Some(s) = p.segments.get_mut(k) {
+                s.coeffs[0][1] += 0.02;
+            }
+        }
+    }
+    p
+}
+
+const EMERGENCY_IDS: core::ops::RangeInclusive<u16> = 0x010..=0x013;
+
+/// Runs `plan` under `sc` at 1 kHz and measures it.
+pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
+    let plan = match sc.bad_segment {
+        Some(b) => spoil(plan, b),
+        None => plan.clone(),
+    };
+    let settings = DriveSettings::default();
+    let (configs, stop_ramp_s) = configs_for(&plan, &settings).expect("plan maxima");
+    let mut cfg = SimConfig {
+        fd: sc.fd,
+        record_every: 1,
+        ..SimConfig::default()
+    };
+    cfg.bus.capture = true;
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let mut sim = Sim::with_faults(&plan.robot, q0, cfg, sc.windows.clone(), sc.seed);
+    let opts = SessionOptions {
+        fd: sc.fd,
+        finish_grace_us: 500_000,
+        ..SessionOptions::default()
+    };
+    let wire = wire_segments(&plan);
+    let mut session = Session::new(&plan, configs, opts).expect("encodable plan");
+    let mut host_alive = true;
+    let mut host_error = None;
+    let mut outcome = None;
+    let mut burst_done = false;
+    let mut reset_done = false;
+    let limit_ns = ((plan.total_time_s + 15.0) * 1e9) as u64;
+    let mut quiet_since: Option<u64> = None;
+    loop {
+        let now = sim.now_ns();
+        if sc.host_killed_ns.is_some_and(|t| now >= t) {
+            host_alive = false;
+        }
+        if host_alive && outcome.is_none() {
+            let mut port = SimPort {
+                sim: &mut sim,
+                tx_queue: 32,
+            };
+            match session.poll(&mut port) {
+                Ok(Some(o)) => outcome = Some(o),
+                Ok(None) => {}
+                Err(e) => {
+                    // The host gives up (as the CLI exits): it falls silent.
+                    host_error = Some(e.to_string());
+                    host_alive = false;
+                }
+            }
+        } else {
+            // A dead host's socket: whatever arrives is never read.
+            while sim.host_receive().is_some() {}
+        }
+        if let Some(t) = sc.burst_ns
+            && !burst_done
+            && now >= t
+        {
+            burst_done = true;
+            let next = sim.nodes[0].node.next_seq() as usize;
+            for s in wire.iter().skip(next).take(12) {
+                for f in s.frames(sc.fd) {
+                    sim.host_send(f);
+                }
+            }
+        }
+        if let Some((i, t)) = sc.node_reset
+            && !reset_done
+            && now >= t
+        {
+            reset_done = true;
+            sim.reset_node(i);
+        }
+        let t = now + 100_000;
+        if let Err(e) = sim.run_until(t) {
+            host_error = Some(format!("virtual machine: {e}"));
+            break;
+        }
+        // Quiescent: nobody armed, running or stopping, and the host finished or silent.
+        let busy = sim.nodes.iter().any(|n| {
+            matches!(
+                n.node.state(),
+                State::Armed | State::Running | State::Stopping
+            )
+        });
+        if !busy && (outcome.is_some() || !host_alive) {
+            let q = *quiet_since.get_or_insert(t);
+            // Let a few heartbeats report the final state.
+            if t >= q + 300_000_000 {
+                break;
+            }
+        } else {
+            quiet_since = None;
+        }
+        if t > limit_ns {
+            break;
+        }
+    }
+    let retransmits = session.retransmits();
+    let mut r = measure(&plan, &sim, sc, &wire, host_error, retransmits);
+    r.stop_ramp_ns = (stop_ramp_s * 1e9) as u64;
+    r.sync_timeout_ns = (settings.sync_timeout * 1e9) as u64;
+    r
+}
+
+fn measure(
+    plan: &Plan,
+    sim: &Sim,
+    sc: &Scenario,
+    wire: &[WireSegment],
+    host_error: Option<String>,
+    retransmits: u64,
+) -> FaultRun {
+    let tick_ns = (1e9 / sim.cfg.rate_hz) as u64;
+    let bad = sc.bad_segment.map(|b| match b {
+        BadSegment::Limits(k) | BadSegment::Kink(k) => k,
+    });
+    let reset = sc.node_reset.map(|r| r.0);
+    let crc: Vec<u32> = wire.iter().map(WireSegment::body_crc).collect();
+    let mut corrupted = 0;
+    let mut whole = true;
+    for (i, n) in sim.nodes.iter().enumerate() {
+        for &(_, seq, c) in &n.executed {
+            let good = crc.get(seq as usize) == Some(&c);
+            if !good || Some(seq as usize) == bad {
+                corrupted += 1;
+            }
+        }
+        let seqs: Vec<(u16, u32)> = n.executed.iter().map(|e| (e.1, e.2)).collect();
+        let want: Vec<(u16, u32)> = (0..wire.len()).map(|k| (k as u16, crc[k])).collect();
+        if seqs != want || Some(i) == reset {
+            whole = false;
+        }
+    }
+    let codes = [0, 1, 2].map(|i| sim.nodes[i].node.fault());
+    let faults = sim.faults();
+    let first_fault_ns = faults.first().map(|f| f.t_ns);
+    let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
+    // Rest: the first tick in Fault after the first fault, for every node
+    // that was running (the reset node has no motor to stop).
+    let mut rest_ns: Option<u64> = Some(0);
+    let mut within = true;
+    for (i, n) in sim.nodes.iter().enumerate() {
+        if Some(i) == reset || n.started_ns.is_none() {
+            continue;
+        }
+        let at = first_fault_ns.and_then(|f| {
+            n.states
+                .iter()
+                .find(|(t, s)| *t >= f && *s == State::Fault)
+                .map(|x| x.0)
+        });
+        let finished = n.node.state() == State::Idle && n.executed.len() == wire.len();
+        rest_ns = match (rest_ns, at) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (Some(a), None) if finished => Some(a),
+            _ => None,
+        };
+        if n.node.state() == State::Fault && n.node.plan_ns() > n.node.buffered_end_ns() {
+            within = false;
+        }
+    }
+    let stop_time_ns = match (first_fault_ns, rest_ns) {
+        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
+        _ => None,
+    };
+    // Emergency arrival → first stopping tick, for nodes still running then.
+    let mut e2s: Option<f64> = None;
+    for n in &sim.nodes {
+        let Some(arr) = n.emergency_rx_ns else {
+            continue;
+        };
+        let running_at_arrival = n
+            .states
+            .iter()
+            .rev()
+            .find(|(t, _)| *t <= arr)
+            .is_some_and(|(_, s)| *s == State::Running);
+        if !running_at_arrival {
+            continue;
+        }
+        if let Some((t, _)) = n
+            .states
+            .iter()
+            .find(|(t, s)| *t >= arr && matches!(s, State::Stopping | State::Fault))
+        {
+            let ticks = (t - arr) as f64 / tick_ns as f64;
+            e2s = Some(e2s.map_or(ticks, |x: f64| x.max(ticks)));
+        }
+    }
+    let mut emergency_codes = Vec::new();
+    let mut heartbeat_codes = Vec::new();
+    let mut last_sync_ns = None;
+    for &(t, station, f) in &sim.bus.capture {
+        match decode(&f) {
+            Ok((Msg::Emergency(e), node)) if EMERGENCY_IDS.contains(&f.id) && station <= 3 => {
+                if let Some(c) = FaultCode::from_u8(e.code) {
+                    emergency_codes.push((node, c));
+                }
+            }
+            Ok((Msg::Heartbeat(h), node)) if h.fault != 0 && station <= 3 => {
+                if let Some(c) = FaultCode::from_u8(h.fault)
+                    && !heartbeat_codes.contains(&(node, c))
+                {
+                    heartbeat_codes.push((node, c));
+                }
+            }
+            Ok((Msg::TimeSync(_), _)) if station == 0 => {
+                let dropped = sc.windows.iter().any(|w| {
+                    w.fault == triquint_sim::Fault::Loss { rate: 1.0 }
+                        && w.ids.contains(&f.id)
+                        && (w.from_ns..w.until_ns).contains(&t)
+                });
+                if !dropped {
+                    last_sync_ns = Some(t);
+                }
+            }
+            _ => {}
+        }
+    }
+    let lost_sync_ns = faults
+        .iter()
+        .find(|f| f.code == FaultCode::LostSync)
+        .map(|f| f.t_ns);
+    let mut rejects = [0u32; 9];
+    for n in &sim.nodes {
+        for (k, r) in rejects.iter_mut().enumerate() {
+            *r += n.node.stats.reason_counts[k] as u32;
+        }
+    }
+    let first_start = sim.nodes.iter().filter_map(|n| n.started_ns).min();
+    let tracking = triquint_sim::metrics::tracking(plan, first_start.unwrap_or(0), &sim.samples);
+    let max_stop_jerk = sim
+        .nodes
+        .iter()
+        .map(|n| n.max_stop_jerk as f64)
+        .fold(0.0, f64::max);
+    let any_fault = codes.iter().any(|c| *c != FaultCode::None) || !faults.is_empty();
+    let all_idle = sim.nodes.iter().all(|n| n.node.state() == State::Idle);
+    let running_left = sim.nodes.iter().any(|n| {
+        matches!(
+            n.node.state(),
+            State::Running | State::Stopping | State::Armed
+        )
+    });
+    let plan_jerk = triquint_sim::testplan::sampled_max_abs(plan)
+        .map(|m| m.jerk.iter().fold(0.0f64, |a, b| a.max(*b)))
+        .unwrap_or(f64::INFINITY);
+    let lim = plan.limits.jerk;
+    // The stop's jerk budget (docs/protocol.md, Stopping): the limit, or the
+    // plan's own jerk plus half the limit when the plan already uses more.
+    let stop_jerk_bound = lim.max(plan_jerk + 0.5 * lim) * 1.001;
+    let ending = if corrupted > 0 || running_left || max_stop_jerk > stop_jerk_bound {
+        Ending::Unsafe
+    } else if whole && all_idle && !any_fault {
+        Ending::Completed
+    } else if !started {
+        Ending::NotStarted
+    } else if stop_time_ns.is_some() && within {
+        Ending::Stopped
+    } else {
+        Ending::Unsafe
+    };
+    FaultRun {
+        ending,
+        codes,
+        corrupted_executions: corrupted,
+        executed_whole_plan: whole,
+        first_fault_ns,
+        stop_time_ns,
+        max_stop_jerk,
+        stop_jerk_bound,
+        emergency_to_stop_ticks: e2s,
+        stopped_within_buffer: within,
+        emergency_codes,
+        heartbeat_codes,
+        last_sync_ns,
+        lost_sync_ns,
+        host_error,
+        retransmits,
+        rejects,
+        injected: sim.faults.as_ref().map(|f| f.stats).unwrap_or_default(),
+        tick_ns,
+        max_tracking_error_m: tracking.max_error_m.iter().fold(0.0, |a, b| a.max(*b)),
+        start_ns: first_start,
+        stop_ramp_ns: 0,
+        sync_timeout_ns: 0,
+    }
+}
