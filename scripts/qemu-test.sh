@@ -5,7 +5,8 @@
 #     (exit status from semihosting; -icount shift=10 counts instructions);
 #  3. the control tick's call graph reaches no f64 soft-float and no panic, and
 #     a deliberately bad build (feature bad-tick) is rejected by the same check;
-#  4. where the tick's instructions go (tick_profile.py), and image sizes.
+#  4. where the tick's instructions go (tick_profile.py), and image sizes;
+#  5. the B-G431B-ESC1 board image builds (no hardware here).
 # Installs what it needs (apt qemu-system-arm, rustup target and llvm-tools).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -62,3 +63,10 @@ if python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_control_tick;
 fi
 echo "ok: the bad build was rejected"
 cargo build --locked --release 2>&1 | tail -1
+
+step "B-G431B-ESC1 board image: fmt, clippy, build (flashing needs the board and probe-rs)"
+cd "$root/firmware/boards/b-g431b-esc1"
+cargo fmt --check
+cargo clippy --locked --release -- -D warnings
+cargo build --locked --release
+"$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 | grep -E "^(section|\.vector_table|\.text|\.rodata|\.ccmram_text|\.data|\.bss) "

@@ -28,7 +28,6 @@ use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
 use triquint_shared::dynamics;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
-use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{
     Command, CommandCode, Frame, State, TimeSync, WireSegment, config_write_frame,
 };
@@ -54,22 +53,8 @@ fn load_plan(name: &str) -> Plan {
 }
 
 fn wire_segments(plan: &Plan) -> Vec<WireSegment> {
-    let n = plan.segments.len();
-    plan.segments
-        .iter()
-        .enumerate()
-        .map(|(i, s)| {
-            let mut flags = 0;
-            if i == 0 {
-                flags |= FLAG_FIRST;
-            }
-            if i + 1 == n {
-                flags |= FLAG_LAST;
-            }
-            WireSegment::from_quintic(i as u16, &s.quintic(), flags)
-                .expect("plan segment on the wire")
-        })
-        .collect()
+    plan.wire_segments()
+        .unwrap_or_else(|(i, e)| panic!("plan segment {i} on the wire: {e}"))
 }
 
 /// FNV-1a over the frames a node queued for transmission.

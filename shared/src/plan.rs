@@ -6,6 +6,8 @@ use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
+use crate::protocol::WireSegment;
+use crate::protocol::segment::{FLAG_FIRST, FLAG_LAST, SegmentError};
 use crate::quintic::Quintic;
 use crate::{Limits, Robot};
 
@@ -75,4 +77,26 @@ pub struct Plan {
     pub segments: Vec<Segment>,
     pub max_abs: MaxAbs,
     pub solver: SolverStats,
+}
+
+impl Plan {
+    /// The segments as they go on the wire: sequence numbers from 0, first and
+    /// last flagged. On error, the index of the segment that cannot be sent.
+    pub fn wire_segments(&self) -> Result<Vec<WireSegment>, (usize, SegmentError)> {
+        let n = self.segments.len();
+        self.segments
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let mut flags = 0;
+                if i == 0 {
+                    flags |= FLAG_FIRST;
+                }
+                if i + 1 == n {
+                    flags |= FLAG_LAST;
+                }
+                WireSegment::from_quintic(i as u16, &s.quintic(), flags).map_err(|e| (i, e))
+            })
+            .collect()
+    }
 }

@@ -3,7 +3,7 @@
 use std::collections::VecDeque;
 
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST, SegmentError};
+use triquint_shared::protocol::segment::SegmentError;
 use triquint_shared::protocol::{
     Command, CommandCode, DriveConfig, FaultCode, Frame, Msg, PARAM_COUNT, PARAMS, Reject, State,
     TimeSync, WireSegment, config_write_frame, decode,
@@ -215,23 +215,9 @@ impl Session {
         configs: [DriveConfig; 3],
         opts: SessionOptions,
     ) -> Result<Self, UploadError> {
-        let n = plan.segments.len();
         let segments = plan
-            .segments
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let mut flags = 0;
-                if i == 0 {
-                    flags |= FLAG_FIRST;
-                }
-                if i + 1 == n {
-                    flags |= FLAG_LAST;
-                }
-                WireSegment::from_quintic(i as u16, &s.quintic(), flags)
-                    .map_err(|source| UploadError::Segment { seq: i, source })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+            .wire_segments()
+            .map_err(|(seq, source)| UploadError::Segment { seq, source })?;
         let plan_end_us = segments.iter().map(|s| s.duration_us as u64).sum();
         Ok(Self {
             opts,

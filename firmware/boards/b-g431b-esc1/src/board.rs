@@ -1,0 +1,38 @@
+//! Constants of the board and the motor that the CAN configuration does not
+//! carry (the protocol's DriveConfig has gains, direction, encoder scale and
+//! limits; not Kt, the current sensing or the motor's poles).
+
+/// Node id when flash holds none (1–3); `TRIQUINT_NODE_ID=2 cargo run --release`
+/// programs another, which is then kept in flash.
+pub const DEFAULT_NODE_ID: u8 = match option_env!("TRIQUINT_NODE_ID") {
+    Some(s) => match s.as_bytes() {
+        [b'2'] => 2,
+        [b'3'] => 3,
+        _ => 1,
+    },
+    None => 1,
+};
+/// Motor torque constant Kt (N·m/A).
+pub const KT: f32 = 0.08;
+/// |Iq| limit (A); the ESC1 is rated 40 A peak.
+pub const MAX_CURRENT: f32 = 15.0;
+/// Motor pole pairs.
+pub const POLE_PAIRS: f32 = 7.0;
+/// Encoder counts per motor revolution (quadrature edges).
+pub const COUNTS_PER_REV: f32 = 4096.0;
+/// Phase current per ADC count: 3 mΩ shunt, op-amp gain 9.14, 12 bit on 3.3 V.
+pub const AMPS_PER_COUNT: f32 = 3.3 / 4096.0 / (0.003 * 9.14);
+/// ADC count at zero current (1.65 V bias).
+pub const ZERO_CURRENT: f32 = 2048.0;
+/// Current-loop PI (V/V per A) at 20 kHz.
+pub const CURRENT_KP: f32 = 0.02;
+pub const CURRENT_KI_DT: f32 = 0.002;
+/// Rotor alignment before the first enable: d-current (A) and duration (PWM periods).
+pub const ALIGN_CURRENT: f32 = 3.0;
+pub const ALIGN_PERIODS: u32 = 10_000;
+/// Control tick and PWM rates (Hz).
+pub const TICK_HZ: u32 = 10_000;
+pub const PWM_HZ: u32 = 20_000;
+/// CAN bit rates (bit/s): arbitration and CAN-FD data phase.
+pub const CAN_BITRATE: u32 = 1_000_000;
+pub const CAN_FD_BITRATE: u32 = 5_000_000;

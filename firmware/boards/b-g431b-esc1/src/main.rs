@@ -1,0 +1,185 @@
+//! triquint drive firmware for the ST B-G431B-ESC1: one axis per board.
+//!
+//! Interrupts, highest first: the current loop (TIM1 update, 20 kHz), the
+//! control tick (TIM6 update, 10 kHz, owns the node), then the embassy
+//! executor in thread mode (CAN receive / transmit, homing, flash). All motion
+//! logic is the target-independent core (`triquint-firmware`).
+#![no_std]
+#![no_main]
+
+mod board;
+mod can;
+mod ccm;
+mod control;
+mod current;
+mod encoder;
+mod foc;
+mod homing;
+mod motor;
+mod storage;
+
+use embassy_embedded_hal::adapter::BlockingAsync;
+use embassy_executor::Spawner;
+use embassy_stm32::adc::{Adc, AdcConfig};
+use embassy_stm32::exti::ExtiInput;
+use embassy_stm32::flash::Flash;
+use embassy_stm32::gpio::{OutputType, Pull};
+use embassy_stm32::interrupt::{InterruptExt, Priority};
+use embassy_stm32::opamp::OpAmp;
+use embassy_stm32::time::Hertz;
+use embassy_stm32::timer::complementary_pwm::{ComplementaryPwm, ComplementaryPwmPin};
+use embassy_stm32::timer::low_level::{CountingMode, RoundTo, Timer};
+use embassy_stm32::timer::qei::{Config as QeiConfig, Qei};
+use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::{Config, bind_interrupts, can as fdcan, interrupt, peripherals, rcc};
+use heapless::spsc::Queue;
+use panic_halt as _;
+use static_cell::StaticCell;
+use triquint_firmware::{Node, RxFrame};
+use triquint_shared::protocol::Frame;
+
+bind_interrupts!(struct Irqs {
+    FDCAN1_IT0 => fdcan::IT0InterruptHandler<peripherals::FDCAN1>;
+    FDCAN1_IT1 => fdcan::IT1InterruptHandler<peripherals::FDCAN1>;
+    EXTI9_5 => embassy_stm32::exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
+});
+
+static RX_QUEUE: StaticCell<Queue<RxFrame, 32>> = StaticCell::new();
+static RESTORE_QUEUE: StaticCell<Queue<RxFrame, 8>> = StaticCell::new();
+static TX_QUEUE: StaticCell<Queue<Frame, 16>> = StaticCell::new();
+static TICK_STATE: StaticCell<control::Tick> = StaticCell::new();
+static CURRENT_STATE: StaticCell<current::Current> = StaticCell::new();
+static OPAMP1: StaticCell<OpAmp<'static, peripherals::OPAMP1>> = StaticCell::new();
+static OPAMP2: StaticCell<OpAmp<'static, peripherals::OPAMP2>> = StaticCell::new();
+
+/// 170 MHz from the 16 MHz HSI (the board's 8 MHz crystal is not needed);
+/// FDCAN from PLL Q at 85 MHz.
+fn clocks() -> Config {
+    let mut config = Config::default();
+    config.rcc.pll = Some(rcc::Pll {
+        source: rcc::PllSource::HSI,
+        prediv: rcc::PllPreDiv::DIV4,
+        mul: rcc::PllMul::MUL85,
+        divp: None,
+        divq: Some(rcc::PllQDiv::DIV4),
+        divr: Some(rcc::PllRDiv::DIV2),
+    });
+    config.rcc.sys = rcc::Sysclk::PLL1_R;
+    config.rcc.boost = true;
+    config.rcc.mux.fdcansel = rcc::mux::Fdcansel::PLL1_Q;
+    config
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_stm32::init(clocks());
+
+    // Node id and configuration live in flash.
+    let mut flash: storage::Storage = BlockingAsync::new(Flash::new_blocking(p.FLASH));
+    let node_id = match storage::node_id(&mut flash).await {
+        Some(id @ 1..=3) if option_env!("TRIQUINT_NODE_ID").is_none() => id,
+        _ => {
+            storage::store_node_id(&mut flash, board::DEFAULT_NODE_ID).await;
+            board::DEFAULT_NODE_ID
+        }
+    };
+
+    // Encoder: TIM4 quadrature on PB6/PB7 (J8 A/B).
+    let qei = Qei::new(p.TIM4, p.PB6, p.PB7, QeiConfig::default());
+    let encoder = encoder::QuadratureEncoder::new(qei);
+
+    // Power stage: TIM1 CH1-3 with complementary outputs, centre-aligned 20 kHz.
+    let mut pwm = ComplementaryPwm::new(
+        p.TIM1,
+        Some(PwmPin::new(p.PA8, OutputType::PushPull)),
+        Some(ComplementaryPwmPin::new(p.PC13, OutputType::PushPull)),
+        Some(PwmPin::new(p.PA9, OutputType::PushPull)),
+        Some(ComplementaryPwmPin::new(p.PA12, OutputType::PushPull)),
+        Some(PwmPin::new(p.PA10, OutputType::PushPull)),
+        Some(ComplementaryPwmPin::new(p.PB15, OutputType::PushPull)),
+        None,
+        None,
+        Hertz(board::PWM_HZ),
+        CountingMode::CenterAlignedBothInterrupts,
+    );
+    pwm.set_dead_time(100); // ≈ 590 ns at 170 MHz
+    pwm.set_repetition_counter(1); // one update per PWM period
+    pwm.set_master_output_enable(false);
+    for ch in [
+        embassy_stm32::timer::Channel::Ch1,
+        embassy_stm32::timer::Channel::Ch2,
+        embassy_stm32::timer::Channel::Ch3,
+    ] {
+        pwm.set_duty(ch, pwm.get_max_duty() / 2);
+        pwm.enable(ch);
+    }
+
+    // Phase currents: op-amps 1 and 2 as wired on the board (external gain),
+    // outputs into ADC1 and ADC2.
+    let op1 = OPAMP1.init(OpAmp::new(
+        p.OPAMP1,
+        embassy_stm32::opamp::OpAmpSpeed::HighSpeed,
+    ));
+    let op2 = OPAMP2.init(OpAmp::new(
+        p.OPAMP2,
+        embassy_stm32::opamp::OpAmpSpeed::HighSpeed,
+    ));
+    let out_u = op1.standalone_ext(p.PA1, p.PA3, p.PA2);
+    let out_v = op2.standalone_ext(p.PA7, p.PA5, p.PA6);
+    let adc1 = Adc::new(p.ADC1, AdcConfig::default());
+    let adc2 = Adc::new(p.ADC2, AdcConfig::default());
+    let cur = current::Current {
+        pwm,
+        adc1,
+        adc2,
+        phase_u: current::channel(out_u),
+        phase_v: current::channel(out_v),
+    };
+    let cur = CURRENT_STATE.init(cur);
+    current::CURRENT.store(cur, core::sync::atomic::Ordering::Release);
+
+    // Queues between the CAN task, the flash task and the tick.
+    let (rx_prod, rx_cons) = RX_QUEUE.init(Queue::new()).split();
+    let (restore_prod, restore_cons) = RESTORE_QUEUE.init(Queue::new()).split();
+    let (tx_prod, tx_cons) = TX_QUEUE.init(Queue::new()).split();
+
+    let tick = control::Tick {
+        node: Node::new(node_id),
+        encoder,
+        motor: motor::TorqueToCurrent {
+            kt: board::KT,
+            max_current: board::MAX_CURRENT,
+        },
+        rx: rx_cons,
+        restore: restore_cons,
+        tx: tx_prod,
+    };
+    let tick = TICK_STATE.init(tick);
+    control::TICK.store(tick, core::sync::atomic::Ordering::Release);
+
+    // CAN-FD: PA11 RX, PB9 TX.
+    let mut cfg = fdcan::CanConfigurator::new(p.FDCAN1, p.PA11, p.PB9, Irqs);
+    can::configure(&mut cfg);
+    let (can_tx, can_rx, _) = cfg.into_normal_mode().split();
+
+    // Control tick: TIM6 at 10 kHz, below the current loop, above everything else.
+    let tim6 = Timer::new(p.TIM6);
+    tim6.set_frequency(Hertz(board::TICK_HZ), RoundTo::Faster);
+    tim6.enable_update_interrupt(true);
+    interrupt::TIM1_UP_TIM16.set_priority(Priority::P0);
+    interrupt::TIM6_DAC.set_priority(Priority::P1);
+    // SAFETY: both handlers own their state (moved in above) and share only atomics.
+    unsafe {
+        interrupt::TIM1_UP_TIM16.enable();
+        interrupt::TIM6_DAC.enable();
+    }
+    embassy_stm32::pac::TIM1.dier().modify(|w| w.set_uie(true));
+    tim6.start();
+    core::mem::forget(tim6);
+
+    let home = ExtiInput::new(p.PB8, p.EXTI8, Pull::Down, Irqs);
+    spawner.spawn(can::receive(can_rx, rx_prod).expect("spawn can rx"));
+    spawner.spawn(can::transmit(can_tx, tx_cons).expect("spawn can tx"));
+    spawner.spawn(homing::home(home).expect("spawn homing"));
+    spawner.spawn(storage::keep(flash, restore_prod, node_id).expect("spawn storage"));
+}
