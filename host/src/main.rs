@@ -42,9 +42,15 @@ fn run(cli: Cli) -> CliResult {
         Command::Fk(a) => cli::fk::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Torque(a) => cli::torque::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Plan(a) => cli::plan::run(a),
-        Command::Check(a) => cli::check::run(a),
-        Command::Report(a) => cli::report::run(a),
-        Command::Simulate(a) => cli::simulate::run(a),
+        Command::Check(a) => {
+            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::check::run(a))
+        }
+        Command::Report(a) => {
+            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::report::run(a))
+        }
+        Command::Simulate(a) => {
+            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
+        }
     }
 }
 

@@ -1,0 +1,245 @@
+//! Soak: seeded random fault schedules over both paper plans on the
+//! in-process virtual hardware (1 kHz control). Prints a table per fault
+//! kind: trials, outcome counts, worst stop time; fails (exit 1) on any
+//! corrupted execution, unsafe ending or panic.
+//!
+//! `cargo run --release -p triquint-host --example fault_soak -- [SCHEDULES] [THREADS] [SEED]`
+
+use std::collections::BTreeMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::Instant;
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use triquint_host::upload::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
+use triquint_shared::plan::Plan;
+use triquint_sim::{Fault, FaultWindow, testplan};
+
+const MS: u64 = 1_000_000;
+
+/// The fault kinds of the soak, with the range their parameter is drawn from.
+const KINDS: [(&str, &str); 15] = [
+    ("loss", "0.1-3 % of frames"),
+    ("corrupt", "0.1-3 % of parts"),
+    ("duplicate", "1-20 % of frames"),
+    ("reorder", "0.1-2 % of frames"),
+    ("delay", "0-5 ms service delay"),
+    ("jitter", "0-100 µs timestamps"),
+    ("late sync", "one sync 1-200 ms late"),
+    ("sync lost", "from 0.5-4.5 s"),
+    ("bus-off", "host/node, 10-600 ms"),
+    ("babble", "0x001-0x01F, 10-600 ms"),
+    ("burst", "12 segments, 0.3-4 s"),
+    ("host killed", "at 0.1-4.5 s"),
+    ("node reset", "at 0.5-4.5 s"),
+    ("bad limits", "segment 1-8 ×10 jerk"),
+    ("not C3", "segment 1-8 velocity step"),
+];
+
+fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
+    let t = |rng: &mut ChaCha8Rng, a: f64, b: f64| (rng.random_range(a..b) * 1e9) as u64;
+    let all = |f: Fault| vec![FaultWindow::new(f, 0, u64::MAX)];
+    let mut sc = Scenario {
+        seed: rng.random(),
+        fd: rng.random_range(0..4) == 0,
+        ..Scenario::default()
+    };
+    match k {
+        0 => {
+            sc.windows = all(Fault::Loss {
+                rate: rng.random_range(0.001..0.03),
+            })
+        }
+        1 => {
+            sc.windows = all(Fault::Corrupt {
+                rate: rng.random_range(0.001..0.03),
+            })
+        }
+        2 => {
+            sc.windows = all(Fault::Duplicate {
+                rate: rng.random_range(0.01..0.2),
+            })
+        }
+        3 => {
+            sc.windows = all(Fault::Reorder {
+                rate: rng.random_range(0.001..0.02),
+            })
+        }
+        4 => {
+            sc.windows = all(Fault::Delay {
+                max_ns: rng.random_range(0..5 * MS),
+            })
+        }
+        5 => {
+            sc.windows = all(Fault::Jitter {
+                max_ns: rng.random_range(0..100_000),
+            })
+        }
+        6 => {
+            let from = t(rng, 0.5, 4.5);
+            sc.windows = vec![
+                FaultWindow::new(
+                    Fault::Late {
+                        ns: rng.random_range(MS..200 * MS),
+                    },
+                    from,
+                    from + 100 * MS,
+                )
+                .on_ids(0x020..=0x020),
+            ]
+        }
+        7 => {
+            sc.windows = vec![
+                FaultWindow::new(Fault::Loss { rate: 1.0 }, t(rng, 0.5, 4.5), u64::MAX)
+                    .on_ids(0x020..=0x020),
+            ]
+        }
+        8 => {
+            let from = t(rng, 0.1, 4.5);
+            let station = rng.random_range(0..4);
+            sc.windows = vec![FaultWindow::new(
+                Fault::BusOff { station },
+                from,
+                from + rng.random_range(10 * MS..600 * MS),
+            )]
+        }
+        9 => {
+            let from = t(rng, 0.1, 4.5);
+            sc.windows = vec![FaultWindow::new(
+                Fault::Babble {
+                    id: rng.random_range(0x001..0x020),
+                },
+                from,
+                from + rng.random_range(10 * MS..600 * MS),
+            )]
+        }
+        10 => sc.burst_ns = Some(t(rng, 0.3, 4.0)),
+        11 => sc.host_killed_ns = Some(t(rng, 0.1, 4.5)),
+        12 => sc.node_reset = Some((rng.random_range(0..3), t(rng, 0.5, 4.5))),
+        13 => sc.bad_segment = Some(BadSegment::Limits(rng.random_range(1..9))),
+        _ => sc.bad_segment = Some(BadSegment::Kink(rng.random_range(1..9))),
+    }
+    sc
+}
+
+#[derive(Default)]
+struct Row {
+    trials: u32,
+    endings: BTreeMap<Ending, u32>,
+    corrupted: usize,
+    panics: u32,
+    worst_stop_ns: u64,
+    worst_e2s_ticks: f64,
+    worst_lost_sync_ns: u64,
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(1000);
+    let threads: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(2).max(1);
+    let seed: u64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(2026);
+    let plans: [Plan; 2] = [
+        testplan::paper_case1().expect("case I"),
+        testplan::paper_case2().expect("case II"),
+    ];
+    let started = Instant::now();
+    // Hide the panic messages of caught panics from the table.
+    std::panic::set_hook(Box::new(|_| {}));
+    let results: Vec<(usize, Option<FaultRun>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|th| {
+                let plans = &plans;
+                s.spawn(move || {
+                    let mut out = Vec::new();
+                    for i in (th..n).step_by(threads) {
+                        let mut rng = ChaCha8Rng::seed_from_u64(
+                            seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                        );
+                        let k = i % KINDS.len();
+                        let sc = schedule(k, &mut rng);
+                        let plan = &plans[(i / KINDS.len()) % 2];
+                        let r = catch_unwind(AssertUnwindSafe(|| run(plan, &sc))).ok();
+                        match &r {
+                            Some(x) if x.ending != Ending::Unsafe => {}
+                            _ => eprintln!("schedule {i} ({}): {sc:?}\n  -> {r:?}", KINDS[k].0),
+                        }
+                        out.push((k, r));
+                    }
+                    out
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_default())
+            .collect()
+    });
+    let _ = std::panic::take_hook();
+    let mut rows: Vec<Row> = (0..KINDS.len()).map(|_| Row::default()).collect();
+    for (k, r) in &results {
+        let row = &mut rows[*k];
+        row.trials += 1;
+        let Some(r) = r else {
+            row.panics += 1;
+            continue;
+        };
+        *row.endings.entry(r.ending).or_default() += 1;
+        row.corrupted += r.corrupted_executions;
+        if r.ending == Ending::Stopped {
+            row.worst_stop_ns = row.worst_stop_ns.max(r.stop_time_ns.unwrap_or(0));
+        }
+        if let Some(t) = r.emergency_to_stop_ticks {
+            row.worst_e2s_ticks = row.worst_e2s_ticks.max(t);
+        }
+        if let (Some(a), Some(b)) = (r.last_sync_ns, r.lost_sync_ns)
+            && *k == 7
+        {
+            row.worst_lost_sync_ns = row.worst_lost_sync_ns.max(b.saturating_sub(a));
+        }
+    }
+    let secs = started.elapsed().as_secs_f64();
+    println!(
+        "fault soak: {n} seeded schedules (seed {seed}) over paper cases I and II, 1 kHz control, {threads} threads, {secs:.1} s\n"
+    );
+    println!(
+        "| fault | rate / parameter | trials | completed | stopped | not started | unsafe | panics | corrupted executions | worst stop (ms) | worst emergency→stop (ticks) |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut bad = 0;
+    for (k, row) in rows.iter().enumerate() {
+        let e = |x: Ending| row.endings.get(&x).copied().unwrap_or(0);
+        bad += e(Ending::Unsafe) as usize + row.panics as usize + row.corrupted;
+        let mut name = KINDS[k].0.to_string();
+        if k == 7 && row.worst_lost_sync_ns > 0 {
+            name = format!(
+                "{name} (detected ≤ {:.0} ms after the last sync)",
+                row.worst_lost_sync_ns as f64 * 1e-6
+            );
+        }
+        println!(
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            KINDS[k].1,
+            row.trials,
+            e(Ending::Completed),
+            e(Ending::Stopped),
+            e(Ending::NotStarted),
+            e(Ending::Unsafe),
+            row.panics,
+            row.corrupted,
+            if row.worst_stop_ns > 0 {
+                format!("{:.0}", row.worst_stop_ns as f64 * 1e-6)
+            } else {
+                "–".into()
+            },
+            if row.worst_e2s_ticks > 0.0 {
+                format!("{:.2}", row.worst_e2s_ticks)
+            } else {
+                "–".into()
+            },
+        );
+    }
+    if bad > 0 {
+        eprintln!("fault soak: {bad} unsafe endings, panics or corrupted executions");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,276 @@
+//! Bad input to the built `triquint` binary, as a table: each case must end
+//! with the exit status of the README's table, exactly one line on stderr
+//! naming what is wrong, no panic, and no output file left behind.
+//! (`upload` with an unknown interface is not covered: no `upload`
+//! subcommand on this branch.)
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const GOOD_POINTS: &str = "points = [[-90, 90, 680], [-90, 90, 660], [-60, 60, 640]]";
+
+struct Case {
+    name: &'static str,
+    /// Files to create in the case's directory: (name, contents).
+    files: Vec<(&'static str, String)>,
+    args: Vec<&'static str>,
+    status: i32,
+    /// Text the one-line error must contain.
+    says: &'static str,
+}
+
+fn job(limits: &str, path: &str) -> String {
+    format!("objective = \"min-max-jerk\"\n[limits]\n{limits}\n[path]\n{path}\n")
+}
+
+fn paper_plan_json() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../testdata/protocol/plans/case1-spline.json"),
+    )
+    .unwrap()
+}
+
+fn cases() -> Vec<Case> {
+    let plan_args = vec![
+        "plan", "job.toml", "-o", "out.json", "--starts", "1", "--quiet",
+    ];
+    let units = "units = \"mm\"";
+    vec![
+        Case {
+            name: "malformed TOML",
+            files: vec![("job.toml", "[limits\nvelocity = 0.5\n".into())],
+            args: plan_args.clone(),
+            status: 2,
+            says: "job.toml",
+        },
+        Case {
+            name: "malformed JSON plan",
+            files: vec![(
+                "plan.json",
+                "{\"format\": \"triquint-plan\", \"segments\": [".into(),
+            )],
+            args: vec!["check", "plan.json"],
+            status: 2,
+            says: "plan.json",
+        },
+        Case {
+            name: "JSON that is not a plan",
+            files: vec![("plan.json", "[1, 2, 3]".into())],
+            args: vec!["simulate", "plan.json"],
+            status: 2,
+            says: "plan.json",
+        },
+        Case {
+            name: "unknown units",
+            files: vec![(
+                "job.toml",
+                job("", &format!("units = \"inch\"\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "inch",
+        },
+        Case {
+            name: "units in metres but values in mm (outside the workspace)",
+            files: vec![(
+                "job.toml",
+                job("", &format!("units = \"m\"\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "outside the workspace",
+        },
+        Case {
+            name: "NaN limit",
+            files: vec![(
+                "job.toml",
+                job("velocity = nan", &format!("{units}\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "velocity",
+        },
+        Case {
+            name: "infinite coordinate",
+            files: vec![(
+                "job.toml",
+                job(
+                    "",
+                    &format!("{units}\npoints = [[-90, 90, 680], [-90, 90, inf]]"),
+                ),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "point 2",
+        },
+        Case {
+            name: "unreachable via-point",
+            files: vec![(
+                "job.toml",
+                job(
+                    "",
+                    &format!("{units}\npoints = [[-90, 90, 680], [900, 90, 660]]"),
+                ),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "point 2",
+        },
+        Case {
+            name: "duplicate consecutive points",
+            files: vec![(
+                "job.toml",
+                job(
+                    "",
+                    &format!("{units}\npoints = [[-90, 90, 680], [-90, 90, 680], [-90, 90, 660]]"),
+                ),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "repeats",
+        },
+        Case {
+            name: "too few points",
+            files: vec![(
+                "job.toml",
+                job("", &format!("{units}\npoints = [[-90, 90, 680]]")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "at least 2 points",
+        },
+        Case {
+            name: "zero velocity limit",
+            files: vec![(
+                "job.toml",
+                job("velocity = 0.0", &format!("{units}\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "velocity",
+        },
+        Case {
+            name: "negative jerk limit",
+            files: vec![(
+                "job.toml",
+                job("jerk = -5.0", &format!("{units}\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "jerk",
+        },
+        Case {
+            name: "unknown key",
+            files: vec![(
+                "job.toml",
+                job("speed = 1.0", &format!("{units}\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "speed",
+        },
+        Case {
+            name: "total time far too short (infeasible)",
+            files: vec![(
+                "job.toml",
+                job("total_time = 0.05", &format!("{units}\n{GOOD_POINTS}")),
+            )],
+            args: plan_args.clone(),
+            status: 3,
+            says: "",
+        },
+        Case {
+            name: "a plan for another robot",
+            files: vec![
+                ("plan.json", paper_plan_json()),
+                ("other.toml", "lead = 0.005\n".into()),
+            ],
+            args: vec!["simulate", "plan.json", "--robot", "other.toml"],
+            status: 2,
+            says: "robot",
+        },
+        Case {
+            name: "a plan for another robot (check)",
+            files: vec![
+                ("plan.json", paper_plan_json()),
+                ("other.toml", "lead = 0.005\n".into()),
+            ],
+            args: vec!["check", "plan.json", "--robot", "other.toml"],
+            status: 2,
+            says: "robot",
+        },
+        Case {
+            name: "missing job file",
+            files: vec![],
+            args: plan_args.clone(),
+            status: 2,
+            says: "job.toml",
+        },
+    ]
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "triquint-cli-errors-{}-{}",
+        std::process::id(),
+        name.replace(|c: char| !c.is_ascii_alphanumeric(), "-")
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn every_bad_input_gets_one_line_and_its_exit_status() {
+    let mut failures = Vec::new();
+    for case in cases() {
+        let dir = scratch(case.name);
+        for (file, text) in &case.files {
+            std::fs::write(dir.join(file), text).unwrap();
+        }
+        let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
+            .args(&case.args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        let status = out.status.code();
+        let mut why = Vec::new();
+        if status != Some(case.status) {
+            why.push(format!("status {status:?}, want {}", case.status));
+        }
+        if lines.len() != 1 {
+            why.push(format!("{} stderr lines", lines.len()));
+        }
+        if stderr.contains("panicked") {
+            why.push("panicked".into());
+        }
+        if !stderr.contains(case.says) {
+            why.push(format!("does not say `{}`", case.says));
+        }
+        if dir.join("out.json").exists() {
+            why.push("left out.json behind".into());
+        }
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !case.files.iter().any(|f| f.0 == n))
+            .collect();
+        if !leftovers.is_empty() {
+            why.push(format!("left files {leftovers:?}"));
+        }
+        eprintln!(
+            "{:<58} exit {:?}  {}",
+            case.name,
+            status,
+            lines.first().unwrap_or(&"")
+        );
+        if !why.is_empty() {
+            failures.push(format!("{}: {} ({stderr})", case.name, why.join(", ")));
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
