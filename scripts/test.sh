@@ -23,6 +23,9 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 step "cargo test"
 cargo test --workspace --locked
 
+step "fault soak (release)"
+./scripts/soak.sh
+
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
 

@@ -3,24 +3,7 @@
 //! streams and mutations (the long libFuzzer run is documented in the README).
 
 include!("../../fuzz/harness/frames.rs");
-
-fn inputs(dir: &str) -> Vec<Vec<u8>> {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fuzz")
-        .join(dir);
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(&root).unwrap_or_else(|e| panic!("{}: {e}", root.display())) {
-        let p = e.unwrap().path();
-        if p.is_file()
-            && !p
-                .file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with('.'))
-        {
-            out.push(std::fs::read(&p).unwrap());
-        }
-    }
-    out
-}
+include!("../../fuzz/harness/corpus.rs");
 
 #[test]
 fn corpus_and_regressions_pass() {
@@ -33,14 +16,7 @@ fn corpus_and_regressions_pass() {
 
 #[test]
 fn seeded_random_streams_and_mutations_pass() {
-    // xorshift: no dependency, reproducible.
-    let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        x
-    };
+    let mut next = xorshift(0x9E37_79B9_7F4A_7C15);
     let corpus = inputs("corpus/frames");
     for i in 0..3000 {
         let mut data = if i % 2 == 0 {

@@ -3,24 +3,7 @@
 //! input, and 2,000 seeded mutations of them.
 
 include!("../../fuzz/harness/job.rs");
-
-fn inputs(dir: &str) -> Vec<Vec<u8>> {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fuzz")
-        .join(dir);
-    let mut out = Vec::new();
-    for e in std::fs::read_dir(&root).unwrap_or_else(|e| panic!("{}: {e}", root.display())) {
-        let p = e.unwrap().path();
-        if p.is_file()
-            && !p
-                .file_name()
-                .is_some_and(|n| n.to_string_lossy().starts_with('.'))
-        {
-            out.push(std::fs::read(&p).unwrap());
-        }
-    }
-    out
-}
+include!("../../fuzz/harness/corpus.rs");
 
 #[test]
 fn corpus_and_regressions_pass() {
@@ -33,13 +16,7 @@ fn corpus_and_regressions_pass() {
 
 #[test]
 fn seeded_mutations_pass() {
-    let mut x: u64 = 0x2545_F491_4F6C_DD1D;
-    let mut next = move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        x
-    };
+    let mut next = xorshift(0x2545_F491_4F6C_DD1D);
     let corpus = inputs("corpus/job");
     let alphabet = b"[]=,.-+0123456789eEnaifINF\"\n #xyzmpu";
     for i in 0..2000 {

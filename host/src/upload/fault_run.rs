@@ -6,7 +6,6 @@
 
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
-use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
 use triquint_sim::faults::FaultStats;
 use triquint_sim::{FaultWindow, Sim, SimConfig};
@@ -99,25 +98,6 @@ pub struct FaultRun {
     pub sync_timeout_ns: u64,
 }
 
-/// The wire segments the host sends for `plan` (same encoding as the session).
-pub fn wire_segments(plan: &Plan) -> Vec<WireSegment> {
-    let n = plan.segments.len();
-    plan.segments
-        .iter()
-        .enumerate()
-        .filter_map(|(i, s)| {
-            let mut flags = 0;
-            if i == 0 {
-                flags |= FLAG_FIRST;
-            }
-            if i + 1 == n {
-                flags |= FLAG_LAST;
-            }
-            WireSegment::from_quintic(i as u16, &s.quintic(), flags).ok()
-        })
-        .collect()
-}
-
 fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
     let mut p = plan.clone();
     match bad {
@@ -162,8 +142,8 @@ pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
         finish_grace_us: 500_000,
         ..SessionOptions::default()
     };
-    let wire = wire_segments(&plan);
     let mut session = Session::new(&plan, configs, opts).expect("encodable plan");
+    let wire = session.segments().to_vec();
     let mut host_alive = true;
     let mut host_error = None;
     let mut outcome = None;

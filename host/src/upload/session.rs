@@ -248,6 +248,11 @@ impl Session {
         &self.faults
     }
 
+    /// The segments as they go on the wire, in order.
+    pub fn segments(&self) -> &[WireSegment] {
+        &self.segments
+    }
+
     /// Segments retransmitted so far.
     pub fn retransmits(&self) -> u64 {
         self.retransmits

@@ -1,0 +1,28 @@
+// Shared by the stable-Rust corpus tests (via include!): the files of a
+// corpus or regression folder of `fuzz/`, and a dependency-free seeded
+// generator for mutations.
+
+/// The contents of every file in `fuzz/<dir>` (dot files skipped).
+fn inputs(dir: &str) -> Vec<Vec<u8>> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz")
+        .join(dir);
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(&root).unwrap_or_else(|e| panic!("{}: {e}", root.display())) {
+        let p = e.unwrap().path();
+        if p.is_file() && !p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.')) {
+            out.push(std::fs::read(&p).unwrap());
+        }
+    }
+    out
+}
+
+/// xorshift64: reproducible, no dependency.
+fn xorshift(mut x: u64) -> impl FnMut() -> u64 {
+    move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    }
+}
