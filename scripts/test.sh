@@ -26,4 +26,7 @@ cargo test --workspace --locked
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
 
+step "HIL suite: SocketCAN (vcan) in a virtme-ng VM"
+./scripts/hil.sh
+
 step "all tests passed in $(( $(date +%s) - start )) s"
