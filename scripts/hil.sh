@@ -5,7 +5,9 @@
 # loads vcan, brings up vcan0 (MTU 72, CAN-FD) and runs the pytest suite in
 # hil-sim/python/ once. Exit status: the suite's (124 when the VM timed out).
 #
-# Needs root (apt-get, pip). Output: target/hil/ (vm.log, reports, candump logs).
+# Needs root (apt-get, pip). Output: target/hil/ (vm.log, reports, candump
+# logs) and a table of the measured figures, over vcan against in process.
+# HIL_PYTEST_ARGS passes pytest options (e.g. "-k upload" for the demo only).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -52,7 +54,7 @@ ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 && ip link set up vc
 export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" \
     HIL_PLANS="$OUT/plans" HIL_ROOT="$ROOT" HIL_IFACE=vcan0 PYTHONDONTWRITEBYTECODE=1 \
     PATH="\$PATH:/usr/bin:/sbin"
-"$PY" -m pytest -p no:cacheprovider -v -rA hil-sim/python
+"$PY" -m pytest -p no:cacheprovider -v -rfE hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?
 echo "\$status" > "$OUT/status"
 exit \$status
@@ -71,5 +73,13 @@ if [ "$status" -eq 0 ] && [ "$(cat "$OUT/status" 2>/dev/null)" != 0 ]; then
     echo "hil: the suite did not report a status (VM failure)" >&2
     status=1
 fi
+step "figures: over vcan (VM, real time) against in process (host)"
+for c in 1 2; do
+    for fd in "" --fd; do
+        "$BIN/triquint" simulate "$OUT/plans/paper-case$c.json" $fd --json \
+            > "$OUT/inproc-case$c${fd:+-fd}.json" || true
+    done
+done
+"$PY" scripts/hil_figures.py "$OUT" || true
 step "HIL suite exit status $status"
 exit "$status"
