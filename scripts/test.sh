@@ -32,4 +32,7 @@ cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-
 step "on-target test (QEMU mps2-an386) and the board images"
 ./scripts/qemu-test.sh
 
+step "HIL suite: SocketCAN (vcan) in a virtme-ng VM"
+./scripts/hil.sh
+
 step "all tests passed in $(( $(date +%s) - start )) s"

@@ -1,7 +1,8 @@
 //! Virtual hardware for triquint: three drives running the real firmware
 //! core, an in-process CAN bus that carries the exact protocol frames with
-//! arbitration and a bit-time model, and a plant built from an independent
-//! (Lagrangian) formulation with deliberately different parameters.
+//! arbitration and a bit-time model, a plant built from an independent
+//! (Lagrangian) formulation with deliberately different parameters, and the
+//! same machine in real time on a SocketCAN interface.
 #![allow(clippy::needless_range_loop)]
 
 pub mod bus;
@@ -9,7 +10,10 @@ pub mod faults;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
+pub mod realtime;
+pub mod robot_file;
 pub mod sim;
+pub mod socketcan_port;
 pub mod testplan;
 
 pub use bus::{Bus, BusConfig, Delivery};

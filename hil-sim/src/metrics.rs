@@ -2,7 +2,7 @@
 //! bus load, start skew, and the f32-vs-f64 evaluation error of the drives.
 
 use triquint_firmware::segment::Seg;
-use triquint_shared::plan::Plan;
+use triquint_shared::plan::{Plan, Segment};
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 
@@ -18,14 +18,18 @@ pub struct Tracking {
 
 /// Plan position of every joint at plan time `t` (s), clamped to the plan.
 pub fn plan_position(plan: &Plan, t: f64) -> [f64; 3] {
-    let t = t.clamp(0.0, plan.total_time_s);
-    let idx = plan
-        .segments
+    segments_position(&plan.segments, t.clamp(0.0, plan.total_time_s))
+}
+
+/// Position of every joint at time `t` (s) along consecutive segments
+/// (the first or last segment outside them).
+pub fn segments_position(segments: &[Segment], t: f64) -> [f64; 3] {
+    let idx = segments
         .partition_point(|s| s.t0_s + s.duration_s < t)
-        .min(plan.segments.len().saturating_sub(1));
-    match plan.segments.get(idx) {
+        .min(segments.len().saturating_sub(1));
+    match segments.get(idx) {
         Some(s) => {
-            let m = s.quintic().eval(t - s.t0_s);
+            let m = s.quintic().eval((t - s.t0_s).clamp(0.0, s.duration_s));
             [m.q[0], m.q[1], m.q[2]]
         }
         None => [0.0; 3],
@@ -35,7 +39,17 @@ pub fn plan_position(plan: &Plan, t: f64) -> [f64; 3] {
 /// Tracking error of the plant (true joint positions) against the f64 plan
 /// at true time − start, over [start, start + total time].
 pub fn tracking(plan: &Plan, start_ns: u64, samples: &[Sample]) -> Tracking {
-    let end_ns = start_ns + (plan.total_time_s * 1e9) as u64;
+    tracking_segments(&plan.segments, plan.total_time_s, start_ns, samples)
+}
+
+/// [`tracking`] against consecutive segments lasting `total_time_s`.
+pub fn tracking_segments(
+    segments: &[Segment],
+    total_time_s: f64,
+    start_ns: u64,
+    samples: &[Sample],
+) -> Tracking {
+    let end_ns = start_ns + (total_time_s * 1e9) as u64;
     let mut sum = [0.0; 3];
     let mut out = Tracking::default();
     for s in samples
@@ -43,7 +57,7 @@ pub fn tracking(plan: &Plan, start_ns: u64, samples: &[Sample]) -> Tracking {
         .filter(|s| s.t_ns >= start_ns && s.t_ns <= end_ns)
     {
         let t = (s.t_ns - start_ns) as f64 * 1e-9;
-        let r = plan_position(plan, t);
+        let r = segments_position(segments, t.min(total_time_s));
         for j in 0..3 {
             let e = s.q[j] - r[j];
             sum[j] += e * e;
@@ -55,6 +69,27 @@ pub fn tracking(plan: &Plan, start_ns: u64, samples: &[Sample]) -> Tracking {
         out.rms_error_m[j] = (sum[j] / out.samples.max(1) as f64).sqrt();
     }
     out
+}
+
+/// A received wire segment as a plan segment starting at `t0_s`: the
+/// normalised-time coefficients b_jk (m) back to c_jk = b_jk / h^k.
+pub fn segment_from_wire(w: &WireSegment, t0_s: f64) -> Segment {
+    let h = w.duration_us as f64 * 1e-6;
+    let b = w.normalised_f64();
+    let coeffs = b.map(|row| {
+        let mut c = [0.0; 6];
+        let mut hk = 1.0;
+        for k in 0..6 {
+            c[k] = row[k] / hk;
+            hk *= h;
+        }
+        c
+    });
+    Segment {
+        t0_s,
+        duration_s: h,
+        coeffs,
+    }
 }
 
 /// Largest |q_f32 − q_f64| (m) over a whole plan: each segment goes through
@@ -105,6 +140,27 @@ mod tests {
             let e = f32_eval_error(&plan, 2000);
             assert!(e < 1e-6, "f32 evaluation error {e:e} m");
             assert!(e > 0.0, "f32 must differ from f64 somewhere");
+        }
+    }
+
+    #[test]
+    fn wire_segments_give_back_the_plan() {
+        let plan = testplan::paper_case2().unwrap();
+        let mut t0 = 0.0;
+        let mut got = Vec::new();
+        for (i, s) in plan.segments.iter().enumerate() {
+            let w = WireSegment::from_quintic(i as u16, &s.quintic(), 0).unwrap();
+            let seg = segment_from_wire(&w, t0);
+            t0 += seg.duration_s;
+            got.push(seg);
+        }
+        assert!((t0 - plan.total_time_s).abs() < 1e-9);
+        for k in 0..=500 {
+            let t = plan.total_time_s * k as f64 / 500.0;
+            let (a, b) = (plan_position(&plan, t), segments_position(&got, t));
+            for j in 0..3 {
+                assert!((a[j] - b[j]).abs() < 1e-9, "t {t}: {} vs {}", a[j], b[j]);
+            }
         }
     }
 

@@ -137,6 +137,104 @@ impl MotorOutput for SimMotor {
     }
 }
 
+impl SimNode {
+    /// Drive `id` (1–3) with its own clock, unconfigured, power stage off.
+    pub fn new(id: u8, clock: LocalClock) -> Self {
+        Self {
+            node: Node::new(id),
+            clock,
+            next_tick_us: 0,
+            next_comm_us: 0,
+            pending_torque: 0.0,
+            enabled: false,
+            motor: SimMotor::default(),
+            last_fault: FaultCode::None,
+            started_ns: None,
+            faults: Vec::new(),
+            peak_torque: 0.0,
+            max_stop_jerk: 0.0,
+            executed: Vec::new(),
+            states: Vec::new(),
+            emergency_rx_ns: None,
+        }
+    }
+
+    /// Is the power stage on (brake released)?
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+
+    /// One control tick at local time `local_us` with the axis at `q` (m),
+    /// at true time `t_ns`. Returns the motor torque acting from now on: the
+    /// previous tick's command (one-tick actuation delay), 0 when disabled.
+    pub fn control_tick(&mut self, local_us: u64, q: f64, counts_per_metre: f64, t_ns: u64) -> f64 {
+        let counts = (q * counts_per_metre).floor() as i64;
+        let mut motor = std::mem::take(&mut self.motor);
+        self.node
+            .tick(local_us, &mut SimEncoder(counts), &mut motor);
+        let acting = if self.enabled {
+            self.pending_torque
+        } else {
+            0.0
+        };
+        self.pending_torque = motor.torque as f64;
+        self.enabled = motor.enabled;
+        self.peak_torque = self.peak_torque.max(motor.torque.abs());
+        self.motor = motor;
+        if self.node.state() == State::Stopping {
+            self.max_stop_jerk = self
+                .max_stop_jerk
+                .max(self.node.stats.reference.qddd.amax());
+        }
+        if self.started_ns.is_none() && self.node.state() == State::Running {
+            self.started_ns = Some(t_ns);
+        }
+        let st = self.node.state();
+        if self.states.last().is_none_or(|x| x.1 != st) {
+            self.states.push((t_ns, st));
+        }
+        if let Some((seq, crc)) = self.node.executing()
+            && self
+                .executed
+                .last()
+                .is_none_or(|x| (x.1, x.2) != (seq, crc))
+        {
+            self.executed.push((t_ns, seq, crc));
+        }
+        acting
+    }
+
+    /// Records a change of the fault code at true time `t_ns`.
+    pub fn note_fault(&mut self, t_ns: u64) {
+        let f = self.node.fault();
+        if f != self.last_fault {
+            if f != FaultCode::None {
+                self.faults.push(FaultEvent {
+                    node: self.node.node_id(),
+                    code: f,
+                    t_ns,
+                });
+            }
+            self.last_fault = f;
+        }
+    }
+}
+
+impl Sample {
+    /// The machine at true time `t_ns`: joint positions `q` and every drive's state.
+    pub fn of(t_ns: u64, q: [f64; 3], nodes: &[SimNode]) -> Self {
+        let k = |i: usize| nodes.get(i).map(|n| &n.node);
+        Sample {
+            t_ns,
+            q,
+            torque: [0, 1, 2].map(|i| k(i).map_or(0.0, |n| n.stats.torque)),
+            // Each node's reference of its own axis.
+            reference: [0, 1, 2].map(|i| k(i).map_or(0.0, |n| n.stats.reference.q[i])),
+            state: [0, 1, 2].map(|i| k(i).map_or(State::Idle, |n| n.state())),
+        }
+    }
+}
+
 /// An error of the virtual machine itself.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -205,25 +303,14 @@ impl Sim {
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.clock_seed);
         let tick_us = (1e6 / cfg.rate_hz).round().max(1.0) as u64;
         let nodes = (1..=3u8)
-            .map(|id| SimNode {
-                node: Node::new(id),
-                clock: LocalClock {
-                    offset_ns: rng.random_range(0..10_000_000_000i64),
-                    drift: rng.random_range(-1.0..1.0) * cfg.max_drift_ppm * 1e-6,
-                },
-                next_tick_us: 0,
-                next_comm_us: 0,
-                pending_torque: 0.0,
-                enabled: false,
-                motor: SimMotor::default(),
-                last_fault: FaultCode::None,
-                started_ns: None,
-                faults: Vec::new(),
-                peak_torque: 0.0,
-                max_stop_jerk: 0.0,
-                executed: Vec::new(),
-                states: Vec::new(),
-                emergency_rx_ns: None,
+            .map(|id| {
+                SimNode::new(
+                    id,
+                    LocalClock {
+                        offset_ns: rng.random_range(0..10_000_000_000i64),
+                        drift: rng.random_range(-1.0..1.0) * cfg.max_drift_ppm * 1e-6,
+                    },
+                )
             })
             .collect::<Vec<_>>();
         let mut sim = Self {
@@ -270,18 +357,7 @@ impl Sim {
     /// Records a change of node `i`'s fault code at the current time.
     fn note_fault(&mut self, i: usize) {
         let t_ns = self.t_ns;
-        let n = &mut self.nodes[i];
-        let f = n.node.fault();
-        if f != n.last_fault {
-            if f != FaultCode::None {
-                n.faults.push(FaultEvent {
-                    node: i as u8 + 1,
-                    code: f,
-                    t_ns,
-                });
-            }
-            n.last_fault = f;
-        }
+        self.nodes[i].note_fault(t_ns);
     }
 
     fn service(&mut self, i: usize) {
@@ -315,47 +391,16 @@ impl Sim {
 
     fn control_tick(&mut self, i: usize, local_us: u64) {
         let cpm = self.cfg.counts_per_metre;
-        let counts = (self.plant.q[i] * cpm).floor() as i64;
-        let n = &mut self.nodes[i];
-        let mut motor = std::mem::take(&mut n.motor);
-        n.node.tick(local_us, &mut SimEncoder(counts), &mut motor);
-        // One-tick actuation delay: last tick's command acts from now on.
-        self.plant.tau[i] = if n.enabled { n.pending_torque } else { 0.0 };
-        n.pending_torque = motor.torque as f64;
-        n.enabled = motor.enabled;
-        n.peak_torque = n.peak_torque.max(motor.torque.abs());
-        n.motor = motor;
-        if n.node.state() == State::Stopping {
-            n.max_stop_jerk = n.max_stop_jerk.max(n.node.stats.reference.qddd.amax());
-        }
-        if n.started_ns.is_none() && n.node.state() == State::Running {
-            n.started_ns = Some(self.t_ns);
-        }
-        let st = n.node.state();
-        if n.states.last().is_none_or(|x| x.1 != st) {
-            n.states.push((self.t_ns, st));
-        }
-        if let Some((seq, crc)) = n.node.executing()
-            && n.executed.last().is_none_or(|x| (x.1, x.2) != (seq, crc))
-        {
-            n.executed.push((self.t_ns, seq, crc));
-        }
+        let t_ns = self.t_ns;
+        self.plant.tau[i] = self.nodes[i].control_tick(local_us, self.plant.q[i], cpm, t_ns);
         self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
         if i == 0 {
             self.tick_count += 1;
             let every = self.cfg.record_every.max(1) as u64;
             if self.tick_count % every == 0 {
                 let q = self.plant.q;
-                self.samples.push(Sample {
-                    t_ns: self.t_ns,
-                    q: [q[0], q[1], q[2]],
-                    torque: [0, 1, 2].map(|k| self.nodes[k].node.stats.torque),
-                    reference: [0, 1, 2].map(|k| {
-                        let a = k; // each node's reference of its own axis
-                        self.nodes[k].node.stats.reference.q[a]
-                    }),
-                    state: [0, 1, 2].map(|k| self.nodes[k].node.state()),
-                });
+                self.samples
+                    .push(Sample::of(t_ns, [q[0], q[1], q[2]], &self.nodes));
             }
         }
     }

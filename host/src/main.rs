@@ -34,6 +34,12 @@ enum Command {
     Report(cli::report::ReportArgs),
     /// Run a plan on the in-process virtual hardware.
     Simulate(cli::simulate::SimulateArgs),
+    /// Upload and run a plan on the drives over SocketCAN.
+    Upload(cli::upload::UploadArgs),
+    /// Plan and run a point-to-point move from the reported position to X Y Z (mm).
+    MoveTo(cli::move_to::MoveToArgs),
+    /// Decode live bus traffic with the protocol declaration.
+    Monitor(cli::monitor::MonitorArgs),
 }
 
 fn run(cli: Cli) -> CliResult {
@@ -51,6 +57,11 @@ fn run(cli: Cli) -> CliResult {
         Command::Simulate(a) => {
             cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
         }
+        Command::Upload(a) => {
+            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::upload::run(a))
+        }
+        Command::MoveTo(a) => cli::move_to::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Monitor(a) => cli::monitor::run(a),
     }
 }
 

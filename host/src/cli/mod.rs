@@ -3,10 +3,13 @@
 pub mod check;
 pub mod fk;
 pub mod ik;
+pub mod monitor;
+pub mod move_to;
 pub mod plan;
 pub mod report;
 pub mod simulate;
 pub mod torque;
+pub mod upload;
 
 use nalgebra::Vector3;
 

@@ -6,10 +6,11 @@
 pub mod fault_run;
 pub mod session;
 pub mod sim_port;
+pub mod socket_port;
 #[cfg(test)]
 mod tests;
 
-pub use session::{FaultReport, Outcome, Session, SessionOptions, UploadError};
+pub use session::{FaultReport, Outcome, Progress, Session, SessionOptions, UploadError};
 
 use triquint_shared::protocol::Frame;
 

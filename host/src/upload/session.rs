@@ -32,6 +32,8 @@ pub struct SessionOptions {
     pub finish_grace_us: u64,
     /// Test hook: stop streaming after this many segments (provokes underrun).
     pub stall_after: Option<usize>,
+    /// Only configure the nodes (and check the configuration), no motion.
+    pub configure_only: bool,
 }
 
 impl Default for SessionOptions {
@@ -48,8 +50,22 @@ impl Default for SessionOptions {
             response_timeout_us: 2_000_000,
             finish_grace_us: 5_000_000,
             stall_after: None,
+            configure_only: false,
         }
     }
+}
+
+/// Progress of a session.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    pub phase: &'static str,
+    /// Segments every node has acknowledged.
+    pub segments_acked: usize,
+    pub segments: usize,
+    /// Start command sent.
+    pub started: bool,
+    /// Plan duration (µs).
+    pub plan_end_us: u64,
 }
 
 /// A fault a node reported (Emergency frame or heartbeat).
@@ -218,8 +234,23 @@ impl Session {
         let segments = plan
             .wire_segments()
             .map_err(|(seq, source)| UploadError::Segment { seq, source })?;
+        Ok(Self::with_segments(segments, configs, opts))
+    }
+
+    /// A session that only writes and checks the configurations (no motion):
+    /// drives report their position once configured.
+    pub fn configure(configs: [DriveConfig; 3], mut opts: SessionOptions) -> Self {
+        opts.configure_only = true;
+        Self::with_segments(Vec::new(), configs, opts)
+    }
+
+    fn with_segments(
+        segments: Vec<WireSegment>,
+        configs: [DriveConfig; 3],
+        opts: SessionOptions,
+    ) -> Self {
         let plan_end_us = segments.iter().map(|s| s.duration_us as u64).sum();
-        Ok(Self {
+        Self {
             opts,
             segments,
             configs,
@@ -241,7 +272,7 @@ impl Session {
             segment_frames: 0,
             retransmits: 0,
             rejects_seen: 0,
-        })
+        }
     }
 
     pub fn faults(&self) -> &[FaultReport] {
@@ -261,6 +292,33 @@ impl Session {
     /// Host time (µs) of the start (0 before).
     pub fn start_us(&self) -> u64 {
         self.start_us
+    }
+
+    /// Where the session is, for progress displays.
+    pub fn progress(&self) -> Progress {
+        let acked = self.next_to_send.saturating_sub(self.in_flight.len());
+        Progress {
+            phase: match self.phase {
+                Phase::Discover => "waiting for heartbeats",
+                Phase::Configure => "configuring",
+                Phase::VerifyConfig | Phase::ReadBack => "checking the configuration",
+                Phase::Sync => "synchronising clocks",
+                Phase::Fill => "filling the queues",
+                Phase::Arm => "arming",
+                Phase::Stream => "running, streaming",
+                Phase::Finish => "running",
+                Phase::Done => "done",
+            },
+            segments_acked: acked,
+            segments: self.segments.len(),
+            started: self.start_us != 0,
+            plan_end_us: self.plan_end_us,
+        }
+    }
+
+    /// Last reported state and fault code of nodes 1–3 (`None`: never heard).
+    pub fn node_states(&self) -> [(Option<State>, u8); 3] {
+        self.nodes.map(|v| (v.state, v.fault))
     }
 
     fn command(&mut self, node: u8, code: CommandCode, arg: u32) -> u8 {
@@ -569,6 +627,7 @@ impl Session {
                 if fresh {
                     let bad = (0..3).find(|&i| self.nodes[i].config_crc != self.configs[i].crc());
                     match bad {
+                        None if self.opts.configure_only => self.set_phase(Phase::Done, now),
                         None => self.set_phase(Phase::Sync, now),
                         Some(i) => {
                             let node = i as u8 + 1;

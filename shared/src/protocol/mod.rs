@@ -14,6 +14,8 @@
 pub mod config;
 pub mod crc;
 #[cfg(any(feature = "alloc", test))]
+pub mod describe;
+#[cfg(any(feature = "alloc", test))]
 pub mod generate;
 pub mod messages;
 pub mod segment;

@@ -1,0 +1,108 @@
+"""Fixtures of the HIL suite: the binaries, the bus, the DBC, and a running
+`triquint-sim` (three virtual drives + plant in real time on vcan0).
+
+Paths come from the environment set by scripts/hil.sh (the VM sees the host's
+file system read-only; only HIL_OUT is written back)."""
+import json
+import os
+import signal
+import subprocess
+import time
+
+import can
+import cantools
+import pytest
+
+ROOT = os.environ.get("HIL_ROOT", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
+IFACE = os.environ.get("HIL_IFACE", "vcan0")
+OUT = os.environ.get("HIL_OUT", "/tmp/triquint-hil")
+PLANS = os.environ.get("HIL_PLANS", os.path.join(OUT, "plans"))
+TRIQUINT = os.environ.get("TRIQUINT", os.path.join(ROOT, "target", "release", "triquint"))
+TRIQUINT_SIM = os.environ.get("TRIQUINT_SIM", os.path.join(ROOT, "target", "release", "triquint-sim"))
+# The guest computes ~11x slower than the host: 1 kHz control fits.
+RATE = os.environ.get("HIL_RATE", "1000")
+
+
+@pytest.fixture(scope="session")
+def db():
+    return cantools.database.load_file(os.path.join(ROOT, "docs", "triquint.dbc"))
+
+
+@pytest.fixture
+def bus():
+    b = can.Bus(interface="socketcan", channel=IFACE, fd=True)
+    yield b
+    b.shutdown()
+
+
+def plan_path(case):
+    return os.path.join(PLANS, f"paper-case{case}.json")
+
+
+def plan_start_mm(case):
+    with open(plan_path(case)) as f:
+        p = json.load(f)
+    return [1000.0 * c for c in p["via_points_m"][0]]
+
+
+class Sim:
+    """A running triquint-sim; `stop()` sends SIGTERM and returns its report."""
+
+    def __init__(self, name, fd=False, nodes="1,2,3", start=None, extra=()):
+        os.makedirs(OUT, exist_ok=True)
+        self.report_path = os.path.join(OUT, f"sim-{name}.json")
+        self.log_path = os.path.join(OUT, f"sim-{name}.log")
+        args = [TRIQUINT_SIM, "--iface", IFACE, "--nodes", nodes, "--rate", RATE, "--report", self.report_path]
+        if fd:
+            args.append("--fd")
+        if start is not None:
+            args += ["--start", ",".join(f"{c:.6f}" for c in start)]
+        args += list(extra)
+        self.log = open(self.log_path, "w")
+        self.proc = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT)
+
+    def wait_heartbeats(self, bus, nodes=(1, 2, 3), timeout=20.0):
+        """Blocks until every node in `nodes` sent a heartbeat."""
+        seen = set()
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < timeout and seen != set(nodes):
+            assert self.proc.poll() is None, open(self.log_path).read()
+            m = bus.recv(0.2)
+            if m is not None and 0x701 <= m.arbitration_id <= 0x703:
+                seen.add(m.arbitration_id - 0x700)
+        assert seen == set(nodes), f"heartbeats from {sorted(seen)} only"
+
+    def stop(self):
+        self.proc.send_signal(signal.SIGTERM)
+        code = self.proc.wait(timeout=30)
+        self.log.close()
+        assert code == 0, f"triquint-sim exit {code}: {open(self.log_path).read()}"
+        with open(self.report_path) as f:
+            return json.load(f)
+
+
+@pytest.fixture
+def make_sim():
+    sims = []
+
+    def make(*a, **k):
+        s = Sim(*a, **k)
+        sims.append(s)
+        return s
+
+    yield make
+    for s in sims:
+        # SIGTERM, so a failed test still leaves the simulator's report.
+        if s.proc.poll() is None:
+            s.proc.send_signal(signal.SIGTERM)
+            try:
+                s.proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                s.proc.kill()
+                s.proc.wait()
+
+
+def run(args, timeout=120):
+    """Runs a command; returns (exit status, stdout, stderr)."""
+    p = subprocess.run(args, capture_output=True, text=True, timeout=timeout)
+    return p.returncode, p.stdout, p.stderr

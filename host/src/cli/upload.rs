@@ -1,0 +1,238 @@
+//! `triquint upload PLAN.json --iface IFACE`: runs a plan on real drives (or
+//! `triquint-sim`) over SocketCAN: heartbeat check, configuration, segment
+//! streaming with flow control, time sync, arm, common start, then each
+//! node's final state and fault code.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::{FaultCode, State};
+
+use crate::cli::simulate::read_plan;
+use crate::exit::{CliError, CliResult};
+use crate::upload::sim_port::configs_for;
+use crate::upload::socket_port::open_host;
+use crate::upload::{Outcome, Session, SessionOptions, UploadError};
+
+#[derive(Args, Debug)]
+pub struct UploadArgs {
+    /// Plan file written by `triquint plan`.
+    pub plan: PathBuf,
+    #[command(flatten)]
+    pub bus: BusArgs,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The bus options shared by `upload` and `move-to`.
+#[derive(Args, Debug, Clone)]
+pub struct BusArgs {
+    /// SocketCAN interface (can0, vcan0).
+    #[arg(long, value_name = "IFACE")]
+    pub iface: String,
+    /// CAN-FD: 64-byte segment frames (the interface needs MTU 72).
+    #[arg(long)]
+    pub fd: bool,
+    /// The drive nodes of axes 1, 2, 3 (all three must answer).
+    #[arg(long, default_value = "1,2,3", value_name = "1,2,3")]
+    pub nodes: String,
+    /// Control tick rate the drives are configured for (Hz).
+    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
+    pub rate: f64,
+    /// How long a node may stay silent before the upload fails (s).
+    #[arg(long, default_value_t = 2.0, value_name = "S")]
+    pub timeout: f64,
+}
+
+/// What an upload did.
+#[derive(Clone, Debug, Serialize)]
+pub struct UploadSummary {
+    pub completed: bool,
+    pub segments: usize,
+    pub frames_sent: u64,
+    pub segment_frames: u64,
+    pub retransmits: u64,
+    /// From the first frame until every segment was acknowledged by every node (s).
+    pub upload_s: f64,
+    /// From the first frame until every node reported rest (s).
+    pub total_s: f64,
+    pub nodes: Vec<NodeSummary>,
+    pub faults: Vec<FaultSummary>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeSummary {
+    pub node: u8,
+    pub state: &'static str,
+    pub fault: u8,
+    pub fault_name: &'static str,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FaultSummary {
+    pub node: u8,
+    pub code: u8,
+    pub name: &'static str,
+}
+
+fn check_bus_args(b: &BusArgs) -> CliResult {
+    let mut nodes: Vec<&str> = b.nodes.split(',').map(str::trim).collect();
+    nodes.sort_unstable();
+    if nodes != ["1", "2", "3"] {
+        return Err(CliError::bad_input(format!(
+            "--nodes {}: the robot has three axes driven by nodes 1, 2 and 3; list all three",
+            b.nodes
+        )));
+    }
+    if !(1000.0..=10000.0).contains(&b.rate) {
+        return Err(CliError::bad_input(format!(
+            "--rate {}: must be 1000 to 10000 Hz",
+            b.rate
+        )));
+    }
+    if !(b.timeout.is_finite() && b.timeout > 0.0) {
+        return Err(CliError::bad_input(format!(
+            "--timeout {}: must be a positive number of seconds",
+            b.timeout
+        )));
+    }
+    Ok(())
+}
+
+fn upload_error(e: UploadError, iface: &str, timeout: f64) -> CliError {
+    match e {
+        e if e.is_config() => CliError::bad_input(e),
+        e @ UploadError::Segment { .. } => CliError::bad_input(e),
+        e if e.is_motion_fault() => CliError::motion_fault(e),
+        e @ UploadError::Timeout { .. } => {
+            CliError::device(format!("{iface}: {e} (silent for {timeout} s)"))
+        }
+        e => CliError::device(format!("{iface}: {e}")),
+    }
+}
+
+/// Uploads and runs `plan` over `bus`, with a progress bar on a terminal.
+pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
+    check_bus_args(bus)?;
+    let settings = DriveSettings {
+        control_rate: bus.rate,
+        ..DriveSettings::default()
+    };
+    let (configs, _) = configs_for(plan, &settings).map_err(CliError::bad_input)?;
+    let opts = SessionOptions {
+        fd: bus.fd,
+        response_timeout_us: (bus.timeout * 1e6) as u64,
+        ..SessionOptions::default()
+    };
+    let mut session =
+        Session::new(plan, configs, opts).map_err(|e| upload_error(e, &bus.iface, bus.timeout))?;
+    let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
+    let bar = ProgressBar::new(plan.segments.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} segments  {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let t0 = Instant::now();
+    let mut acked_at: Option<f64> = None;
+    let outcome: Outcome = loop {
+        let polled = session.poll(&mut port);
+        let p = session.progress();
+        bar.set_position(p.segments_acked as u64);
+        bar.set_message(p.phase);
+        if acked_at.is_none() && p.segments_acked == p.segments {
+            acked_at = Some(t0.elapsed().as_secs_f64());
+        }
+        match polled {
+            Ok(Some(o)) => break o,
+            Ok(None) => {}
+            Err(e) => {
+                bar.abandon();
+                return Err(upload_error(e, &bus.iface, bus.timeout));
+            }
+        }
+        // 1 ms: the window (4 segments) stays full and time stamps come from
+        // the kernel, so polling faster only burns CPU.
+        std::thread::sleep(Duration::from_millis(1));
+    };
+    bar.finish_and_clear();
+    let total_s = t0.elapsed().as_secs_f64();
+    let nodes = session
+        .node_states()
+        .iter()
+        .enumerate()
+        .map(|(i, (state, fault))| NodeSummary {
+            node: i as u8 + 1,
+            state: state.map_or("silent", State::name),
+            fault: *fault,
+            fault_name: FaultCode::from_u8(*fault).map_or("unknown", FaultCode::name),
+        })
+        .collect();
+    Ok(UploadSummary {
+        completed: outcome.completed,
+        segments: plan.segments.len(),
+        frames_sent: outcome.frames_sent,
+        segment_frames: outcome.segment_frames_sent,
+        retransmits: outcome.retransmits,
+        upload_s: acked_at.unwrap_or(total_s),
+        total_s,
+        nodes,
+        faults: outcome
+            .faults
+            .iter()
+            .map(|f| FaultSummary {
+                node: f.node,
+                code: f.code as u8,
+                name: f.code.name(),
+            })
+            .collect(),
+    })
+}
+
+/// Prints the summary; exit 0 only when every node completed without a fault.
+pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(s).map_err(|e| CliError::device(e.to_string()))?
+        );
+    } else {
+        println!(
+            "{} segments over {} ({}): {} frames ({} segment frames, {} retransmissions); all acknowledged after {:.3} s, done after {:.3} s",
+            s.segments,
+            bus.iface,
+            if bus.fd { "CAN-FD" } else { "classic CAN" },
+            s.frames_sent,
+            s.segment_frames,
+            s.retransmits,
+            s.upload_s,
+            s.total_s
+        );
+        for n in &s.nodes {
+            println!(
+                "node {}: {}, fault {} ({})",
+                n.node, n.state, n.fault_name, n.fault
+            );
+        }
+    }
+    if s.completed && s.faults.is_empty() {
+        return Ok(());
+    }
+    Err(CliError::motion_fault(match s.faults.first() {
+        Some(f) => format!("node {} faulted: {} ({})", f.node, f.name, f.code),
+        None => "the plan did not complete".to_string(),
+    }))
+}
+
+pub fn run(args: &UploadArgs) -> CliResult {
+    let plan = read_plan(&args.plan)?;
+    let summary = run_plan(&plan, &args.bus)?;
+    report(&summary, &args.bus, args.json)
+}
