@@ -1,5 +1,5 @@
-//! A `candump -L` log of a full upload recorded on vcan by the HIL suite
-//! (`scripts/hil.sh`, Case I over CAN-FD; `testdata/hil/`):
+//! `candump -L` logs of full uploads recorded on vcan by the HIL suite
+//! (`scripts/hil.sh`, Case I, classic CAN and CAN-FD; `testdata/hil/`):
 //! the protocol decoder reads every line, the decoded form matches the stored
 //! one (`TRIQUINT_BLESS=1` rewrites it), every frame encodes back to the same
 //! bytes from its physical values, and the segments reassembled from the wire
@@ -100,6 +100,11 @@ fn check_log(name: &str, fd: bool) {
         "{} is stale: TRIQUINT_BLESS=1 cargo test -p triquint-host --test candump",
         stored.display()
     );
+}
+
+#[test]
+fn classic_upload_log_decodes() {
+    check_log("case1-classic", false);
 }
 
 #[test]
