@@ -32,6 +32,9 @@ step "golden vectors are current (host f32 results; f64 plan within 1 µm)"
 cargo test --locked -p triquint-firmware --test golden -- --nocapture 2>&1 | grep -E "golden|test result"
 
 cd "$root/firmware/boards/qemu-mps2-an386"
+# Board crates are their own workspaces: build each into its own target/,
+# whatever CARGO_TARGET_DIR the caller set for the main workspace.
+export CARGO_TARGET_DIR="$PWD/target"
 elf=target/thumbv7em-none-eabihf/release/triquint-qemu-mps2-an386
 step "QEMU image: fmt, clippy, build"
 cargo fmt --check
@@ -66,6 +69,7 @@ cargo build --locked --release 2>&1 | tail -1
 
 step "B-G431B-ESC1 board image: fmt, clippy, build (flashing needs the board and probe-rs)"
 cd "$root/firmware/boards/b-g431b-esc1"
+export CARGO_TARGET_DIR="$PWD/target"
 cargo fmt --check
 cargo clippy --locked --release -- -D warnings
 cargo build --locked --release

@@ -6,5 +6,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --locked -p triquint-host --example fault_soak
 start=$(date +%s)
-./target/release/examples/fault_soak "${SOAK_SCHEDULES:-1000}" "${SOAK_THREADS:-2}" "${SOAK_SEED:-2026}"
+"${CARGO_TARGET_DIR:-target}/release/examples/fault_soak" "${SOAK_SCHEDULES:-1000}" "${SOAK_THREADS:-2}" "${SOAK_SEED:-2026}"
 echo "fault soak: $(( $(date +%s) - start )) s"
