@@ -310,7 +310,12 @@ impl<const Q: usize> Node<Q> {
         };
         let for_me = node == 0 || node == self.node_id;
         match msg {
-            Msg::TimeSync(s) => self.sync.on_sync(s.seq, s.prev_tx_us, rx.timestamp_us),
+            Msg::TimeSync(s) => {
+                // Only a node with no motion pending may follow a new host time base.
+                let idle = matches!(self.state, State::Idle | State::Fault);
+                self.sync
+                    .on_sync(s.seq, s.prev_tx_us, rx.timestamp_us, idle)
+            }
             Msg::Emergency(e) if node != self.node_id => {
                 let code = if node == 0 {
                     FaultCode::HostEmergency

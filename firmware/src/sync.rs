@@ -23,14 +23,19 @@ pub struct SyncEstimator {
 /// is a late or corrupted sync, not a clock: it is discarded. Clocks within
 /// ±1000 ppm drift at most 100 µs per 100 ms sync period.
 pub const OUTLIER_US: i64 = 500;
+/// Consecutive outliers after which an idle node takes a new host time base.
+pub const REBASE_AFTER: u32 = 3;
 
 impl SyncEstimator {
     pub fn reset(&mut self) {
         *self = Self::default();
     }
 
-    /// A TimeSync (`seq`, host transmit time of `seq − 1`) received at local time `local_us`.
-    pub fn on_sync(&mut self, seq: u8, prev_tx_us: u32, local_us: u64) {
+    /// A TimeSync (`seq`, host transmit time of `seq − 1`) received at local
+    /// time `local_us`. `may_rebase`: no motion depends on the time base, so
+    /// [`REBASE_AFTER`] outliers in a row mean a new host time base (a new
+    /// host session), not late frames, and the estimator starts afresh.
+    pub fn on_sync(&mut self, seq: u8, prev_tx_us: u32, local_us: u64, may_rebase: bool) {
         self.rx_us = Some(local_us);
         if let Some((pseq, plocal)) = self.pending
             && pseq.wrapping_add(1) == seq
@@ -45,13 +50,20 @@ impl SyncEstimator {
             };
             // Once synced, a sample far from the prediction is a late receive
             // timestamp or a corrupted frame: keep the old time base.
+            let mut host = host;
             if self.samples >= 2
                 && let Some(est) = self.host_us(plocal)
                 && (host - est).abs() > OUTLIER_US
             {
                 self.outliers = self.outliers.saturating_add(1);
-                self.pending = Some((seq, local_us));
-                return;
+                if !(may_rebase && self.outliers >= REBASE_AFTER) {
+                    self.pending = Some((seq, local_us));
+                    return;
+                }
+                let rx = self.rx_us;
+                *self = Self::default();
+                self.rx_us = rx;
+                host = prev_tx_us as i64;
             }
             if let Some((ha, la)) = self.a {
                 let dl = plocal as i64 - la as i64;
@@ -130,7 +142,7 @@ mod tests {
             } else {
                 (host_tx - 100_000.0) as u32
             };
-            s.on_sync(k as u8, prev, local(host_tx) as u64);
+            s.on_sync(k as u8, prev, local(host_tx) as u64, false);
         }
         assert!(s.is_synced(local(2_950_000.0) as u64, 500_000));
         let est = s.host_us(local(2_950_000.0) as u64).unwrap();
@@ -147,12 +159,13 @@ mod tests {
                 k as u8,
                 (k * 100_000).saturating_sub(100_000) as u32,
                 7 + k * 100_000,
+                false,
             );
         }
         let before = s.host_us(450_007).unwrap();
         // Sync 5 is received 30 ms late; sync 6 pairs host time 500 000 with it.
-        s.on_sync(5, 400_000, 530_007);
-        s.on_sync(6, 500_000, 600_007);
+        s.on_sync(5, 400_000, 530_007, false);
+        s.on_sync(6, 500_000, 600_007, false);
         assert_eq!(s.outliers, 1);
         assert!((s.host_us(450_007).unwrap() - before).abs() <= 1);
         // The timeout runs from the last sync received.
@@ -165,10 +178,47 @@ mod tests {
                 k as u8,
                 (k * 100_000 - 100_000 + 30_000) as u32,
                 7 + k * 100_000,
+                false,
             );
         }
         assert!(s.outliers > 5);
         assert!(!s.is_synced(1_900_007, 250_000));
+    }
+
+    /// A new host session restarts host time: an idle node follows it after
+    /// REBASE_AFTER syncs; a node with motion pending never does.
+    #[test]
+    fn idle_node_follows_a_new_host_time_base() {
+        for idle in [true, false] {
+            let mut s = SyncEstimator::default();
+            for k in 0..5u64 {
+                s.on_sync(
+                    k as u8,
+                    (k * 100_000).saturating_sub(100_000) as u32,
+                    7 + k * 100_000,
+                    idle,
+                );
+            }
+            // The new session's host clock starts at 9 000 000 µs.
+            for k in 5..12u64 {
+                let host = 9_000_000 + (k - 5) * 100_000;
+                s.on_sync(
+                    k as u8,
+                    host.saturating_sub(100_000) as u32,
+                    7 + k * 100_000,
+                    idle,
+                );
+            }
+            let t = 7 + 11 * 100_000;
+            let est = s.host_us(t).unwrap();
+            if idle {
+                assert!((est - 9_600_000).abs() <= 1, "{est}");
+                assert!(s.is_synced(t, 250_000));
+            } else {
+                assert!((est - 1_100_000).abs() <= 1, "{est}");
+                assert!(s.outliers >= 6);
+            }
+        }
     }
 
     #[test]
@@ -178,7 +228,7 @@ mod tests {
         for k in 0..6u64 {
             let host = base + k * 100_000;
             let prev = (host - 100_000) as u32;
-            s.on_sync(k as u8, prev, 5_000 + k * 100_000);
+            s.on_sync(k as u8, prev, 5_000 + k * 100_000, false);
         }
         let est = s.host_us(5_000 + 550_000).unwrap();
         assert_eq!(est, (base + 550_000) as i64);
