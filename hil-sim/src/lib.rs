@@ -11,6 +11,7 @@ pub mod metrics;
 pub mod plant;
 pub mod plot;
 pub mod realtime;
+pub mod report;
 pub mod robot_file;
 pub mod sim;
 pub mod socketcan_port;

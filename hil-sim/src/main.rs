@@ -15,6 +15,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use triquint_shared::kinematics::Pose;
 use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport, RunReport};
+use triquint_sim::report::{JsonFault, RunJson};
 use triquint_sim::robot_file::read_robot;
 
 #[derive(Parser, Debug)]
@@ -49,22 +50,9 @@ struct Args {
 }
 
 #[derive(Serialize)]
-struct JsonFault {
-    node: u8,
-    code: u8,
-    name: &'static str,
-    t_s: f64,
-}
-
-#[derive(Serialize)]
 struct JsonRun {
-    rms_error_m: [f64; 3],
-    max_error_m: [f64; 3],
-    peak_torque_nm: [f64; 3],
-    bus_load: f64,
-    frames: u64,
-    faults: Vec<JsonFault>,
-    completed: bool,
+    #[serde(flatten)]
+    run: RunJson,
     segment_bus_load: f64,
     segment_frames: u64,
     segments: usize,
@@ -94,22 +82,19 @@ struct JsonReport {
 
 fn json_run(r: &RunReport) -> JsonRun {
     JsonRun {
-        rms_error_m: r.tracking.rms_error_m,
-        max_error_m: r.tracking.max_error_m,
-        peak_torque_nm: r.peak_torque_nm,
-        bus_load: r.bus_load,
-        frames: r.frames,
-        faults: r
-            .faults
-            .iter()
-            .map(|(f, t_s)| JsonFault {
-                node: f.node,
-                code: f.code as u8,
-                name: f.code.name(),
-                t_s: *t_s,
-            })
-            .collect(),
-        completed: r.completed,
+        run: RunJson {
+            rms_error_m: r.tracking.rms_error_m,
+            max_error_m: r.tracking.max_error_m,
+            peak_torque_nm: r.peak_torque_nm,
+            bus_load: r.bus_load,
+            frames: r.frames,
+            faults: r
+                .faults
+                .iter()
+                .map(|(f, t_s)| JsonFault::new(f, *t_s))
+                .collect(),
+            completed: r.completed,
+        },
         segment_bus_load: r.segment_bus_load,
         segment_frames: r.segment_frames,
         segments: r.segments,

@@ -3,10 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use serde::Serialize;
 use triquint_shared::plan::{PLAN_FORMAT, Plan};
 use triquint_sim::metrics::plan_position;
 use triquint_sim::plot::{Series, line_chart};
+use triquint_sim::report::{JsonFault, RunJson};
 
 use crate::exit::{CliError, CliResult, write_atomic};
 use crate::upload::sim_port::{SimReport, SimulateError, SimulateOptions, simulate};
@@ -30,25 +30,6 @@ pub struct SimulateArgs {
     /// Write tracking-error and torque plots (SVG) into DIR.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-}
-
-#[derive(Serialize)]
-struct JsonFault {
-    node: u8,
-    code: u8,
-    name: &'static str,
-    t_s: f64,
-}
-
-#[derive(Serialize)]
-struct JsonReport {
-    rms_error_m: [f64; 3],
-    max_error_m: [f64; 3],
-    peak_torque_nm: [f64; 3],
-    bus_load: f64,
-    frames: u64,
-    faults: Vec<JsonFault>,
-    completed: bool,
 }
 
 /// Reads and checks a plan file (exit 2 when it is not one).
@@ -109,15 +90,10 @@ pub fn run(args: &SimulateArgs) -> CliResult {
     let faults: Vec<JsonFault> = report
         .faults_on_nodes
         .iter()
-        .map(|f| JsonFault {
-            node: f.node,
-            code: f.code as u8,
-            name: f.code.name(),
-            t_s: f.t_ns as f64 * 1e-9 - start_s,
-        })
+        .map(|f| JsonFault::new(f, f.t_ns as f64 * 1e-9 - start_s))
         .collect();
     if args.json {
-        let j = JsonReport {
+        let j = RunJson {
             rms_error_m: report.tracking.rms_error_m,
             max_error_m: report.tracking.max_error_m,
             peak_torque_nm: report.peak_torque_nm,
