@@ -151,17 +151,23 @@ mod tests {
         assert!(s.lost(local(4_000_000.0) as u64, 500_000));
     }
 
-    #[test]
-    fn late_sync_is_discarded_and_silence_times_out_from_the_last_good_sync() {
+    /// Five syncs 100 ms apart with host time = local time − 7 µs.
+    fn synced(may_rebase: bool) -> SyncEstimator {
         let mut s = SyncEstimator::default();
         for k in 0..5u64 {
             s.on_sync(
                 k as u8,
                 (k * 100_000).saturating_sub(100_000) as u32,
                 7 + k * 100_000,
-                false,
+                may_rebase,
             );
         }
+        s
+    }
+
+    #[test]
+    fn late_sync_is_discarded_and_silence_times_out_from_the_last_good_sync() {
+        let s = &mut synced(false);
         let before = s.host_us(450_007).unwrap();
         // Sync 5 is received 30 ms late; sync 6 pairs host time 500 000 with it.
         s.on_sync(5, 400_000, 530_007, false);
@@ -190,15 +196,7 @@ mod tests {
     #[test]
     fn idle_node_follows_a_new_host_time_base() {
         for idle in [true, false] {
-            let mut s = SyncEstimator::default();
-            for k in 0..5u64 {
-                s.on_sync(
-                    k as u8,
-                    (k * 100_000).saturating_sub(100_000) as u32,
-                    7 + k * 100_000,
-                    idle,
-                );
-            }
+            let mut s = synced(idle);
             // The new session's host clock starts at 9 000 000 µs.
             for k in 5..12u64 {
                 let host = 9_000_000 + (k - 5) * 100_000;
