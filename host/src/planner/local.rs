@@ -54,6 +54,13 @@ const CUT_THRESHOLD: f64 = 0.5;
 /// Relative tolerance of the cutting-plane loop.
 const TOL: f64 = 1e-9;
 const MAX_INNER_ROUNDS: usize = 25;
+/// Cutting-plane rounds when judging a trust-region step (its figures are
+/// exact whatever the count; more rounds only improve x).
+const STEP_ROUNDS: usize = 6;
+/// Accuracy of the inner solves. Tighter asks for more than the interior
+/// point method delivers on these degenerate problems (most solves then end
+/// "almost solved", less accurate than this).
+const INNER_TOL: f64 = 1e-9;
 
 /// One planning problem: knots, limits, dynamics and the time budget.
 #[derive(Clone, Debug)]
@@ -67,6 +74,9 @@ pub struct Problem {
     pub weight: f64,
     /// Torque samples per segment where local maxima get constraints.
     pub torque_samples: usize,
+    /// Jerk only: velocity, acceleration and torque are neither constrained
+    /// nor evaluated (the relaxation solved first, see [`Problem::relaxed`]).
+    pub jerk_only: bool,
 }
 
 /// A candidate plan: intervals, knot derivatives, and its exact figures.
@@ -197,6 +207,9 @@ impl Problem {
                 let acc = derivative(&vel);
                 let jerk = derivative(&acc);
                 fig.jerk = fig.jerk.max(argmax_abs_on_interval(&jerk, 0.0, hk).1);
+                if self.jerk_only {
+                    continue;
+                }
                 for (q, poly, rate) in [
                     (Quantity::Velocity, &vel, &acc),
                     (Quantity::Acceleration, &acc, &jerk),
@@ -213,6 +226,9 @@ impl Problem {
                     }
                     note(&mut fig, q, best);
                 }
+            }
+            if self.jerk_only {
+                continue;
             }
             // Torque on a grid; cuts at each axis's local maxima of |τ|.
             // Samples from the power coefficients: one Horner pass per joint.
@@ -448,11 +464,17 @@ impl Problem {
     /// Exact min-max-jerk knot derivatives for fixed intervals (cutting planes).
     /// `x0` is where torque is first linearised (zeros will do).
     pub fn inner(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<Solution> {
+        self.inner_rounds(h, x0, MAX_INNER_ROUNDS)
+    }
+
+    /// [`Problem::inner`] with at most `max_rounds` cutting-plane rounds.
+    fn inner_rounds(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
         let mut x = x0.clone();
         let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
         let mut solves = 0;
-        for _ in 0..MAX_INNER_ROUNDS {
-            let lp = self.build(h, &x, &cuts, None);
+        for _ in 0..max_rounds {
+            let mut lp = self.build(h, &x, &cuts, None);
+            lp.tolerance = INNER_TOL;
             let sol = lp.solve().ok()?;
             solves += 1;
             let s_lp = sol[3 * self.nv()];
@@ -471,7 +493,20 @@ impl Problem {
             let exact = fig.jerk <= s_lp * (1.0 + TOL) + 1e-12
                 && fig.violation <= sigma_lp + TOL
                 && (fig.binding != Quantity::Torque || moved <= 1e-9 * scale);
-            if exact || solves == MAX_INNER_ROUNDS as u64 {
+            let before = cuts.len();
+            for c in &fig.cuts {
+                if !cuts
+                    .iter()
+                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
+                {
+                    cuts.push(*c);
+                }
+            }
+            // Without a new cut the next LP is the same one, unless torque
+            // cuts are re-linearised at the new point: stop, the figures are exact.
+            let relinearise = moved > 1e-9 * scale && cuts.iter().any(|c| c.q == Quantity::Torque);
+            let stuck = cuts.len() == before && !relinearise;
+            if exact || stuck || solves == max_rounds as u64 {
                 return Some(Solution {
                     h: h.to_vec(),
                     x,
@@ -481,23 +516,16 @@ impl Problem {
                     lp_solves: solves,
                 });
             }
-            for c in fig.cuts {
-                if !cuts
-                    .iter()
-                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
-                {
-                    cuts.push(c);
-                }
-            }
         }
         None
     }
 
-    /// Trust-region SLP over (x, h) from `start`, with Σh ≤ total_time: each
-    /// step solves the problem linearised in h at the current point (x is
-    /// exact there), restores C3 at the new intervals by projection, and is
-    /// accepted on the exact merit. Stops when a step gains less than
-    /// `rel_tol` of the merit (three times running) or the region collapses.
+    /// Trust-region SLP over (x, h) from `start` (an inner solution), with
+    /// Σh ≤ total_time: each step solves the problem linearised in h at the
+    /// current point (x is exact there) and is judged on the exact inner
+    /// optimum at the new intervals. Stops when a step gains less than
+    /// `rel_tol` of the merit (three times running), when the model's
+    /// promise falls to the LP's accuracy, or when the region collapses.
     pub fn local_search(&self, start: &Solution, max_iter: usize, rel_tol: f64) -> Solution {
         let nv = self.nv();
         let nseg = self.nseg();
@@ -506,11 +534,14 @@ impl Problem {
         let mut delta = 0.25;
         let mut solves = 0;
         let mut stalled = 0;
+        let mut rejected_small = 0;
         for _ in 0..max_iter {
             let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
             let mut lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
-            // A step only needs to be good, not exact: the merit is exact.
+            // A step only needs to be good, not exact: the merit is exact
+            // (so no iterative refinement of the KKT solves either).
             lp.tolerance = 1e-8;
+            lp.refine = false;
             solves += 1;
             let Ok(sol) = lp.solve() else {
                 delta *= 0.25;
@@ -522,23 +553,26 @@ impl Problem {
             let merit = cur.merit(self.weight);
             let predicted = sol[nd] + self.weight * sol[nd + 1];
             let gain = merit - predicted;
-            if gain <= 1e-10 * merit {
+            // Below the step LP's accuracy a predicted gain is noise.
+            if gain <= 1e-9 * merit {
                 break;
             }
             let h_new: Vec<f64> = (0..nseg)
                 .map(|k| (cur.h[k] + sol[3 * nv + k]).max(self.h_min))
                 .collect();
+            // The step is judged on the exact inner optimum at the new
+            // intervals: x re-optimised, not the LP's x projected back onto C3
+            // (that evaluation understates the gain and keeps steps tiny).
             let mut x_new = self.unpack(&sol);
             self.project(&h_new, &mut x_new);
-            let f = self.figures(&h_new, &x_new, self.torque_samples);
-            let cand = Solution {
-                h: h_new,
-                x: x_new,
-                jerk: f.jerk,
-                violation: f.violation,
-                binding: f.binding,
-                lp_solves: 0,
+            let Some(cand) = self.inner_at(&h_new, &x_new, STEP_ROUNDS) else {
+                delta *= 0.25;
+                if delta < 1e-7 {
+                    break;
+                }
+                continue;
             };
+            solves += cand.lp_solves;
             let actual = merit - cand.merit(self.weight);
             let rho = actual / gain;
             let at_edge = (0..nseg).any(|k| sol[3 * nv + k].abs() >= 0.99 * delta * cur.h[k]);
@@ -556,20 +590,63 @@ impl Problem {
                 }
             } else {
                 delta *= 0.25;
+                // Rejected although the model promised little: at the noise floor.
+                rejected_small += usize::from(gain < 1e-6 * merit);
             }
-            if stalled >= 3 || delta < 1e-7 {
+            if stalled >= 3 || rejected_small >= 2 || delta < 1e-7 {
                 break;
-            }
-        }
-        // Polish: the exact optimum for the final intervals.
-        if let Some(polished) = self.inner(&cur.h, &cur.x) {
-            solves += polished.lp_solves;
-            if polished.merit(self.weight) <= cur.merit(self.weight) {
-                cur = polished;
             }
         }
         cur.lp_solves = start.lp_solves + solves;
         cur
+    }
+
+    /// The jerk-only relaxation of this problem. Its optimum is a lower
+    /// bound; when that optimum meets every other limit it is the optimum.
+    pub fn relaxed(&self) -> Problem {
+        Problem {
+            jerk_only: true,
+            ..self.clone()
+        }
+    }
+
+    /// Exact figures of (h, x) under this problem's limits.
+    pub fn evaluate(&self, h: &[f64], x: &[Vec<f64>; 3]) -> Solution {
+        let f = self.figures(h, x, self.torque_samples);
+        Solution {
+            h: h.to_vec(),
+            x: x.clone(),
+            jerk: f.jerk,
+            violation: f.violation,
+            binding: f.binding,
+            lp_solves: 0,
+        }
+    }
+
+    /// The inner optimum at fixed h, through the relaxation when its answer
+    /// meets every limit (then it is exact, and the cutting planes are skipped).
+    pub fn inner_via_relaxation(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<Solution> {
+        self.inner_at(h, x0, MAX_INNER_ROUNDS)
+    }
+
+    /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
+    fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        if !self.jerk_only
+            && let Some(r) = self.relaxed().inner(h, x0)
+        {
+            let full = self.evaluate(h, &r.x);
+            if full.violation == 0.0 {
+                return Some(Solution {
+                    lp_solves: r.lp_solves,
+                    ..full
+                });
+            }
+            return self.inner_rounds(h, &r.x, max_rounds).map(|s| Solution {
+                lp_solves: s.lp_solves + r.lp_solves,
+                ..s
+            });
+        }
+        self.inner_rounds(h, x0, max_rounds)
     }
 
     /// Zero knot derivatives: the start of the first inner solve.
@@ -583,6 +660,7 @@ pub fn problem(knots: Knots, limits: &Limits, model: Model<f64>, total_time: f64
     Problem {
         h_min: 1e-3,
         torque_samples: TORQUE_SAMPLES,
+        jerk_only: false,
         weight: 1e3 * limits.jerk.max(1.0),
         knots,
         limits: limits.clone(),

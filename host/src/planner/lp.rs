@@ -17,6 +17,8 @@ pub struct Lp {
     soc: Rows,
     /// Relative accuracy asked of the solver.
     pub tolerance: f64,
+    /// Iterative refinement of each KKT solve (off trades accuracy for speed).
+    pub refine: bool,
 }
 
 /// Primal and dual solution; `z` is ordered as the rows: equalities,
@@ -59,6 +61,7 @@ impl Lp {
             vars,
             cost: vec![0.0; vars],
             tolerance: 1e-11,
+            refine: true,
             ..Self::default()
         }
     }
@@ -136,6 +139,7 @@ impl Lp {
             .tol_gap_rel(self.tolerance)
             .tol_feas(self.tolerance)
             .max_iter(200)
+            .iterative_refinement_enable(self.refine)
             .build()
             .map_err(|_| LpFailure(SolverStatus::NumericalError))?;
         let mut solver = DefaultSolver::new(&p, &self.cost, &a, &b, &cones, settings)

@@ -160,7 +160,7 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
     fine.torque_samples = FINAL_TORQUE_SAMPLES;
     fine.total_time = h.iter().sum();
     let exact = fine
-        .inner(&h, &sol.x)
+        .inner_via_relaxation(&h, &sol.x)
         .ok_or_else(|| CliError::infeasible("the solver failed on the rounded intervals"))?;
     lp_solves += exact.lp_solves;
     if !search::feasible(&fine, &exact) {

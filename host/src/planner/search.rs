@@ -135,11 +135,43 @@ fn parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R +
 const REFINE: usize = 3;
 
 /// Multistart global search for min-max jerk at the problem's total time.
+///
+/// The jerk-only relaxation is searched first: its LPs are a fraction of the
+/// size (no velocity, acceleration or torque rows) and exact in one solve.
+/// Its global optimum bounds the problem's from below, so when it meets
+/// every other limit it is the answer; otherwise the full problem is
+/// searched, from the relaxation's optimum and the same starts.
 pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
     let starts = start_points(p, opts.starts, opts.seed);
-    let pb = bar(starts.len() + REFINE, opts.progress, "searching");
+    let relaxed = multistart(&p.relaxed(), &starts, opts, "searching");
+    let mut starts = starts;
+    let mut lp_solves = 0;
+    if let Some(r) = relaxed {
+        let full = p.evaluate(&r.best.h, &r.best.x);
+        if full.violation == 0.0 {
+            let best = Solution {
+                lp_solves: r.best.lp_solves,
+                ..full
+            };
+            return Some(SearchResult { best, ..r });
+        }
+        lp_solves = r.lp_solves;
+        starts.insert(0, r.best.h);
+    }
+    let mut r = multistart(p, &starts, opts, "limits bind")?;
+    r.lp_solves += lp_solves;
+    Some(r)
+}
+
+fn multistart(
+    p: &Problem,
+    starts: &[Vec<f64>],
+    opts: &SearchOptions,
+    what: &str,
+) -> Option<SearchResult> {
+    let pb = bar(starts.len() + REFINE, opts.progress, what);
     let best_so_far = Mutex::new(f64::INFINITY);
-    let coarse: Vec<Option<Solution>> = parallel(&starts, opts.threads, |h| {
+    let coarse: Vec<Option<Solution>> = parallel(starts, opts.threads, |h| {
         let first = p.inner(h, &p.zero_x())?;
         let sol = p.local_search(&first, 60, 1e-5);
         if let Ok(mut b) = best_so_far.lock() {
@@ -164,7 +196,7 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
     });
     let chosen: Vec<usize> = order.iter().copied().take(REFINE).collect();
     let refined: Vec<Solution> = parallel(&chosen, opts.threads, |&i| {
-        let sol = coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-11));
+        let sol = coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10));
         pb.inc(1);
         sol
     })
@@ -316,7 +348,7 @@ pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     });
     let mut p = p.clone();
     p.total_time = t;
-    let guess = p.inner(&h, &x)?;
+    let guess = p.inner_via_relaxation(&h, &x)?;
     Some(p.local_search(&guess, 200, 1e-9))
 }
 
