@@ -527,6 +527,17 @@ impl Problem {
     /// `rel_tol` of the merit (three times running), when the model's
     /// promise falls to the LP's accuracy, or when the region collapses.
     pub fn local_search(&self, start: &Solution, max_iter: usize, rel_tol: f64) -> Solution {
+        self.local_search_until(start, max_iter, rel_tol, &|_| false)
+    }
+
+    /// [`Problem::local_search`] that also stops at the first point where `done` holds.
+    pub fn local_search_until(
+        &self,
+        start: &Solution,
+        max_iter: usize,
+        rel_tol: f64,
+        done: &dyn Fn(&Solution) -> bool,
+    ) -> Solution {
         let nv = self.nv();
         let nseg = self.nseg();
         let nd = 3 * nv + nseg;
@@ -536,6 +547,9 @@ impl Problem {
         let mut stalled = 0;
         let mut rejected_small = 0;
         for _ in 0..max_iter {
+            if done(&cur) {
+                break;
+            }
             let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
             let mut lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
             // A step only needs to be good, not exact: the merit is exact

@@ -129,6 +129,7 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
             })?;
             // Leave room for rounding to whole microseconds (jerk ∝ T⁻³).
             let t = best.h.iter().sum::<f64>() * (1.0 + 1e-6) + 1e-6 * best.h.len() as f64;
+            let bisection = best.lp_solves;
             let best = search::stretch(&p, &best, t)
                 .filter(|s| search::feasible(&p, s))
                 .unwrap_or(best);
@@ -138,7 +139,8 @@ pub fn plan(job: &Job, opts: &SearchOptions) -> CliResult<Plan> {
                     job.limits.total_time
                 )));
             }
-            (best.clone(), probe.starts, probe.lp_solves + best.lp_solves)
+            let lp_solves = probe.lp_solves + bisection + best.lp_solves;
+            (best, probe.starts, lp_solves)
         }
     };
     let total: f64 = sol.h.iter().sum();

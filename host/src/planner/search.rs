@@ -296,13 +296,30 @@ pub fn min_time(
     let total: f64 = s.h.iter().sum();
     // Jerk-only lower bound on the time, valid because `s` is the global optimum.
     let t_low = total * (s.jerk / template.limits.jerk).cbrt();
-    let scaled = |t: f64| stretch(&at(t), s, t);
+    let mut spent = 0;
+    // A plan at t from the probe's shape: scaled to t first (exact when only
+    // jerk binds), then locally optimised when another limit is violated.
+    // (Starting from the last feasible plan instead ends at longer times: the
+    // local search then stays in that plan's basin.)
+    let mut try_at = |t: f64| {
+        let from = s;
+        let p = at(t);
+        let guess = scale(&p, from, t)?;
+        spent += guess.lp_solves;
+        if feasible(&p, &guess) {
+            return Some(guess);
+        }
+        // Only feasibility is asked here: stop at the first feasible point.
+        let sol = p.local_search_until(&guess, 200, 1e-9, &|sol| feasible(&p, sol));
+        spent += sol.lp_solves - guess.lp_solves;
+        feasible(&p, &sol).then_some(sol)
+    };
     // Walk up from the lower bound until feasible, then bisect.
     let mut lo = t_low;
     let mut hi = t_low;
     let mut best = None;
     for _ in 0..40 {
-        if let Some(sol) = scaled(hi).filter(|sol| feasible(&at(hi), sol)) {
+        if let Some(sol) = try_at(hi) {
             best = Some(sol);
             break;
         }
@@ -317,7 +334,7 @@ pub fn min_time(
     };
     while hi > lo && hi - lo > 1e-5 * hi {
         let mid = 0.5 * (lo + hi);
-        match scaled(mid).filter(|sol| feasible(&at(mid), sol)) {
+        match try_at(mid) {
             Some(sol) => {
                 hi = mid;
                 best = sol;
@@ -325,12 +342,13 @@ pub fn min_time(
             None => lo = mid,
         }
     }
+    best.lp_solves = spent;
     Ok((best, probe))
 }
 
 /// A solution's shape time-scaled to total time `t` (velocities ÷ α,
-/// accelerations ÷ α²), re-solved and locally optimised there.
-pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+/// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
+fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     let alpha = t / s.h.iter().sum::<f64>();
     let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
     let x = s.x.clone().map(|v| {
@@ -348,7 +366,15 @@ pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     });
     let mut p = p.clone();
     p.total_time = t;
-    let guess = p.inner_via_relaxation(&h, &x)?;
+    p.inner_via_relaxation(&h, &x)
+}
+
+/// A solution's shape time-scaled to total time `t`, re-solved and locally
+/// optimised there.
+pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+    let guess = scale(p, s, t)?;
+    let mut p = p.clone();
+    p.total_time = t;
     Some(p.local_search(&guess, 200, 1e-9))
 }
 
