@@ -7,7 +7,9 @@
 //! - [`local`]: exact inner problem for fixed intervals; local search over intervals.
 //! - [`search`]: deterministic multistart, µs rounding, min-time.
 //! - [`verify`]: independent checks of a plan file.
+//! - [`evolution`]: differential evolution, an independent global check of the search.
 
+pub mod evolution;
 pub mod local;
 pub mod lp;
 pub mod search;
