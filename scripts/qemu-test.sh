@@ -44,9 +44,9 @@ cargo build --locked --release
 step "QEMU mps2-an386: golden replay and tick budget (exit status from the image)"
 cargo run --locked --release
 
-step "ELF check: control tick reaches no f64 soft-float and no panic"
+step "ELF check: control tick (with the hand-off) reaches no f64 soft-float and no panic"
 python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_control_tick
-echo "(for information: the CAN receive path, which commits configurations in f64)"
+echo "(for information: the CAN receive side, which commits configurations in f64)"
 python3 "$root/scripts/elf_check.py" "$objdump" "$elf" triquint_can_rx | tail -1 || true
 
 step "where the tick's instructions go (QEMU block trace)"

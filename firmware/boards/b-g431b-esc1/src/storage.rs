@@ -8,12 +8,12 @@ use core::sync::atomic::Ordering;
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::Timer;
-use heapless::spsc::Producer;
 use sequential_storage::cache::NoCache;
 use sequential_storage::map::{fetch_item, store_item};
 use triquint_firmware::RxFrame;
 use triquint_shared::protocol::{Command, CommandCode, PARAM_COUNT, config_write_frame};
 
+use crate::can::RESTORE;
 use crate::control::{TO_STORE, now_us};
 use crate::encoder::HOMED;
 
@@ -47,7 +47,7 @@ pub async fn store_node_id(flash: &mut Storage, id: u8) {
 }
 
 #[embassy_executor::task]
-pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, node: u8) {
+pub async fn keep(mut flash: Storage, node: u8) {
     let mut buf = [0u8; 4 * (PARAM_COUNT + 1) + 32];
     while !HOMED.load(Ordering::Acquire) {
         Timer::after_millis(10).await;
@@ -64,15 +64,12 @@ pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, n
     if let Ok(Some(words)) = kept {
         for (i, w) in words.iter().take(PARAM_COUNT).enumerate() {
             let frame = config_write_frame(node, i as u8, f32::from_bits(*w));
-            while restore
-                .enqueue(RxFrame {
+            RESTORE
+                .send(RxFrame {
                     frame,
                     timestamp_us: now_us(),
                 })
-                .is_err()
-            {
-                Timer::after_millis(1).await;
-            }
+                .await;
         }
         let commit = Command {
             command: CommandCode::ConfigCommit as u8,
@@ -80,10 +77,12 @@ pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, n
             arg: words[PARAM_COUNT],
         };
         let frame = commit.to_frame(0);
-        let _ = restore.enqueue(RxFrame {
-            frame,
-            timestamp_us: now_us(),
-        });
+        RESTORE
+            .send(RxFrame {
+                frame,
+                timestamp_us: now_us(),
+            })
+            .await;
     }
     loop {
         Timer::after_millis(200).await;
