@@ -94,7 +94,7 @@ impl Active {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Stats {
     pub rejects: u16,
-    pub reason_counts: [u8; 9],
+    pub reason_counts: [u8; Reject::TABLE.len()],
     pub last_reject: u8,
     pub torque: f32,
     pub following_error: f32,
@@ -852,6 +852,13 @@ impl<const Q: usize> Drive<Q> {
         let ev = self.ev;
         if self.state == State::Running && e.abs() > self.cfg.following_error_max {
             self.begin_stop(StopReason::Fault(FaultCode::FollowingError), false, now_us);
+        }
+        // Accepted segments stay inside the soft limits: a measured position
+        // outside them is a runaway axis, stopped along the path.
+        if self.state == State::Running
+            && !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max)
+        {
+            self.begin_stop(StopReason::Fault(FaultCode::SoftLimit), false, now_us);
         }
         self.integral = limit(self.integral + self.cfg.ki * e * a.dt, lim);
         let torque = limit(

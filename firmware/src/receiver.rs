@@ -42,22 +42,33 @@ pub struct Receiver {
 }
 
 /// Velocity, acceleration and jerk of every axis within the configured
-/// limits (with [`LIMIT_TOL`]), checked at 65 points of the segment (a safety
-/// net behind the host's exact verification, not a replacement for it).
-fn within_limits(seg: &Seg, cfg: &DriveConfig) -> bool {
+/// limits (with [`LIMIT_TOL`]), else `Invalid`, and this axis's position
+/// within its soft limits, else `OutsideSoftLimits`; checked at 65 points of
+/// the segment (a safety net behind the host's exact verification, not a
+/// replacement for it).
+fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
     let k = 1.0 + LIMIT_TOL;
     let (v, a, j) = (
         cfg.max_velocity * k,
         cfg.max_acceleration * k,
         cfg.max_jerk * k,
     );
-    (0..=64).all(|i| {
+    let axis = (cfg.axis as usize).min(2);
+    for i in 0..=64 {
         let m = seg.eval(seg.start_ns + seg.duration_ns * i / 64);
-        m.q.iter().all(|x| x.is_finite())
+        if !(m.q.iter().all(|x| x.is_finite())
             && m.qd.amax() <= v
             && m.qdd.amax() <= a
-            && m.qddd.amax() <= j
-    })
+            && m.qddd.amax() <= j)
+        {
+            return Err(Reject::Invalid);
+        }
+        let q = m.q[axis];
+        if !(cfg.soft_limit_min..=cfg.soft_limit_max).contains(&q) {
+            return Err(Reject::OutsideSoftLimits);
+        }
+    }
+    Ok(())
 }
 
 impl Receiver {
@@ -154,7 +165,7 @@ impl Receiver {
             }
             Ok(Prepared {
                 cfg,
-                model: cfg.robot().model::<f32>(),
+                model: cfg.robot().native_model(),
                 active: Active::new(&cfg, crc),
             })
         };
@@ -189,8 +200,7 @@ impl Receiver {
             Some(_) if w.duration_us == 0 || w.duration_us > MAX_DURATION_US => {
                 Err(Reject::Invalid)
             }
-            Some((_, cfg)) if !within_limits(&seg, cfg) => Err(Reject::Invalid),
-            Some(_) => Ok(()),
+            Some((_, cfg)) => within_limits(&seg, cfg),
         };
         CheckedSegment {
             begin: seg.eval(seg.start_ns),

@@ -74,6 +74,8 @@ fn TIM6_DAC() {
     if crc != *LAST_CRC {
         *LAST_CRC = crc;
         if let Some(cfg) = t.drive.config() {
+            // Iq = τ / Kt with the configured torque constant.
+            t.motor.kt = cfg.torque_constant;
             let v = cfg.to_values();
             critical_section::with(|cs| TO_STORE.borrow(cs).replace(Some((v, crc))));
         }

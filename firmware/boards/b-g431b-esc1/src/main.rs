@@ -146,7 +146,8 @@ async fn main(spawner: Spawner) {
         drive: Drive::new(node_id),
         encoder,
         motor: motor::TorqueToCurrent {
-            kt: board::KT,
+            // Until a configuration brings Kt: no current at all.
+            kt: f32::INFINITY,
             max_current: board::MAX_CURRENT,
         },
         inbox: inbox_cons,

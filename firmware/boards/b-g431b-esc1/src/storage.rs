@@ -11,7 +11,9 @@ use embassy_time::Timer;
 use sequential_storage::cache::NoCache;
 use sequential_storage::map::{fetch_item, store_item};
 use triquint_firmware::RxFrame;
-use triquint_shared::protocol::{Command, CommandCode, PARAM_COUNT, config_write_frame};
+use triquint_shared::protocol::{
+    Command, CommandCode, DriveConfig, PARAM_COUNT, config_write_frame,
+};
 
 use crate::can::RESTORE;
 use crate::control::{TO_STORE, now_us};
@@ -94,6 +96,11 @@ pub async fn keep(mut flash: Storage, node: u8) {
             *w = v.to_bits();
         }
         words[PARAM_COUNT] = crc;
+        // The configuration's node id is the board's from its next start.
+        let id = DriveConfig::from_values(&values).node_id as u8;
+        if id != node && (1..=3).contains(&id) && node_id(&mut flash).await != Some(id) {
+            store_node_id(&mut flash, id).await;
+        }
         let _ = store_item(
             &mut flash,
             RANGE,
