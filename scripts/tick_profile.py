@@ -28,10 +28,15 @@ COMPONENTS = [
     ("firmware/src/scaling.rs", "", "time-scaling sigma(t), plan time"),
     ("firmware/src/sync.rs", "", "host time from the sync estimate"),
     ("shared/src/protocol", "", "frame encoding (heartbeat, telemetry)"),
-    ("firmware/src/node.rs", "periodic", "frame encoding (heartbeat, telemetry)"),
-    ("firmware/src/node.rs", "lookahead", "queue search (lookahead, advance)"),
-    ("firmware/src/node.rs", "path_reference", "queue search (lookahead, advance)"),
-    ("firmware/src/node.rs", "", "node: state machine, PID, velocity filter, friction"),
+    ("firmware/src/drive.rs", "take", "hand-off: items taken from the inbox"),
+    ("firmware/src/drive.rs", "accept", "hand-off: items taken from the inbox"),
+    ("firmware/src/drive.rs", "commit", "hand-off: items taken from the inbox"),
+    ("firmware/src/drive.rs", "on_command", "hand-off: items taken from the inbox"),
+    ("heapless", "", "hand-off: items taken from the inbox"),
+    ("firmware/src/drive.rs", "periodic", "frame encoding (heartbeat, telemetry)"),
+    ("firmware/src/drive.rs", "lookahead", "queue search (lookahead, advance)"),
+    ("firmware/src/drive.rs", "path_reference", "queue search (lookahead, advance)"),
+    ("firmware/src/drive.rs", "", "drive: state machine, PID, velocity filter, friction"),
 ]
 
 

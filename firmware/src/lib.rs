@@ -1,21 +1,30 @@
 //! Drive firmware core of triquint: target-independent, `no_std`, allocation-free.
 //!
-//! One [`node::Node`] per drive. The board support calls
-//! [`node::Node::on_frame`] for every received frame (with its receive
-//! timestamp), [`node::Node::tick`] from the control-rate timer, and drains
-//! [`node::Node::poll_tx`] into the CAN controller. Hardware is reached only
-//! through the small traits in [`hal`].
+//! A drive node is two parts in two contexts. The board's CAN receive task
+//! gives every received frame (with its receive timestamp) to a
+//! [`receiver::Receiver`], which decodes, reassembles and validates it and
+//! returns a finished [`inbox::Item`]; the control-rate timer takes those
+//! items ([`drive::Drive::take_from`], a lock-free queue in between), runs
+//! [`drive::Drive::tick`] and drains [`drive::Drive::pop_tx`] into the CAN
+//! controller. [`node::Node`] is both in one context (simulators, tests).
+//! Hardware is reached only through the small traits in [`hal`].
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod drive;
 pub mod hal;
+pub mod inbox;
 pub mod node;
 pub mod ns;
+pub mod receiver;
 pub mod scaling;
 pub mod segment;
 pub mod sync;
 
+pub use drive::{Drive, QUEUE_CAPACITY};
 pub use hal::{CanPort, Clock, Encoder, MotorOutput, RxFrame};
-pub use node::{Node, QUEUE_CAPACITY};
+pub use inbox::Item;
+pub use node::Node;
+pub use receiver::{Receiver, Status};
 #[cfg(test)]
 mod tests;

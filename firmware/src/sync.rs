@@ -2,7 +2,7 @@
 //! time of sync k, local receive time of sync k), all integer arithmetic.
 
 /// Time-sync estimator of one node.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SyncEstimator {
     /// Last sync received: (seq, local receive time µs).
     pending: Option<(u8, u64)>,

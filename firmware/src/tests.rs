@@ -539,3 +539,69 @@ fn following_error_and_lost_sync_stop_with_their_codes() {
     assert!(matches!(r.node.state(), State::Stopping | State::Fault));
     assert_eq!(r.node.fault(), FaultCode::LostSync);
 }
+
+/// Axis 1 (this node) over segment `s`: (start, end) position.
+fn own_span(s: &WireSegment) -> (f32, f32) {
+    let seg = crate::segment::Seg::from_wire(s, 0);
+    (seg.start_q()[1], seg.end_q()[1])
+}
+
+#[test]
+fn a_segment_beyond_the_soft_limits_is_rejected_never_queued() {
+    let segs = segments(3, 0.3);
+    let (a, b) = own_span(&segs[0]);
+    let mut r = Rig::new();
+    // The first segment fits exactly; the second moves on beyond.
+    r.cfg.soft_limit_min = a.min(b) - 1e-6;
+    r.cfg.soft_limit_max = a.max(b) + 1e-6;
+    r.parked = a;
+    r.configure();
+    r.run(50);
+    assert_eq!(
+        r.send_segment(&segs[0]).map(|a| a.0),
+        Some(Reject::Accepted)
+    );
+    assert_eq!(
+        r.send_segment(&segs[1]).map(|a| a.0),
+        Some(Reject::OutsideSoftLimits)
+    );
+    assert_eq!(r.node.queue_depth(), 1);
+    assert_eq!(r.node.next_seq(), 1, "the rejected segment took no place");
+    assert_eq!(
+        r.node.stats.reason_counts[Reject::OutsideSoftLimits as usize],
+        1
+    );
+}
+
+#[test]
+fn a_measured_position_beyond_the_soft_limits_stops_with_its_code() {
+    let segs = segments(4, 0.3);
+    let (a, b) = own_span(&segs[0]);
+    let dir = (b - a).signum();
+    let mut r = Rig::new();
+    // The limit 0.5 mm behind the plan's start: the plan stays inside.
+    if dir > 0.0 {
+        r.cfg.soft_limit_min = a - 0.5e-3;
+    } else {
+        r.cfg.soft_limit_max = a + 0.5e-3;
+    }
+    let mut r = Rig::loaded_with(r, &segs);
+    r.start();
+    r.run(15);
+    assert_eq!(r.node.state(), State::Running);
+    // The axis drops 0.9 mm behind the reference (within the following
+    // error bound): past the soft limit.
+    r.offset = -0.9e-3 * dir;
+    r.run(2);
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_eq!(r.node.fault(), FaultCode::SoftLimit);
+    assert!(r.emergencies().contains(&(FaultCode::SoftLimit as u8)));
+    r.run(600);
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::SoftLimit);
+    assert!(
+        r.max_stop_jerk <= r.cfg.max_jerk * 1.5,
+        "{}",
+        r.max_stop_jerk
+    );
+}

@@ -14,17 +14,20 @@
 //! - `S` seq u16, flags u16, duration_us u32, start_ns i64, 18 × i64: a segment
 //! - `E` s_ns i64, σ, σ̇, σ̈ f32 → 12 × f32 (q, q̇, q̈, q⃛ after scaling),
 //!   ok u8, 3 × f32 torque: evaluation of the last segment
-//! - `N` node id u8: a fresh node
-//! - `F` timestamp_us u32, id u16, len u8, fd u8, payload → tx count u8,
-//!   tx hash u32 (only when the count is not 0)
+//! - `N` node id u8: a fresh node (receive side, inbox and drive)
+//! - `F` timestamp_us u32, id u16, len u8, fd u8, payload: a frame through
+//!   the receive side into the inbox, as the board's CAN task does (it
+//!   transmits nothing)
 //! - `T` now_us u32, counts i32 → torque f32, enabled | state << 1 u8,
-//!   tx count u8, tx hash u32 (only when the count is not 0)
+//!   tx count u8, tx hash u32 (only when the count is not 0): a tick as the
+//!   board runs it, items taken from the inbox first
 //! - `Z` end
 
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
-use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
+use triquint_firmware::inbox::Inbox;
+use triquint_firmware::{Drive, Encoder, MotorOutput, QUEUE_CAPACITY, Receiver, RxFrame};
 use triquint_shared::dynamics;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
@@ -216,7 +219,9 @@ impl MotorOutput for Motor {
 
 /// Replays inputs into one node and records its outputs.
 struct Recorder {
-    node: Node,
+    node: Drive,
+    receiver: Receiver,
+    inbox: Inbox,
     motor: Motor,
     out: Out,
     now: u64,
@@ -240,11 +245,14 @@ impl Recorder {
     }
 
     fn rx(&mut self, f: Frame) {
-        self.node.on_frame(&RxFrame {
+        let rx = RxFrame {
             frame: f,
             timestamp_us: self.now,
-        });
-        let (n, h) = self.drain();
+        };
+        if let Some(item) = self.receiver.on_frame(&rx, self.node.status()) {
+            // A full inbox drops the item, as on the board.
+            let _ = self.inbox.enqueue(item);
+        }
         let o = &mut self.out;
         o.u8(b'F');
         o.u32(self.now as u32);
@@ -252,10 +260,6 @@ impl Recorder {
         o.u8(f.len);
         o.u8(f.fd as u8);
         o.0.extend_from_slice(f.payload());
-        o.u8(n);
-        if n > 0 {
-            o.u32(h);
-        }
     }
 
     fn command(&mut self, c: CommandCode, arg: u32) {
@@ -287,6 +291,7 @@ impl Recorder {
         let jitter = (self.noise >> 29) as i64 - 3;
         let q = self.node.stats.reference.q[1] as f64;
         let counts = (q * self.cpm).round() as i64 + jitter;
+        self.node.take_from(&mut self.inbox);
         self.node.tick(self.now, &mut Enc(counts), &mut self.motor);
         let (n, h) = self.drain();
         let o = &mut self.out;
@@ -303,6 +308,25 @@ impl Recorder {
         self.ticks += 1;
         if self.states.last() != Some(&self.node.state()) {
             self.states.push(self.node.state());
+        }
+    }
+
+    /// Hands segment `next` over when the queue runs low or when the next
+    /// tick switches segments (its front ends within one tick).
+    fn top_up(&mut self, segs: &[WireSegment], next: &mut usize) {
+        let switch = self.node.executing().is_some_and(|(seq, _)| {
+            let end: i64 = segs[..=seq as usize]
+                .iter()
+                .map(|w| w.duration_us as i64 * 1000)
+                .sum();
+            self.node.plan_ns() + (TICK_US * 1000) as i64 >= end
+        });
+        let room = self.node.queue_depth() < QUEUE_CAPACITY;
+        if (self.node.queue_depth() < 3 || switch && room) && *next < segs.len() {
+            for f in segs[*next].frames(true) {
+                self.rx(f);
+            }
+            *next += 1;
         }
     }
 
@@ -324,7 +348,9 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     };
     let cfg = DriveConfig::new(&plan.robot, &Limits::default(), 1, &settings, 0.2, 0.1);
     let mut r = Recorder {
-        node: Node::new(NODE),
+        node: Drive::new(NODE),
+        receiver: Receiver::new(NODE),
+        inbox: Inbox::new(),
         motor: Motor::default(),
         out,
         now: 1_000_000,
@@ -345,6 +371,7 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         r.rx(config_write_frame(NODE, k as u8, *v));
     }
     r.command(CommandCode::ConfigCommit, cfg.crc());
+    r.tick();
     assert_eq!(r.node.config_crc(), cfg.crc(), "configuration committed");
     r.run_us(20_000);
     let mut next = 0;
@@ -359,26 +386,17 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     let host_now = (r.now + 3_000_000) as u32;
     r.command(CommandCode::Start, host_now + 20_000);
     // Run 1.1 s (two segment switches), topping the queue up over CAN-FD
-    // right before ticks, as the CAN task hands segments over.
+    // right before ticks; at every segment switch the tick also takes a
+    // new segment (the worst case of the hand-off).
     for _ in 0..11_000 {
-        if r.node.queue_depth() < 3 && next < segs.len() {
-            for f in segs[next].frames(true) {
-                r.rx(f);
-            }
-            next += 1;
-        }
+        r.top_up(&segs, &mut next);
         r.tick();
     }
     r.command(CommandCode::FeedHold, 0);
     r.run_us(250_000);
     r.command(CommandCode::Resume, 0);
     for _ in 0..3_000 {
-        if r.node.queue_depth() < 3 && next < segs.len() {
-            for f in segs[next].frames(true) {
-                r.rx(f);
-            }
-            next += 1;
-        }
+        r.top_up(&segs, &mut next);
         r.tick();
     }
     r.command(CommandCode::Stop, 0);

@@ -135,7 +135,7 @@ fn frame_loss_is_recovered_by_retransmission() {
         400 * MS,
         FOREVER,
     )];
-    let r = run(&spiral(), &scenario(w, 11));
+    let r = run(&spiral(), &scenario(w, 12));
     assert_recovered("loss 1 %", &r);
     assert!(r.injected.lost > 10 && r.retransmits > 0, "{r:?}");
 }

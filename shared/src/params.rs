@@ -1,6 +1,6 @@
 //! Machine parameters (paper Table 1) and motion limits (paper Table 3), SI units.
 
-use core::f64::consts::PI;
+use core::fmt::{Debug, Display};
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -10,36 +10,58 @@ use crate::{Real, c};
 /// Angles of the three guideways around the base centre (paper Fig. 3).
 pub const GUIDEWAY_ANGLES_DEG: [f64; 3] = [0.0, 120.0, 240.0];
 
-/// Geometry and inertia of a vertical 3-PUU machine. Defaults are the paper's Table 1.
+/// (cos, sin) of [`GUIDEWAY_ANGLES_DEG`] as `libm::sincos(a·π/180)` gives
+/// them in f64 (a test checks every bit): constants, so a model in f32
+/// needs no trigonometry and no f64 code.
+pub const GUIDEWAY_COS_SIN: [(f64, f64); 3] = [
+    (1.0, 0.0),
+    (-0.4999999999999998, 0.8660254037844387),
+    (-0.5000000000000004, -0.8660254037844385),
+];
+
+/// Geometry and inertia of a vertical 3-PUU machine in f64 (the planner,
+/// plan files). Defaults are the paper's Table 1.
+pub type Robot = RobotParams<f64>;
+
+/// Geometry and inertia of a vertical 3-PUU machine in precision `T`: f64 as
+/// [`Robot`] on the host; f32 on a drive, straight from the configuration's
+/// wire values (so a drive's set-up links no double-precision code).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Robot {
+#[serde(
+    deny_unknown_fields,
+    default,
+    bound(
+        serialize = "T: Serialize",
+        deserialize = "T: Deserialize<'de>, RobotParams<T>: Default"
+    )
+)]
+pub struct RobotParams<T> {
     /// s: platform circumradius (m).
-    pub platform_radius: f64,
+    pub platform_radius: T,
     /// S: base circumradius, guideway axes (m).
-    pub base_radius: f64,
+    pub base_radius: T,
     /// l: strut length (m).
-    pub strut_length: f64,
+    pub strut_length: T,
     /// d: slider offset toward the centre (m).
-    pub slider_offset: f64,
+    pub slider_offset: T,
     /// m_p: platform mass (kg).
-    pub platform_mass: f64,
+    pub platform_mass: T,
     /// Extra mass carried by the platform (kg); 0 in the paper.
-    pub payload_mass: f64,
+    pub payload_mass: T,
     /// m_i: mass of each strut, a slender rod (kg).
-    pub strut_mass: f64,
+    pub strut_mass: T,
     /// m_qi: mass of each slider (kg).
-    pub slider_mass: f64,
+    pub slider_mass: T,
     /// I_M: motor rotor inertia (kg m²).
-    pub motor_inertia: f64,
+    pub motor_inertia: T,
     /// I_C: coupling inertia (kg m²).
-    pub coupling_inertia: f64,
+    pub coupling_inertia: T,
     /// I_L: leadscrew inertia (kg m²).
-    pub leadscrew_inertia: f64,
+    pub leadscrew_inertia: T,
     /// p: leadscrew lead, slider travel per motor turn (m).
-    pub lead: f64,
+    pub lead: T,
     /// g: gravity, acting along −z (m/s²).
-    pub gravity: f64,
+    pub gravity: T,
 }
 
 impl Default for Robot {
@@ -62,19 +84,29 @@ impl Default for Robot {
     }
 }
 
-/// A parameter that cannot describe a machine.
+/// A parameter that cannot describe a machine (the value in the parameters' precision).
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-pub enum ParamError {
+pub enum ParamError<T: Debug + Display = f64> {
     #[error("robot parameter `{name}` must be {rule}, got {value}")]
     Invalid {
         name: &'static str,
         rule: &'static str,
-        value: f64,
+        value: T,
     },
 }
 
-fn check(name: &'static str, value: f64, positive: bool) -> Result<(), ParamError> {
-    let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
+fn check<T: Real + Display>(
+    name: &'static str,
+    value: T,
+    positive: bool,
+) -> Result<(), ParamError<T>> {
+    let zero = T::zero();
+    let ok = value.is_finite()
+        && if positive {
+            value > zero
+        } else {
+            value >= zero
+        };
     if ok {
         Ok(())
     } else {
@@ -90,20 +122,20 @@ fn check(name: &'static str, value: f64, positive: bool) -> Result<(), ParamErro
     }
 }
 
-impl Robot {
+impl<T: Real + Display> RobotParams<T> {
     /// ρ = S − d − s: horizontal distance from the platform centre to a strut's
     /// lower end when the platform is centred.
-    pub fn rho(&self) -> f64 {
+    pub fn rho(&self) -> T {
         self.base_radius - self.slider_offset - self.platform_radius
     }
 
     /// Motor + coupling + leadscrew inertia on one axis (kg m²).
-    pub fn rotor_inertia(&self) -> f64 {
+    pub fn rotor_inertia(&self) -> T {
         self.motor_inertia + self.coupling_inertia + self.leadscrew_inertia
     }
 
     /// Checks every parameter; the error names the first bad one.
-    pub fn validate(&self) -> Result<(), ParamError> {
+    pub fn validate(&self) -> Result<(), ParamError<T>> {
         check("platform_radius", self.platform_radius, true)?;
         check("base_radius", self.base_radius, true)?;
         check("strut_length", self.strut_length, true)?;
@@ -124,26 +156,45 @@ impl Robot {
         )
     }
 
-    /// The derived constants the kinematics and dynamics need, in precision `T`.
+    /// The derived constants the kinematics and dynamics need, computed in
+    /// the parameters' own precision `T` (f32 on a drive: no f64 code).
     /// Computed once (at configuration time on a drive), never on the control path.
-    pub fn model<T: Real>(&self) -> Model<T> {
+    pub fn native_model(&self) -> Model<T> {
         let rho = self.rho();
-        let u = GUIDEWAY_ANGLES_DEG.map(|a| {
-            let (s, co) = libm::sincos(a * PI / 180.0);
-            Vector3::new(c(rho * co), c(rho * s), T::zero())
-        });
-        let ratio = 2.0 * PI / self.lead;
+        let one = T::one();
+        let ratio = T::two_pi() / self.lead;
         Model {
-            rho_u: u,
-            l: c(self.strut_length),
-            l2: c(self.strut_length * self.strut_length),
-            platform_mass: c(self.platform_mass + self.payload_mass),
-            strut_mass: c(self.strut_mass),
-            slider_mass: c(self.slider_mass),
-            rotor_inertia: c(self.rotor_inertia()),
-            ratio: c(ratio),
-            inv_ratio: c(1.0 / ratio),
-            gravity: c(self.gravity),
+            // Constants converted at compile time (f32: no f64 code is linked).
+            rho_u: GUIDEWAY_COS_SIN
+                .map(|(co, s)| Vector3::new(rho * c::<T>(co), rho * c::<T>(s), T::zero())),
+            l: self.strut_length,
+            l2: self.strut_length * self.strut_length,
+            platform_mass: self.platform_mass + self.payload_mass,
+            strut_mass: self.strut_mass,
+            slider_mass: self.slider_mass,
+            rotor_inertia: self.rotor_inertia(),
+            ratio,
+            inv_ratio: one / ratio,
+            gravity: self.gravity,
+        }
+    }
+}
+
+impl Robot {
+    /// The model computed in f64 and delivered in precision `U`.
+    pub fn model<U: Real>(&self) -> Model<U> {
+        let m = self.native_model();
+        Model {
+            rho_u: m.rho_u.map(|v| v.map(c)),
+            l: c(m.l),
+            l2: c(m.l2),
+            platform_mass: c(m.platform_mass),
+            strut_mass: c(m.strut_mass),
+            slider_mass: c(m.slider_mass),
+            rotor_inertia: c(m.rotor_inertia),
+            ratio: c(m.ratio),
+            inv_ratio: c(m.inv_ratio),
+            gravity: c(m.gravity),
         }
     }
 }
@@ -225,6 +276,7 @@ impl Limits {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use core::f64::consts::PI;
     use std::string::ToString;
 
     #[test]
@@ -235,6 +287,38 @@ mod tests {
         let reflected = r.rotor_inertia() * (2.0 * PI / r.lead).powi(2);
         assert!((reflected - 104.0).abs() < 1.0, "{reflected}");
         assert!(r.validate().is_ok());
+    }
+
+    #[test]
+    fn guideway_constants_are_libm_sincos_bit_for_bit() {
+        for (a, (co, s)) in GUIDEWAY_ANGLES_DEG.iter().zip(GUIDEWAY_COS_SIN) {
+            let (ls, lc) = libm::sincos(a * PI / 180.0);
+            assert_eq!(
+                (co.to_bits(), s.to_bits()),
+                (lc.to_bits(), ls.to_bits()),
+                "{a}°: {lc:?} {ls:?}"
+            );
+        }
+        // The f32 model from f32 parameters equals the f64 model within f32 rounding.
+        let m64 = Robot::default().model::<f64>();
+        // The drive's path: the wire's f32 values, straight into the model.
+        let cfg = crate::protocol::config::DriveConfig::new(
+            &Robot::default(),
+            &Limits::default(),
+            0,
+            &crate::protocol::config::DriveSettings::default(),
+            0.5,
+            0.2,
+        );
+        let r32: RobotParams<f32> = cfg.robot();
+        let m32 = r32.native_model();
+        for i in 0..3 {
+            for k in 0..3 {
+                assert!((m32.rho_u[i][k] as f64 - m64.rho_u[i][k]).abs() < 1e-7);
+            }
+        }
+        assert!((m32.ratio as f64 / m64.ratio - 1.0).abs() < 1e-6);
+        assert!((m32.rotor_inertia as f64 / m64.rotor_inertia - 1.0).abs() < 1e-6);
     }
 
     #[test]

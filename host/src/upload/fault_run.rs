@@ -86,7 +86,7 @@ pub struct FaultRun {
     pub host_error: Option<String>,
     pub retransmits: u64,
     /// Segment rejections counted by the nodes, by reason index.
-    pub rejects: [u32; 9],
+    pub rejects: [u32; triquint_shared::protocol::Reject::TABLE.len()],
     pub injected: FaultStats,
     pub tick_ns: u64,
     pub max_tracking_error_m: f64,
@@ -350,7 +350,7 @@ fn measure(
         .iter()
         .find(|f| f.code == FaultCode::LostSync)
         .map(|f| f.t_ns);
-    let mut rejects = [0u32; 9];
+    let mut rejects = [0u32; triquint_shared::protocol::Reject::TABLE.len()];
     for n in &sim.nodes {
         for (k, r) in rejects.iter_mut().enumerate() {
             *r += n.node.stats.reason_counts[k] as u32;

@@ -6,6 +6,7 @@
 
 use super::crc::Crc32;
 use super::wire::{Addr, FieldDef, MessageDef, WireType};
+use crate::params::RobotParams;
 use crate::{Limits, Robot};
 
 /// One configuration parameter.
@@ -118,10 +119,18 @@ config_params! {
     35 friction_coulomb ["N"],
     /// Identified viscous friction of the slider (feedforward).
     36 friction_viscous ["N.s/m"],
+    /// Node id (1–3) the drive answers to; a board keeps it in flash and uses it from its next start.
+    37 node_id [""],
+    /// Motor torque constant Kt: the current loop's q-axis reference is torque / Kt.
+    38 torque_constant ["N.m/A"],
+    /// Soft limit of this axis's joint position, low end: segments beyond it are rejected, a measured position beyond it stops the machine.
+    39 soft_limit_min ["m"],
+    /// Soft limit of this axis's joint position, high end.
+    40 soft_limit_max ["m"],
 }
 
 /// Number of configuration parameters.
-pub const PARAM_COUNT: usize = 37;
+pub const PARAM_COUNT: usize = 41;
 
 /// ConfigWrite: host → node n, one parameter per frame.
 pub const CONFIG_WRITE: MessageDef = MessageDef {
@@ -242,6 +251,11 @@ pub struct DriveSettings {
     /// Identified friction (feedforward): Coulomb (N) and viscous (N·s/m).
     pub friction_coulomb: f64,
     pub friction_viscous: f64,
+    /// Motor torque constant Kt of each axis (N·m/A).
+    pub torque_constant: [f64; 3],
+    /// Soft limits [low, high] of each axis's joint position (m): the
+    /// guideway travel the drives enforce.
+    pub soft_limits: [[f64; 2]; 3],
 }
 
 /// The loop bandwidth every plan runs with (Hz). Not tuned per plan.
@@ -267,6 +281,10 @@ impl Default for DriveSettings {
             // An identification 20 % short of the virtual machine's 6 N and 30 N·s/m.
             friction_coulomb: 4.8,
             friction_viscous: 24.0,
+            torque_constant: [0.08; 3],
+            // The paper machine's sliders stay within 0.08–0.41 m in every
+            // test plan; its guideway travel is assumed to be 0–0.8 m.
+            soft_limits: [[0.0, 0.8]; 3],
         }
     }
 }
@@ -336,6 +354,10 @@ impl DriveConfig {
             velocity_filter: f(s.velocity_filter),
             friction_coulomb: f(s.friction_coulomb),
             friction_viscous: f(s.friction_viscous),
+            node_id: (a + 1) as f32,
+            torque_constant: f(s.torque_constant[a]),
+            soft_limit_min: f(s.soft_limits[a][0]),
+            soft_limit_max: f(s.soft_limits[a][1]),
         }
     }
 
@@ -343,23 +365,23 @@ impl DriveConfig {
         config_crc(&self.to_values())
     }
 
-    /// The robot these parameters describe (f32 values widened).
-    pub fn robot(&self) -> Robot {
-        let d = |x: f32| x as f64;
-        Robot {
-            platform_radius: d(self.platform_radius),
-            base_radius: d(self.base_radius),
-            strut_length: d(self.strut_length),
-            slider_offset: d(self.slider_offset),
-            platform_mass: d(self.platform_mass),
-            payload_mass: d(self.payload_mass),
-            strut_mass: d(self.strut_mass),
-            slider_mass: d(self.slider_mass),
-            motor_inertia: d(self.motor_inertia),
-            coupling_inertia: d(self.coupling_inertia),
-            leadscrew_inertia: d(self.leadscrew_inertia),
-            lead: d(self.lead),
-            gravity: d(self.gravity),
+    /// The robot these parameters describe, in the wire's f32 (a drive
+    /// builds its model from it with no double-precision code).
+    pub fn robot(&self) -> RobotParams<f32> {
+        RobotParams {
+            platform_radius: self.platform_radius,
+            base_radius: self.base_radius,
+            strut_length: self.strut_length,
+            slider_offset: self.slider_offset,
+            platform_mass: self.platform_mass,
+            payload_mass: self.payload_mass,
+            strut_mass: self.strut_mass,
+            slider_mass: self.slider_mass,
+            motor_inertia: self.motor_inertia,
+            coupling_inertia: self.coupling_inertia,
+            leadscrew_inertia: self.leadscrew_inertia,
+            lead: self.lead,
+            gravity: self.gravity,
         }
     }
 
@@ -375,7 +397,8 @@ impl DriveConfig {
                 });
             }
         }
-        let positive: [(&'static str, f32); 13] = [
+        let positive: [(&'static str, f32); 14] = [
+            ("torque_constant", self.torque_constant),
             ("max_velocity", self.max_velocity),
             ("max_acceleration", self.max_acceleration),
             ("max_jerk", self.max_jerk),
@@ -399,7 +422,19 @@ impl DriveConfig {
                 });
             }
         }
-        let rules: [(&'static str, f32, bool, &'static str); 10] = [
+        let rules: [(&'static str, f32, bool, &'static str); 12] = [
+            (
+                "node_id",
+                self.node_id,
+                self.node_id == 1.0 || self.node_id == 2.0 || self.node_id == 3.0,
+                "1, 2 or 3",
+            ),
+            (
+                "soft_limit_max",
+                self.soft_limit_max,
+                self.soft_limit_max > self.soft_limit_min,
+                "> soft_limit_min",
+            ),
             (
                 "friction_coulomb",
                 self.friction_coulomb,
@@ -462,11 +497,9 @@ impl DriveConfig {
             }
         }
         self.robot().validate().map_err(|e| match e {
-            crate::params::ParamError::Invalid { name, rule, value } => ConfigError {
-                name,
-                value: value as f32,
-                rule,
-            },
+            crate::params::ParamError::Invalid { name, rule, value } => {
+                ConfigError { name, value, rule }
+            }
         })
     }
 
@@ -513,6 +546,53 @@ mod tests {
         assert_eq!(c.first_difference(&d).map(|x| x.0), Some("kp"));
         d.direction = 0.5;
         assert_eq!(d.validate().unwrap_err().name, "direction");
+    }
+
+    #[test]
+    fn node_id_kt_and_soft_limits_are_carried_and_checked() {
+        let s = DriveSettings {
+            torque_constant: [0.05, 0.06, 0.07],
+            soft_limits: [[0.0, 0.5], [0.1, 0.6], [0.2, 0.7]],
+            ..DriveSettings::default()
+        };
+        let c = DriveConfig::new(&Robot::default(), &Limits::default(), 2, &s, 0.8, 0.3);
+        assert_eq!(
+            (
+                c.node_id,
+                c.torque_constant,
+                c.soft_limit_min,
+                c.soft_limit_max
+            ),
+            (3.0, 0.07, 0.2, 0.7)
+        );
+        c.validate().unwrap();
+        for (bad, name) in [
+            (DriveConfig { node_id: 4.0, ..c }, "node_id"),
+            (DriveConfig { node_id: 0.0, ..c }, "node_id"),
+            (
+                DriveConfig {
+                    torque_constant: 0.0,
+                    ..c
+                },
+                "torque_constant",
+            ),
+            (
+                DriveConfig {
+                    soft_limit_max: 0.2,
+                    ..c
+                },
+                "soft_limit_max",
+            ),
+            (
+                DriveConfig {
+                    soft_limit_min: f32::NAN,
+                    ..c
+                },
+                "soft_limit_min",
+            ),
+        ] {
+            assert_eq!(bad.validate().unwrap_err().name, name);
+        }
     }
 
     #[test]

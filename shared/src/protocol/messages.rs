@@ -61,6 +61,8 @@ code_enum! {
         QuickStop = 15,
         /// A peer node fell silent (no heartbeat within the sync timeout) or lost its configuration (reset) while running.
         PeerLost = 16,
+        /// The measured position left this axis's soft limits while running: jerk-limited stop along the path.
+        SoftLimit = 17,
     }
 }
 
@@ -85,6 +87,8 @@ code_enum! {
         Incomplete = 7,
         /// The segment does not start where the previous one ends.
         Discontinuous = 8,
+        /// The segment leaves this axis's soft limits.
+        OutsideSoftLimits = 9,
     }
 }
 

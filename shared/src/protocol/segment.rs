@@ -336,12 +336,15 @@ impl Reassembler {
 
     /// Feeds one part frame (payload of a SegmentPart or SegmentPartFd).
     pub fn push(&mut self, data: &[u8], fd: bool) -> PartEvent {
+        // Checked accesses only (`get`, `zip`): a drive's receive path has no panic.
         let n_parts = parts_per_segment(fd);
         let wbytes = words_per_part(fd) * WORD_LEN;
-        if data.len() < 2 + wbytes {
+        let (Some(&part), Some(&seq8), Some(words)) =
+            (data.first(), data.get(1), data.get(2..2 + wbytes))
+        else {
             return PartEvent::Ignored(Reject::Invalid);
-        }
-        let (part, seq8) = (data[0] as usize, data[1]);
+        };
+        let part = part as usize;
         if part >= n_parts {
             return PartEvent::Ignored(Reject::Invalid);
         }
@@ -350,7 +353,7 @@ impl Reassembler {
             let old = self.seq();
             self.active = true;
             self.fd = fd;
-            self.body[..wbytes].copy_from_slice(&data[2..2 + wbytes]);
+            self.store(0, words);
             self.next_part = 1;
             if self.body[0] != seq8 {
                 // Header and body disagree: a damaged frame, worth a retransmission.
@@ -386,10 +389,16 @@ impl Reassembler {
         if part < self.next_part {
             return PartEvent::Ignored(Reject::Duplicate);
         }
-        let start = part * wbytes;
-        self.body[start..start + wbytes].copy_from_slice(&data[2..2 + wbytes]);
+        self.store(part * wbytes, words);
         self.next_part += 1;
         self.maybe_complete(n_parts)
+    }
+
+    /// Copies a part's words into the body at byte `start` (what does not fit is dropped).
+    fn store(&mut self, start: usize, words: &[u8]) {
+        for (d, s) in self.body.iter_mut().skip(start).zip(words) {
+            *d = *s;
+        }
     }
 
     fn maybe_complete(&mut self, n_parts: usize) -> PartEvent {

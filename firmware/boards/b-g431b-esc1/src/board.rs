@@ -1,9 +1,11 @@
 //! Constants of the board and the motor that the CAN configuration does not
-//! carry (the protocol's DriveConfig has gains, direction, encoder scale and
-//! limits; not Kt, the current sensing or the motor's poles).
+//! carry (the protocol's DriveConfig has the node id, gains, direction, Kt,
+//! encoder scale, limits and soft limits; not the current sensing or the
+//! motor's poles).
 
 /// Node id when flash holds none (1–3); `TRIQUINT_NODE_ID=2 cargo run --release`
-/// programs another, which is then kept in flash.
+/// programs another, which is then kept in flash. A committed configuration
+/// with another `node_id` renumbers the board from its next start.
 pub const DEFAULT_NODE_ID: u8 = match option_env!("TRIQUINT_NODE_ID") {
     Some(s) => match s.as_bytes() {
         [b'2'] => 2,
@@ -12,8 +14,6 @@ pub const DEFAULT_NODE_ID: u8 = match option_env!("TRIQUINT_NODE_ID") {
     },
     None => 1,
 };
-/// Motor torque constant Kt (N·m/A).
-pub const KT: f32 = 0.08;
 /// |Iq| limit (A); the ESC1 is rated 40 A peak.
 pub const MAX_CURRENT: f32 = 15.0;
 /// Motor pole pairs.

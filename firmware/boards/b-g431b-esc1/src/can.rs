@@ -1,17 +1,28 @@
 //! CAN-FD on FDCAN1 (PA11 RX, PB9 TX on the ESC1): the receive task timestamps
-//! frames and hands them to the control tick; the transmit task sends what
-//! the node queued (heartbeats, acknowledgements, telemetry, emergencies).
+//! frames and runs the node's receive side on them (decoding, segment
+//! reassembly and checks, configuration set-up) below the control tick,
+//! handing finished items to the tick; the transmit task sends what the node
+//! queued (heartbeats, acknowledgements, telemetry, emergencies).
 
+use core::sync::atomic::Ordering;
+
+use embassy_futures::select::{Either, select};
 use embassy_stm32::can::frame::{FdFrame, Header};
 use embassy_stm32::can::{self, CanRx, CanTx};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use heapless::spsc::{Consumer, Producer};
-use triquint_firmware::RxFrame;
+use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
+
+use crate::control::STATUS;
+use crate::encoder::HOMED;
 
 /// Raised by the tick when it queued frames.
 pub static TX_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
+/// Frames replayed from flash (the kept configuration), received like bus frames.
+pub static RESTORE: Channel<CriticalSectionRawMutex, RxFrame, 4> = Channel::new();
 
 fn to_core(f: &FdFrame) -> Option<Frame> {
     let id = match f.id() {
@@ -32,20 +43,28 @@ fn to_fdcan(f: &Frame) -> Option<FdFrame> {
 }
 
 #[embassy_executor::task]
-pub async fn receive(mut rx: CanRx<'static>, mut to_tick: Producer<'static, RxFrame>) {
+pub async fn receive(
+    mut rx: CanRx<'static>,
+    mut receiver: Receiver,
+    mut to_tick: Producer<'static, Item>,
+) {
     loop {
-        match rx.read_fd().await {
-            Ok(env) => {
-                if let Some(frame) = to_core(&env.frame) {
-                    let rx = RxFrame {
-                        frame,
-                        timestamp_us: env.ts.as_micros(),
-                    };
-                    // A full queue drops the frame: the host's flow control resends.
-                    let _ = to_tick.enqueue(rx);
-                }
-            }
-            Err(_bus_error) => {}
+        let frame = match select(rx.read_fd(), RESTORE.receive()).await {
+            Either::First(Ok(env)) => to_core(&env.frame).map(|frame| RxFrame {
+                frame,
+                timestamp_us: env.ts.as_micros(),
+            }),
+            Either::First(Err(_bus_error)) => None,
+            Either::Second(kept) => Some(kept),
+        };
+        // Until the axis is homed the node stays unconfigured.
+        let Some(frame) = frame.filter(|_| HOMED.load(Ordering::Acquire)) else {
+            continue;
+        };
+        let status = critical_section::with(|cs| STATUS.borrow(cs).get());
+        if let Some(item) = receiver.on_frame(&frame, status) {
+            // A full queue drops the item: the host's flow control resends.
+            let _ = to_tick.enqueue(item);
         }
     }
 }

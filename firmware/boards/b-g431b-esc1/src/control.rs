@@ -1,16 +1,17 @@
 //! The 10 kHz control tick: TIM6's update interrupt, above the CAN tasks and
-//! below the current loop. It owns the node: frames the CAN task handed over
-//! come in through a lock-free queue, are fed to the node, then the node's
-//! tick runs and its frames go out through the other queue.
+//! below the current loop. It owns the node's drive (control side): the CAN
+//! receive task decodes, reassembles and validates frames and hands finished
+//! items over through a lock-free queue; the tick takes at most two of them,
+//! runs, and its frames go out through the other queue.
 
-use core::cell::RefCell;
+use core::cell::{Cell, RefCell};
 use core::sync::atomic::{AtomicPtr, AtomicU32, Ordering};
 
 use critical_section::Mutex;
 use embassy_stm32::interrupt;
 use embassy_stm32::pac;
 use heapless::spsc::{Consumer, Producer};
-use triquint_firmware::{Node, RxFrame};
+use triquint_firmware::{Drive, Item, Status};
 use triquint_shared::protocol::{Frame, PARAM_COUNT};
 
 use crate::encoder::QuadratureEncoder;
@@ -18,12 +19,11 @@ use crate::motor::TorqueToCurrent;
 
 /// Everything the tick owns.
 pub struct Tick {
-    pub node: Node,
+    pub drive: Drive,
     pub encoder: QuadratureEncoder,
     pub motor: TorqueToCurrent,
-    pub rx: Consumer<'static, RxFrame>,
-    /// The kept configuration, replayed after homing.
-    pub restore: Consumer<'static, RxFrame>,
+    /// Finished items from the CAN receive task.
+    pub inbox: Consumer<'static, Item>,
     pub tx: Producer<'static, Frame>,
 }
 
@@ -34,6 +34,12 @@ pub static TICK: AtomicPtr<Tick> = AtomicPtr::new(core::ptr::null_mut());
 pub type Kept = ([f32; PARAM_COUNT], u32);
 /// Committed configuration the storage task should keep in flash.
 pub static TO_STORE: Mutex<RefCell<Option<Kept>>> = Mutex::new(RefCell::new(None));
+/// What the receive side needs to know of the drive, published every tick.
+pub static STATUS: Mutex<Cell<Status>> = Mutex::new(Cell::new(Status {
+    config_crc: 0,
+    flushes: 0,
+    may_rebase: true,
+}));
 /// Ticks run, for the heartbeat LED and debugging.
 pub static TICKS: AtomicU32 = AtomicU32::new(0);
 
@@ -51,29 +57,25 @@ fn TIM6_DAC() {
     let Some(t) = (unsafe { TICK.load(Ordering::Acquire).as_mut() }) else {
         return;
     };
-    // Hand-off from the CAN and flash tasks. Until the axis is homed the node
-    // stays unconfigured (motor off, heartbeat without a configuration).
-    let homed = crate::encoder::HOMED.load(Ordering::Acquire);
-    while let Some(rx) = t.restore.dequeue() {
-        t.node.on_frame(&rx);
-    }
-    while let Some(rx) = t.rx.dequeue() {
-        if homed {
-            t.node.on_frame(&rx);
-        }
-    }
-    t.node.tick(now_us(), &mut t.encoder, &mut t.motor);
-    while let Some(f) = t.node.peek_tx() {
+    // Hand-off from the CAN receive task (which drops frames until the axis
+    // is homed: the node stays unconfigured, motor off).
+    t.drive.take_from(&mut t.inbox);
+    t.drive.tick(now_us(), &mut t.encoder, &mut t.motor);
+    let status = t.drive.status();
+    critical_section::with(|cs| STATUS.borrow(cs).set(status));
+    while let Some(f) = t.drive.peek_tx() {
         if t.tx.enqueue(f).is_err() {
             break;
         }
-        t.node.pop_tx();
+        t.drive.pop_tx();
     }
     crate::can::TX_READY.signal(());
-    let crc = t.node.config_crc();
+    let crc = status.config_crc;
     if crc != *LAST_CRC {
         *LAST_CRC = crc;
-        if let Some(cfg) = t.node.config() {
+        if let Some(cfg) = t.drive.config() {
+            // Iq = τ / Kt with the configured torque constant.
+            t.motor.kt = cfg.torque_constant;
             let v = cfg.to_values();
             critical_section::with(|cs| TO_STORE.borrow(cs).replace(Some((v, crc))));
         }

@@ -3,7 +3,7 @@
 //! space-vector modulation (min/max zero-sequence injection). Runs in the
 //! PWM-synchronous interrupt at 20 kHz, highest priority.
 
-use core::f32::consts::FRAC_1_SQRT_2;
+use core::f32::consts::{FRAC_1_SQRT_2, FRAC_2_PI, FRAC_PI_2};
 
 const INV_SQRT3: f32 = 0.577_350_27;
 const SQRT3_2: f32 = 0.866_025_4;
@@ -12,6 +12,24 @@ const SQRT3_2: f32 = 0.866_025_4;
 #[inline]
 pub fn clarke(ia: f32, ib: f32) -> (f32, f32) {
     (ia, (ia + 2.0 * ib) * INV_SQRT3)
+}
+
+/// (sin θ, cos θ) in single precision only: libm's `sinf`/`cosf` work in
+/// f64, which the Cortex-M4F does in software. Quadrant reduction and Taylor
+/// polynomials on |x| ≤ π/4; error below 1e-6 for |θ| ≤ 2π.
+#[inline]
+pub fn sin_cos(theta: f32) -> (f32, f32) {
+    let q = libm::roundf(theta * FRAC_2_PI);
+    let x = theta - q * FRAC_PI_2;
+    let x2 = x * x;
+    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+    let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+    match (q as i32) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// d, q from α, β at electrical angle (sin θ, cos θ).
@@ -74,7 +92,7 @@ pub struct CurrentLoop {
 impl CurrentLoop {
     /// Phase currents (A), electrical angle (rad), Iq reference (A) → duties.
     pub fn step(&mut self, ia: f32, ib: f32, theta_e: f32, iq_ref: f32) -> [f32; 3] {
-        let (sin, cos) = (libm::sinf(theta_e), libm::cosf(theta_e));
+        let (sin, cos) = sin_cos(theta_e);
         let (alpha, beta) = clarke(ia, ib);
         let (id, iq) = park(alpha, beta, sin, cos);
         // Each axis may use the whole circle alone; together ≤ 1/√3 after svpwm.

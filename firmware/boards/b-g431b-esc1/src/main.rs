@@ -35,7 +35,8 @@ use embassy_stm32::{Config, bind_interrupts, can as fdcan, interrupt, peripheral
 use heapless::spsc::Queue;
 use panic_halt as _;
 use static_cell::StaticCell;
-use triquint_firmware::{Node, RxFrame};
+use triquint_firmware::inbox::{INBOX_SLOTS, Item};
+use triquint_firmware::{Drive, Receiver};
 use triquint_shared::protocol::Frame;
 
 bind_interrupts!(struct Irqs {
@@ -44,8 +45,7 @@ bind_interrupts!(struct Irqs {
     EXTI9_5 => embassy_stm32::exti::InterruptHandler<interrupt::typelevel::EXTI9_5>;
 });
 
-static RX_QUEUE: StaticCell<Queue<RxFrame, 32>> = StaticCell::new();
-static RESTORE_QUEUE: StaticCell<Queue<RxFrame, 8>> = StaticCell::new();
+static INBOX: StaticCell<Queue<Item, INBOX_SLOTS>> = StaticCell::new();
 static TX_QUEUE: StaticCell<Queue<Frame, 16>> = StaticCell::new();
 static TICK_STATE: StaticCell<control::Tick> = StaticCell::new();
 static CURRENT_STATE: StaticCell<current::Current> = StaticCell::new();
@@ -138,20 +138,19 @@ async fn main(spawner: Spawner) {
     let cur = CURRENT_STATE.init(cur);
     current::CURRENT.store(cur, core::sync::atomic::Ordering::Release);
 
-    // Queues between the CAN task, the flash task and the tick.
-    let (rx_prod, rx_cons) = RX_QUEUE.init(Queue::new()).split();
-    let (restore_prod, restore_cons) = RESTORE_QUEUE.init(Queue::new()).split();
+    // Queues between the CAN tasks and the tick.
+    let (inbox_prod, inbox_cons) = INBOX.init(Queue::new()).split();
     let (tx_prod, tx_cons) = TX_QUEUE.init(Queue::new()).split();
 
     let tick = control::Tick {
-        node: Node::new(node_id),
+        drive: Drive::new(node_id),
         encoder,
         motor: motor::TorqueToCurrent {
-            kt: board::KT,
+            // Until a configuration brings Kt: no current at all.
+            kt: f32::INFINITY,
             max_current: board::MAX_CURRENT,
         },
-        rx: rx_cons,
-        restore: restore_cons,
+        inbox: inbox_cons,
         tx: tx_prod,
     };
     let tick = TICK_STATE.init(tick);
@@ -178,8 +177,8 @@ async fn main(spawner: Spawner) {
     core::mem::forget(tim6);
 
     let home = ExtiInput::new(p.PB8, p.EXTI8, Pull::Down, Irqs);
-    spawner.spawn(can::receive(can_rx, rx_prod).expect("spawn can rx"));
+    spawner.spawn(can::receive(can_rx, Receiver::new(node_id), inbox_prod).expect("spawn can rx"));
     spawner.spawn(can::transmit(can_tx, tx_cons).expect("spawn can tx"));
     spawner.spawn(homing::home(home).expect("spawn homing"));
-    spawner.spawn(storage::keep(flash, restore_prod, node_id).expect("spawn storage"));
+    spawner.spawn(storage::keep(flash, node_id).expect("spawn storage"));
 }

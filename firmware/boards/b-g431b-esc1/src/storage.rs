@@ -8,12 +8,14 @@ use core::sync::atomic::Ordering;
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::Timer;
-use heapless::spsc::Producer;
 use sequential_storage::cache::NoCache;
 use sequential_storage::map::{fetch_item, store_item};
 use triquint_firmware::RxFrame;
-use triquint_shared::protocol::{Command, CommandCode, PARAM_COUNT, config_write_frame};
+use triquint_shared::protocol::{
+    Command, CommandCode, DriveConfig, PARAM_COUNT, config_write_frame,
+};
 
+use crate::can::RESTORE;
 use crate::control::{TO_STORE, now_us};
 use crate::encoder::HOMED;
 
@@ -47,7 +49,7 @@ pub async fn store_node_id(flash: &mut Storage, id: u8) {
 }
 
 #[embassy_executor::task]
-pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, node: u8) {
+pub async fn keep(mut flash: Storage, node: u8) {
     let mut buf = [0u8; 4 * (PARAM_COUNT + 1) + 32];
     while !HOMED.load(Ordering::Acquire) {
         Timer::after_millis(10).await;
@@ -64,15 +66,12 @@ pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, n
     if let Ok(Some(words)) = kept {
         for (i, w) in words.iter().take(PARAM_COUNT).enumerate() {
             let frame = config_write_frame(node, i as u8, f32::from_bits(*w));
-            while restore
-                .enqueue(RxFrame {
+            RESTORE
+                .send(RxFrame {
                     frame,
                     timestamp_us: now_us(),
                 })
-                .is_err()
-            {
-                Timer::after_millis(1).await;
-            }
+                .await;
         }
         let commit = Command {
             command: CommandCode::ConfigCommit as u8,
@@ -80,10 +79,12 @@ pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, n
             arg: words[PARAM_COUNT],
         };
         let frame = commit.to_frame(0);
-        let _ = restore.enqueue(RxFrame {
-            frame,
-            timestamp_us: now_us(),
-        });
+        RESTORE
+            .send(RxFrame {
+                frame,
+                timestamp_us: now_us(),
+            })
+            .await;
     }
     loop {
         Timer::after_millis(200).await;
@@ -95,6 +96,11 @@ pub async fn keep(mut flash: Storage, mut restore: Producer<'static, RxFrame>, n
             *w = v.to_bits();
         }
         words[PARAM_COUNT] = crc;
+        // The configuration's node id is the board's from its next start.
+        let id = DriveConfig::from_values(&values).node_id as u8;
+        if id != node && (1..=3).contains(&id) && node_id(&mut flash).await != Some(id) {
+            store_node_id(&mut flash, id).await;
+        }
         let _ = store_item(
             &mut flash,
             RANGE,

@@ -3,8 +3,10 @@
 //! f32 result bit for bit, counting instructions as it goes.
 
 use nalgebra::Vector3;
+use triquint_firmware::Item;
+use triquint_firmware::inbox::{CommandData, Inbox};
 use triquint_firmware::segment::{Seg, scale};
-use triquint_firmware::{Node, RxFrame};
+use triquint_firmware::{Drive, Receiver, RxFrame};
 use triquint_shared::Model;
 use triquint_shared::dynamics;
 use triquint_shared::protocol::{Frame, State, WireSegment};
@@ -81,7 +83,7 @@ impl Rd<'_> {
 }
 
 /// Same FNV-1a as the host test: the frames a node queued.
-fn drain(node: &mut Node) -> (u8, u32) {
+fn drain(node: &mut Drive) -> (u8, u32) {
     let mut h: u32 = 0x811C_9DC5;
     let mut n = 0u8;
     while let Some(f) = node.pop_tx() {
@@ -119,12 +121,22 @@ pub struct Figures {
     /// Ticks in which the queue front advanced to the next segment.
     pub switch_ticks: u32,
     pub switch_max: u32,
+    /// Switch ticks that also took a new segment from the inbox.
+    pub switch_take_ticks: u32,
+    pub switch_take_max: u32,
+    /// Ticks that took a segment from the inbox (accepted or not).
+    pub take_segment_max: u32,
+    /// Receive side (CAN task) per frame.
     pub rx_frames: u32,
+    pub rx_sum: u64,
     pub rx_max: u32,
-    /// Largest frame handed over while Running/Stopping.
-    pub rx_moving_max: u32,
-    /// Largest (frames handed over since the last tick + the tick), moving.
-    pub handoff_max: u32,
+    /// Per frame that completes a segment (reassembly end, CRC, checks).
+    pub rx_segment_max: u32,
+    /// Per frame, other than a segment's last part or a configuration commit.
+    pub rx_other_max: u32,
+    /// The configuration commit (robot model built in the receive context).
+    pub rx_commit_max: u32,
+    /// Every tick includes its hand-off (items taken from the inbox).
     pub worst_tick: u32,
 }
 
@@ -141,9 +153,8 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
     let mut fig = Figures::default();
     let mut model: Option<Model<f32>> = None;
     let mut seg: Option<Seg> = None;
-    let mut node: Option<Node> = None;
+    let mut node: Option<(Receiver, Drive, Inbox)> = None;
     let mut motor = Motor::default();
-    let mut pending_rx = 0u32;
     loop {
         let at = r.p;
         let tag = r.u8()?;
@@ -212,11 +223,12 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                 r.expect_v3("torque", &t)?;
             }
             b'N' => {
-                node = Some(Node::new(r.u8()?));
+                let id = r.u8()?;
+                node = Some((Receiver::new(id), Drive::new(id), Inbox::new()));
                 motor = Motor::default();
             }
             b'F' => {
-                let Some(n) = node.as_mut() else {
+                let Some((rcv, n, inbox)) = node.as_mut() else {
                     return Err(fail("frame before node", at));
                 };
                 let ts = r.u32()? as u64;
@@ -229,25 +241,37 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                     frame: Frame::with_payload(id, payload, fd),
                     timestamp_us: ts,
                 };
-                let ((), k) = cnt.instructions(|| triquint_can_rx(n, &rx));
+                let status = n.status();
+                let (item, k) = cnt.instructions(|| triquint_can_rx(rcv, &rx, status));
                 fig.rx_frames += 1;
+                fig.rx_sum += k as u64;
                 fig.rx_max = fig.rx_max.max(k);
-                if matches!(n.state(), State::Running | State::Stopping) {
-                    fig.rx_moving_max = fig.rx_moving_max.max(k);
-                    pending_rx += k;
+                match &item {
+                    Some(Item::Segment(_)) => fig.rx_segment_max = fig.rx_segment_max.max(k),
+                    Some(Item::Command {
+                        data: CommandData::Commit { .. },
+                        ..
+                    }) => fig.rx_commit_max = fig.rx_commit_max.max(k),
+                    _ => fig.rx_other_max = fig.rx_other_max.max(k),
                 }
-                check_tx(&mut r, n)?;
+                if let Some(item) = item {
+                    // A full inbox drops the item, as on the board.
+                    let _ = inbox.enqueue(item);
+                }
             }
             b'T' => {
-                let Some(n) = node.as_mut() else {
+                let Some((_, n, inbox)) = node.as_mut() else {
                     return Err(fail("tick before node", at));
                 };
                 let now = r.u32()? as u64;
                 let counts = r.u32()? as i32 as i64;
                 let before = (n.state(), n.queue_depth(), n.scaling_phase());
+                let segment_waiting = matches!(inbox.peek(), Some(Item::Segment(_)));
+                let seq = n.next_seq();
                 let ((), k) = cnt.instructions(|| {
-                    triquint_control_tick(n, now, &mut Counts(counts), &mut motor)
+                    triquint_control_tick(n, inbox, now, &mut Counts(counts), &mut motor)
                 });
+                let took_segment = n.next_seq() != seq;
                 r.expect("motor torque", motor.torque.to_bits())?;
                 let flags = r.u8()?;
                 let got = motor.enabled as u8 | (n.state() as u8) << 1;
@@ -262,14 +286,22 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                 check_tx(&mut r, n)?;
                 fig.ticks += 1;
                 fig.worst_tick = fig.worst_tick.max(k);
-                fig.handoff_max = fig.handoff_max.max(k + pending_rx);
-                pending_rx = 0;
+                if segment_waiting {
+                    fig.take_segment_max = fig.take_segment_max.max(k);
+                }
                 use triquint_firmware::scaling::Phase;
                 match before.0 {
                     State::Running | State::Stopping => {
-                        if n.queue_depth() < before.1 && n.state() == before.0 {
+                        // The queue front advanced (with a segment taken,
+                        // the depth stays: compare with one more).
+                        let depth = n.queue_depth().saturating_sub(took_segment as usize);
+                        if depth < before.1 && n.state() == before.0 {
                             fig.switch_ticks += 1;
                             fig.switch_max = fig.switch_max.max(k);
+                            if took_segment {
+                                fig.switch_take_ticks += 1;
+                                fig.switch_take_max = fig.switch_take_max.max(k);
+                            }
                         }
                         if before.2 == Phase::Nominal && before.0 == State::Running {
                             fig.running_ticks += 1;
@@ -297,7 +329,7 @@ fn fail(what: &'static str, offset: usize) -> Failure {
     }
 }
 
-fn check_tx(r: &mut Rd, n: &mut Node) -> Result<(), Failure> {
+fn check_tx(r: &mut Rd, n: &mut Drive) -> Result<(), Failure> {
     let at = r.p;
     let (k, h) = drain(n);
     let want = r.u8()?;

@@ -1,8 +1,10 @@
-//! The control tick as the boards run it, behind un-mangled, never-inlined
-//! entry points: the ELF check (scripts/elf_check.py) walks the call graph
-//! from these symbols and rejects f64 soft-float and panic paths.
+//! The control tick and the CAN receive side as the boards run them, behind
+//! un-mangled, never-inlined entry points: the ELF check
+//! (scripts/elf_check.py) walks the call graph from these symbols and
+//! rejects f64 soft-float and panic paths.
 
-use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
+use triquint_firmware::inbox::Inbox;
+use triquint_firmware::{Drive, Encoder, Item, MotorOutput, Receiver, RxFrame, Status};
 
 /// Encoder of the test image: the recorded count.
 pub struct Counts(pub i64);
@@ -27,31 +29,39 @@ impl MotorOutput for Motor {
     }
 }
 
-/// One control tick.
+/// One control tick: the hand-off (items the receive side finished, from
+/// the lock-free queue) and the tick itself.
 #[unsafe(no_mangle)]
 #[inline(never)]
 pub extern "Rust" fn triquint_control_tick(
-    node: &mut Node,
+    drive: &mut Drive,
+    inbox: &mut Inbox,
     now_us: u64,
     enc: &mut Counts,
     motor: &mut Motor,
 ) {
-    node.tick(now_us, enc, motor);
+    drive.take_from(inbox);
+    drive.tick(now_us, enc, motor);
     #[cfg(feature = "bad-tick")]
-    bad(node, motor);
+    bad(drive, motor);
 }
 
-/// One received frame handed from the CAN task to the node.
+/// One received frame in the CAN receive context: decode, reassembly,
+/// validation; the finished item goes into the queue to the tick.
 #[unsafe(no_mangle)]
 #[inline(never)]
-pub extern "Rust" fn triquint_can_rx(node: &mut Node, rx: &RxFrame) {
-    node.on_frame(rx);
+pub extern "Rust" fn triquint_can_rx(
+    receiver: &mut Receiver,
+    rx: &RxFrame,
+    status: Status,
+) -> Option<Item> {
+    receiver.on_frame(rx, status)
 }
 
 /// What the check must catch: an f64 operation and a reachable panic.
 #[cfg(feature = "bad-tick")]
 #[inline(never)]
-fn bad(node: &mut Node, motor: &mut Motor) {
+fn bad(node: &mut Drive, motor: &mut Motor) {
     let t = core::hint::black_box(motor.torque as f64);
     motor.torque = (t * 1.000_000_1) as f32;
     let i = core::hint::black_box(node.queue_depth());

@@ -1,0 +1,213 @@
+//! The CAN receive side of a node, run in the CAN task (below the control
+//! tick): decodes every frame, reassembles segments, checks their CRC, limits
+//! and soft limits, keeps the written configuration and prepares a committed
+//! one (robot model included). What is left for the tick is a finished
+//! [`Item`]: see [`crate::inbox`].
+
+use triquint_shared::protocol::segment::MAX_DURATION_US;
+use triquint_shared::protocol::{
+    Command, CommandCode, DriveConfig, FaultCode, Msg, PARAM_COUNT, PartEvent, Reassembler, Reject,
+    WireSegment, config::config_crc, decode,
+};
+
+use crate::drive::{Active, Drive, LIMIT_TOL};
+use crate::hal::RxFrame;
+use crate::inbox::{CheckedSegment, CommandData, Item, Prepared};
+use crate::segment::Seg;
+use crate::sync::SyncEstimator;
+
+/// What the receive side needs to know of the node, published by the tick
+/// ([`Drive::status`]); a board shares it through atomics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Status {
+    /// CRC of the running configuration (0: none).
+    pub config_crc: u32,
+    /// Queue flushes so far: a flush also drops a partial segment.
+    pub flushes: u32,
+    /// No motion pending (Idle or Fault): the time sync may take a new host time base.
+    pub may_rebase: bool,
+}
+
+/// Receive side of one node.
+pub struct Receiver {
+    node_id: u8,
+    asm: Reassembler,
+    written: [f32; PARAM_COUNT],
+    written_mask: u64,
+    flushes: u32,
+    sync: SyncEstimator,
+    /// The last two configurations prepared, newest first: the node may
+    /// refuse a commit (not Idle) and keep running the earlier one.
+    configs: [Option<(u32, DriveConfig)>; 2],
+}
+
+/// Velocity, acceleration and jerk of every axis within the configured
+/// limits (with [`LIMIT_TOL`]), else `Invalid`, and this axis's position
+/// within its soft limits, else `OutsideSoftLimits`; checked at 65 points of
+/// the segment (a safety net behind the host's exact verification, not a
+/// replacement for it).
+fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
+    let k = 1.0 + LIMIT_TOL;
+    let (v, a, j) = (
+        cfg.max_velocity * k,
+        cfg.max_acceleration * k,
+        cfg.max_jerk * k,
+    );
+    let axis = (cfg.axis as usize).min(2);
+    for i in 0..=64 {
+        let m = seg.eval(seg.start_ns + seg.duration_ns * i / 64);
+        if !(m.q.iter().all(|x| x.is_finite())
+            && m.qd.amax() <= v
+            && m.qdd.amax() <= a
+            && m.qddd.amax() <= j)
+        {
+            return Err(Reject::Invalid);
+        }
+        let q = m.q[axis];
+        if !(cfg.soft_limit_min..=cfg.soft_limit_max).contains(&q) {
+            return Err(Reject::OutsideSoftLimits);
+        }
+    }
+    Ok(())
+}
+
+impl Receiver {
+    pub fn new(node_id: u8) -> Self {
+        Self {
+            node_id,
+            asm: Reassembler::default(),
+            written: [0.0; PARAM_COUNT],
+            written_mask: 0,
+            flushes: 0,
+            sync: SyncEstimator::default(),
+            configs: [None; 2],
+        }
+    }
+
+    pub fn node_id(&self) -> u8 {
+        self.node_id
+    }
+
+    /// Receive and file at once, in one context (simulators, host-side tests).
+    pub fn deliver<const Q: usize>(&mut self, rx: &RxFrame, drive: &mut Drive<Q>) {
+        if let Some(item) = self.on_frame(rx, drive.status()) {
+            drive.take(&item);
+        }
+    }
+
+    /// Handles one received frame; returns what the tick must take, if anything.
+    pub fn on_frame(&mut self, rx: &RxFrame, status: Status) -> Option<Item> {
+        if status.flushes != self.flushes {
+            self.flushes = status.flushes;
+            self.asm.clear();
+        }
+        let Ok((msg, node)) = decode(&rx.frame) else {
+            return None;
+        };
+        let for_me = node == 0 || node == self.node_id;
+        let rx_us = rx.timestamp_us;
+        match msg {
+            Msg::TimeSync(s) => {
+                self.sync
+                    .on_sync(s.seq, s.prev_tx_us, rx_us, status.may_rebase);
+                Some(Item::Sync(self.sync))
+            }
+            Msg::Emergency(_) if node != self.node_id => Some(Item::Emergency {
+                code: if node == 0 {
+                    FaultCode::HostEmergency
+                } else {
+                    FaultCode::PeerEmergency
+                },
+                rx_us,
+            }),
+            Msg::Heartbeat(heartbeat) if node != self.node_id => Some(Item::PeerHeartbeat {
+                node,
+                heartbeat,
+                rx_us,
+            }),
+            Msg::Command(c) if for_me => Some(Item::Command {
+                command: c,
+                rx_us,
+                data: self.command_data(&c),
+            }),
+            Msg::ConfigWrite { index, value } if for_me => {
+                if let Some(slot) = self.written.get_mut(index as usize) {
+                    *slot = value;
+                    self.written_mask |= 1u64 << index;
+                }
+                None
+            }
+            Msg::SegmentPart => self.part(rx.frame.payload(), false, status.config_crc),
+            Msg::SegmentPartFd => self.part(rx.frame.payload(), true, status.config_crc),
+            _ => None,
+        }
+    }
+
+    fn command_data(&mut self, c: &Command) -> CommandData {
+        match CommandCode::from_u8(c.command) {
+            Some(CommandCode::ReadConfig) => CommandData::Values(self.written),
+            Some(CommandCode::ConfigCommit) => self.prepare(c.arg),
+            _ => CommandData::None,
+        }
+    }
+
+    /// A commit of the written values if their CRC is `want`: every parameter
+    /// written, valid, and the robot model built.
+    fn prepare(&mut self, want: u32) -> CommandData {
+        let crc = config_crc(&self.written);
+        let all = (1u64 << PARAM_COUNT) - 1;
+        let cfg = DriveConfig::from_values(&self.written);
+        let config = if self.written_mask & all != all || crc != want || cfg.validate().is_err() {
+            Err(FaultCode::ConfigMismatch)
+        } else {
+            if self.configs[0].map(|(c, _)| c) != Some(crc) {
+                self.configs = [Some((crc, cfg)), self.configs[0]];
+            }
+            Ok(Prepared {
+                cfg,
+                model: cfg.robot().native_model(),
+                active: Active::new(&cfg, crc),
+            })
+        };
+        CommandData::Commit { crc, config }
+    }
+
+    fn part(&mut self, payload: &[u8], fd: bool, active_crc: u32) -> Option<Item> {
+        match self.asm.push(payload, fd) {
+            PartEvent::Pending => None,
+            PartEvent::Ignored(r) => Some(Item::PartIgnored(r)),
+            PartEvent::Rejected { seq, reason } => Some(Item::PartRejected {
+                seq: seq.unwrap_or(0xFFFF),
+                reason,
+            }),
+            PartEvent::Complete(w) => Some(Item::Segment(self.check(&w, active_crc))),
+        }
+    }
+
+    /// The expensive part of accepting a segment, done here so the tick does
+    /// not: conversion, limit checks at 65 points, start and end motion.
+    fn check(&self, w: &WireSegment, active_crc: u32) -> CheckedSegment {
+        let seg = Seg::from_wire(w, 0);
+        let cfg = self
+            .configs
+            .iter()
+            .flatten()
+            .find(|(c, _)| *c == active_crc && active_crc != 0);
+        let verdict = match cfg {
+            // The node refuses it anyway (no configuration).
+            None => Err(Reject::WrongState),
+            // Out-of-range durations are the node's Invalid; skip the work.
+            Some(_) if w.duration_us == 0 || w.duration_us > MAX_DURATION_US => {
+                Err(Reject::Invalid)
+            }
+            Some((_, cfg)) => within_limits(&seg, cfg),
+        };
+        CheckedSegment {
+            begin: seg.eval(seg.start_ns),
+            end: seg.eval(seg.end_ns()),
+            seg,
+            verdict,
+            config_crc: cfg.map(|(c, _)| *c).unwrap_or(0),
+        }
+    }
+}
