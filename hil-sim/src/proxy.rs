@@ -18,8 +18,9 @@ use std::os::fd::AsRawFd;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::SystemTime;
 
+use triquint_firmware::sync::OUTLIER_US;
 use triquint_shared::protocol::segment::{FLAG_FIRST, SEGMENT_PART, SEGMENT_PART_FD};
-use triquint_shared::protocol::{Frame, PartEvent, Reassembler};
+use triquint_shared::protocol::{Frame, PartEvent, Reassembler, TimeSync};
 
 use crate::bus::Delivery;
 use crate::faults::{FaultInjector, FaultStats, FaultWindow};
@@ -49,6 +50,10 @@ pub struct ProxyReport {
     /// injected delay: the proxy's own latency (µs), worst and mean.
     pub max_latency_us: f64,
     pub mean_latency_us: f64,
+    /// Time syncs the proxy itself delayed by more than the drives' outlier
+    /// gate (`firmware::sync::OUTLIER_US`): each is discarded by the drives,
+    /// and a run of them for `sync_timeout` is a lost sync (a safe stop).
+    pub late_syncs: u64,
     /// Wall time from the proxy's start to side A's first frame (s).
     pub first_a_frame_s: Option<f64>,
     pub wall_time_s: f64,
@@ -137,6 +142,9 @@ impl Bridge {
         self.delivered += 1;
         let r = &mut self.report;
         r.max_latency_us = r.max_latency_us.max(late_us);
+        if d.frame.id == TimeSync::DEF.addr.id(0) && late_us > OUTLIER_US as f64 {
+            r.late_syncs += 1;
+        }
         r.mean_latency_us += (late_us - r.mean_latency_us) / self.delivered as f64;
         Some(d.frame)
     }
