@@ -2,7 +2,7 @@
 # Hardware-in-the-loop suite on a real SocketCAN interface: installs what it
 # needs, builds the release binaries, plans both paper cases on the host, then
 # boots one small VM (virtme-ng, the distribution kernel, emulated CPU) that
-# loads vcan, brings up vcan0 (MTU 72, CAN-FD) and runs the pytest suite in
+# loads vcan, brings up vcan0 and vcan1 (MTU 72, CAN-FD) and runs the pytest suite in
 # hil-sim/python/ once. Exit status: the suite's (124 when the VM timed out).
 #
 # Needs root (apt-get, pip). Output: target/hil/ (vm.log, reports, candump
@@ -50,9 +50,12 @@ cat > "$OUT/in-vm.sh" <<VM
 #!/bin/sh
 cd "$ROOT"
 modprobe vcan || exit 90
-ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 && ip link set up vcan0 || exit 91
+# vcan1: the drives' side of the fault-injecting proxy (test_faults.py).
+for i in vcan0 vcan1; do
+    ip link add dev \$i type vcan && ip link set \$i mtu 72 && ip link set up \$i || exit 91
+done
 export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" \
-    HIL_PLANS="$OUT/plans" HIL_ROOT="$ROOT" HIL_IFACE=vcan0 PYTHONDONTWRITEBYTECODE=1 \
+    HIL_PLANS="$OUT/plans" HIL_ROOT="$ROOT" HIL_IFACE=vcan0 HIL_IFACE_B=vcan1 PYTHONDONTWRITEBYTECODE=1 \
     PATH="\$PATH:/usr/bin:/sbin"
 "$PY" -m pytest -p no:cacheprovider -v -rfE hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?

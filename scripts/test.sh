@@ -25,6 +25,7 @@ cargo test --workspace --locked
 
 step "fault soak (release)"
 ./scripts/soak.sh
+./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
 
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf

@@ -5,6 +5,7 @@ Paths come from the environment set by scripts/hil.sh (the VM sees the host's
 file system read-only; only HIL_OUT is written back)."""
 import json
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -15,6 +16,8 @@ import pytest
 
 ROOT = os.environ.get("HIL_ROOT", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
 IFACE = os.environ.get("HIL_IFACE", "vcan0")
+# The drives' side of the fault-injecting proxy (host on IFACE, proxy between).
+IFACE_B = os.environ.get("HIL_IFACE_B", "vcan1")
 OUT = os.environ.get("HIL_OUT", "/tmp/triquint-hil")
 PLANS = os.environ.get("HIL_PLANS", os.path.join(OUT, "plans"))
 TRIQUINT = os.environ.get("TRIQUINT", os.path.join(ROOT, "target", "release", "triquint"))
@@ -35,6 +38,13 @@ def bus():
     b.shutdown()
 
 
+@pytest.fixture
+def bus_b():
+    b = can.Bus(interface="socketcan", channel=IFACE_B, fd=True)
+    yield b
+    b.shutdown()
+
+
 def plan_path(case):
     return os.path.join(PLANS, f"paper-case{case}.json")
 
@@ -48,11 +58,11 @@ def plan_start_mm(case):
 class Sim:
     """A running triquint-sim; `stop()` sends SIGTERM and returns its report."""
 
-    def __init__(self, name, fd=False, nodes="1,2,3", start=None, extra=()):
+    def __init__(self, name, fd=False, nodes="1,2,3", start=None, extra=(), iface=IFACE):
         os.makedirs(OUT, exist_ok=True)
         self.report_path = os.path.join(OUT, f"sim-{name}.json")
         self.log_path = os.path.join(OUT, f"sim-{name}.log")
-        args = [TRIQUINT_SIM, "--iface", IFACE, "--nodes", nodes, "--rate", RATE, "--report", self.report_path]
+        args = [TRIQUINT_SIM, "--iface", iface, "--nodes", nodes, "--rate", RATE, "--report", self.report_path]
         if fd:
             args.append("--fd")
         if start is not None:
@@ -81,12 +91,33 @@ class Sim:
             return json.load(f)
 
 
+class Proxy(Sim):
+    """A running `triquint-sim proxy` between IFACE (A, host) and IFACE_B (B,
+    drives) with the given fault options; `stop()` returns its counts."""
+
+    def __init__(self, name, faults=(), fd=False):
+        os.makedirs(OUT, exist_ok=True)
+        self.report_path = os.path.join(OUT, f"proxy-{name}.json")
+        self.log_path = os.path.join(OUT, f"proxy-{name}.log")
+        args = [TRIQUINT_SIM, "proxy", "--a", IFACE, "--b", IFACE_B, "--report", self.report_path, *faults]
+        if fd:
+            args.append("--fd")
+        # Real-time priority: in the emulated guest the drives' catch-up loop
+        # takes whole CPUs, and every ms the proxy waits for one is a ms of
+        # latency on the time sync (it moves the drives' time base).
+        chrt = shutil.which("chrt") or "/usr/bin/chrt"
+        if os.geteuid() == 0 and os.path.exists(chrt):
+            args = [chrt, "-f", "50", *args]
+        self.log = open(self.log_path, "w")
+        self.proc = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT)
+
+
 @pytest.fixture
 def make_sim():
     sims = []
 
-    def make(*a, **k):
-        s = Sim(*a, **k)
+    def make(*a, cls=Sim, **k):
+        s = cls(*a, **k)
         sims.append(s)
         return s
 

@@ -103,7 +103,7 @@ impl FaultWindow {
 }
 
 /// What the injector did (per fault kind, summed over receivers).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct FaultStats {
     pub lost: u64,
     pub corrupted: u64,
@@ -249,6 +249,11 @@ impl FaultInjector {
             Some((due, _)) if *due <= now_ns => q.pop_front().map(|x| x.1),
             _ => None,
         }
+    }
+
+    /// When the next delivery to `station` is due (`None`: nothing held).
+    pub fn next_due(&self, station: usize) -> Option<u64> {
+        self.held.get(station)?.front().map(|x| x.0)
     }
 
     /// Keeps the babbler's transmit queue full while a Babble window is active

@@ -10,6 +10,7 @@ pub mod faults;
 pub mod metrics;
 pub mod plant;
 pub mod plot;
+pub mod proxy;
 pub mod realtime;
 pub mod report;
 pub mod robot_file;

@@ -4,13 +4,18 @@
 //! --json`, for the last plan run, plus every run and the pacing figures).
 //! Exit status: 0 stopped by a signal, 2 bad input, 4 interface or bus
 //! failure, 5 the machine left its workspace.
+//!
+//! `triquint-sim proxy` bridges two interfaces through the fault model
+//! (`cli/proxy.rs`).
+
+mod cli;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use clap::Parser;
+use clap::{Parser, Subcommand};
 use nalgebra::Vector3;
 use serde::Serialize;
 use triquint_shared::kinematics::Pose;
@@ -19,11 +24,31 @@ use triquint_sim::report::{JsonFault, RunJson};
 use triquint_sim::robot_file::read_robot;
 
 #[derive(Parser, Debug)]
-#[command(name = "triquint-sim", version, about)]
+#[command(
+    name = "triquint-sim",
+    version,
+    about,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    machine: Args,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Bridge two CAN interfaces both ways through seeded faults.
+    Proxy(cli::proxy::ProxyArgs),
+}
+
+#[derive(clap::Args, Debug)]
 struct Args {
     /// SocketCAN interface (vcan0, can0).
-    #[arg(long, value_name = "IFACE")]
-    iface: String,
+    #[arg(long, value_name = "IFACE", required = true)]
+    iface: Option<String>,
     /// Drives to run, comma-separated (an absent drive is a silent node).
     #[arg(long, default_value = "1,2,3", value_name = "1,2,3")]
     nodes: String,
@@ -60,6 +85,12 @@ struct JsonRun {
     duration_s: f64,
     start_skew_us: f64,
     tracking_samples: usize,
+    /// Per node, the (sequence, body CRC-32) of every segment it executed.
+    executed: Vec<Vec<(u16, u32)>>,
+    stop_s: Option<f64>,
+    stopped_within_buffer: bool,
+    max_stop_jerk: [f64; 3],
+    stop_ramp_s: f64,
 }
 
 #[derive(Serialize)]
@@ -102,9 +133,23 @@ fn json_run(r: &RunReport) -> JsonRun {
         duration_s: r.duration_s,
         start_skew_us: r.start_skew_ns as f64 * 1e-3,
         tracking_samples: r.tracking.samples,
+        executed: (1..=3)
+            .map(|node| {
+                r.executed
+                    .iter()
+                    .filter(|e| e.0 == node)
+                    .map(|e| (e.1, e.2))
+                    .collect()
+            })
+            .collect(),
+        stop_s: r.stop_s,
+        stopped_within_buffer: r.stopped_within_buffer,
+        max_stop_jerk: r.max_stop_jerk,
+        stop_ramp_s: r.stop_ramp_s,
     }
 }
 
+/// Exit status and the one-line message.
 struct Failure(u8, String);
 
 fn bad(msg: impl std::fmt::Display) -> Failure {
@@ -152,13 +197,23 @@ fn write_report(path: &Path, text: &str) -> Result<(), Failure> {
         })
 }
 
-fn report_json(args: &Args, r: &RealtimeReport) -> String {
+/// A flag set by SIGINT or SIGTERM.
+fn stop_on_signals() -> Result<Arc<AtomicBool>, Failure> {
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(sig, Arc::clone(&stop))
+            .map_err(|e| Failure(4, format!("cannot install the signal handler: {e}")))?;
+    }
+    Ok(stop)
+}
+
+fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
     let runs: Vec<JsonRun> = r.runs.iter().map(json_run).collect();
     let last = json_run(r.runs.last().unwrap_or(&RunReport::default()));
     let j = JsonReport {
         last,
         runs,
-        iface: args.iface.clone(),
+        iface: iface.to_string(),
         fd: args.fd,
         rate_hz: args.rate,
         ticks: r.ticks,
@@ -185,15 +240,13 @@ fn run(args: &Args) -> Result<(), Failure> {
     let r0 = parse_start(&args.start)?;
     let pose = Pose::from_cartesian(&robot.model::<f64>(), r0)
         .map_err(|e| bad(format!("--start {}: {e}", args.start)))?;
-    let mut cfg = RealtimeConfig::new(&args.iface, robot, pose.q);
+    let iface = args.iface.as_deref().unwrap_or_default();
+    let mut cfg = RealtimeConfig::new(iface, robot, pose.q);
     cfg.nodes = nodes;
     cfg.fd = args.fd;
     cfg.rate_hz = args.rate;
-    let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(sig, Arc::clone(&stop))
-            .map_err(|e| Failure(4, format!("cannot install the signal handler: {e}")))?;
-    }
+    let stop = stop_on_signals()?;
+    let port = realtime::open(&cfg).map_err(|e| Failure(4, e.to_string()))?;
     eprintln!(
         "triquint-sim: nodes {:?} on {} ({}), {} Hz; SIGINT/SIGTERM to stop",
         cfg.nodes,
@@ -202,7 +255,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         cfg.rate_hz
     );
     let mut r = RealtimeReport::default();
-    let failure = match realtime::run(&cfg, &stop, &mut r) {
+    let failure = match realtime::run(port, &cfg, &stop, &mut r) {
         Ok(()) => None,
         Err(e @ RealtimeError::Bus(_)) => Some(Failure(4, e.to_string())),
         Err(e @ RealtimeError::Machine(_)) => Some(Failure(5, e.to_string())),
@@ -217,7 +270,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         r.frames
     );
     if let Some(path) = &args.report {
-        write_report(path, &report_json(args, &r))?;
+        write_report(path, &report_json(args, iface, &r))?;
     }
     match failure {
         Some(f) => Err(f),
@@ -226,8 +279,12 @@ fn run(args: &Args) -> Result<(), Failure> {
 }
 
 fn main() -> ExitCode {
-    let args = Args::parse();
-    match run(&args) {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Some(Command::Proxy(p)) => cli::proxy::run(p),
+        None => run(&cli.machine),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure(code, msg)) => {
             eprintln!("triquint-sim: error: {msg}");

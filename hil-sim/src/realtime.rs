@@ -17,7 +17,7 @@ use rand_chacha::ChaCha8Rng;
 use triquint_firmware::hal::service;
 use triquint_shared::Robot;
 use triquint_shared::plan::Segment;
-use triquint_shared::protocol::segment::FLAG_FIRST;
+use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{
     CommandCode, FaultCode, Frame, Msg, PartEvent, Reassembler, State, decode, frame_time_ns,
 };
@@ -92,6 +92,18 @@ pub struct RunReport {
     pub duration_s: f64,
     /// Spread of the drives' first Running tick (ns).
     pub start_skew_ns: u64,
+    /// Segments each drive took its reference from: (node, sequence, CRC-32
+    /// of the body it received), in order.
+    pub executed: Vec<(u8, u16, u32)>,
+    /// From the first fault to the last running axis at rest (s).
+    pub stop_s: Option<f64>,
+    /// Every faulted axis stopped inside the plan time it had buffered (or
+    /// on the plan's own end, which is at rest).
+    pub stopped_within_buffer: bool,
+    /// Largest |joint jerk| of each drive's reference while stopping (m/s³).
+    pub max_stop_jerk: [f64; 3],
+    /// The stop ramp T_s the drives were configured with (s).
+    pub stop_ramp_s: f64,
 }
 
 /// Everything the machine measured.
@@ -125,6 +137,8 @@ struct Watch {
     start_arg: Option<u32>,
     start_host_ns: Option<i64>,
     running: bool,
+    /// The plan's last segment went over the bus.
+    saw_last: bool,
     samples: Vec<Sample>,
 }
 
@@ -170,6 +184,7 @@ impl Watch {
                     if w.flags & FLAG_FIRST != 0 {
                         self.segments.clear();
                     }
+                    self.saw_last |= w.flags & FLAG_LAST != 0;
                     // Retransmissions arrive again: keep the first copy.
                     if w.seq as usize == self.segments.len() {
                         let t0 = self.segments.last().map_or(0.0, |s| s.t0_s + s.duration_s);
@@ -194,18 +209,22 @@ fn unwrap_host_us(arg: u32, est_ns: i64) -> i64 {
 /// Ticks later than this are not caught up but skipped (and counted).
 const MAX_CATCH_UP_NS: u64 = 5_000_000_000;
 
-/// Runs the machine until `stop` is set (or it fails); `report` holds what
-/// was measured either way.
+/// Opens the machine's socket on `cfg.iface`.
+pub fn open(cfg: &RealtimeConfig) -> Result<SocketCanPort, SocketCanError> {
+    // One socket for the three drives, receiving its own frames too: they
+    // reach the other drives (as on a bus) and the run's accounting, with one
+    // read pass per tick (system calls are dear in an emulated guest).
+    SocketCanPort::open(&cfg.iface, cfg.fd, true, SystemTime::now())
+}
+
+/// Runs the machine on the socket of [`open`] until `stop` is set (or it
+/// fails); `report` holds what was measured either way.
 pub fn run(
+    mut port: SocketCanPort,
     cfg: &RealtimeConfig,
     stop: &AtomicBool,
     report: &mut RealtimeReport,
 ) -> Result<(), RealtimeError> {
-    let epoch = SystemTime::now();
-    // One socket for the three drives, receiving its own frames too: they
-    // reach the other drives (as on a bus) and the run's accounting, with one
-    // read pass per tick (system calls are dear in an emulated guest).
-    let mut port = SocketCanPort::open(&cfg.iface, cfg.fd, true, epoch)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.clock_seed);
     let mut nodes: Vec<SimNode> = cfg
         .nodes
@@ -277,6 +296,8 @@ pub fn run(
                     n.started_ns = None;
                     n.faults.clear();
                     n.max_stop_jerk = 0.0;
+                    n.executed.clear();
+                    n.states.clear();
                 }
             }
             rx.push(r);
@@ -394,6 +415,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
         .collect();
     faults.sort_by_key(|f| f.0.t_ns);
     let no_fault = faults.iter().all(|f| f.0.code == FaultCode::None);
+    let (stop_s, stopped_within_buffer) = stop_figures(watch, nodes);
     RunReport {
         completed: completed && no_fault && started.len() == nodes.len(),
         faults,
@@ -407,7 +429,51 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
         plan_time_s,
         duration_s: window * 1e-9,
         start_skew_ns: skew,
+        executed: nodes
+            .iter()
+            .flat_map(|n| n.executed.iter().map(|e| (n.node.node_id(), e.1, e.2)))
+            .collect(),
+        stop_s,
+        stopped_within_buffer,
+        stop_ramp_s: nodes
+            .iter()
+            .filter_map(|n| n.node.config())
+            .map(|c| c.stop_time as f64)
+            .fold(0.0, f64::max),
+        max_stop_jerk: [0, 1, 2].map(|a| {
+            nodes
+                .iter()
+                .find(|n| n.node.node_id() as usize == a + 1)
+                .map_or(0.0, |n| n.max_stop_jerk as f64)
+        }),
     }
+}
+
+/// Time from the first fault to the last running axis at rest, and whether
+/// every faulted axis stayed inside its buffered plan time.
+fn stop_figures(watch: &Watch, nodes: &[SimNode]) -> (Option<f64>, bool) {
+    let n_seg = watch.segments.len();
+    let within = nodes.iter().all(|n| {
+        let had_last = watch.saw_last && n.executed.iter().any(|e| e.1 as usize + 1 == n_seg);
+        n.node.state() != State::Fault || n.node.plan_ns() <= n.node.buffered_end_ns() || had_last
+    });
+    let Some(first) = nodes.iter().flat_map(|n| &n.faults).map(|f| f.t_ns).min() else {
+        return (None, within);
+    };
+    let mut rest = first;
+    for n in nodes.iter().filter(|n| n.started_ns.is_some()) {
+        match n
+            .states
+            .iter()
+            .find(|(t, s)| *t >= first && *s == State::Fault)
+        {
+            Some((t, _)) => rest = rest.max(*t),
+            // Still moving (or finished without stopping): no stop time.
+            None if n.node.state() != State::Idle => return (None, within),
+            None => {}
+        }
+    }
+    (Some((rest - first) as f64 * 1e-9), within)
 }
 
 #[cfg(test)]

@@ -67,6 +67,15 @@ pub struct SocketCanPort {
     pub foreign: u64,
 }
 
+impl std::os::fd::AsRawFd for SocketCanPort {
+    fn as_raw_fd(&self) -> std::os::fd::RawFd {
+        match &self.sock {
+            Sock::Classic(s) => s.as_raw_fd(),
+            Sock::Fd(s) => s.as_raw_fd(),
+        }
+    }
+}
+
 /// Wall-clock time (ns) since `epoch`: the clock of kernel receive timestamps.
 pub fn ns_since(epoch: SystemTime, t: SystemTime) -> u64 {
     t.duration_since(epoch).map_or(0, |d| d.as_nanos() as u64)

@@ -1,11 +1,12 @@
 //! Bad input to the built `triquint` binary, as a table: each case must end
 //! with the exit status of the README's table, exactly one line on stderr
 //! naming what is wrong, no panic, and no output file left behind.
-//! (`upload` with an unknown interface is not covered: no `upload`
-//! subcommand on this branch.)
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// An interface no machine has.
+const NO_IFACE: &str = "triquint-nosuch0";
 
 const GOOD_POINTS: &str = "points = [[-90, 90, 680], [-90, 90, 660], [-60, 60, 640]]";
 
@@ -199,6 +200,29 @@ fn cases() -> Vec<Case> {
             status: 2,
             says: "robot",
         },
+        // An unknown interface name: the kernel has no such device (with or
+        // without CAN support): exit 4, one line.
+        Case {
+            name: "upload on an unknown interface",
+            files: vec![("plan.json", paper_plan_json())],
+            args: vec!["upload", "plan.json", "--iface", NO_IFACE],
+            status: 4,
+            says: "triquint-nosuch0: cannot open SocketCAN interface",
+        },
+        Case {
+            name: "monitor on an unknown interface",
+            files: vec![],
+            args: vec!["monitor", "--iface", NO_IFACE, "--count", "1"],
+            status: 4,
+            says: "triquint-nosuch0: cannot open SocketCAN interface",
+        },
+        Case {
+            name: "move-to on an unknown interface",
+            files: vec![],
+            args: vec!["move-to", "-85", "90", "670", "--iface", NO_IFACE],
+            status: 4,
+            says: "triquint-nosuch0: cannot open SocketCAN interface",
+        },
         Case {
             name: "missing job file",
             files: vec![],
@@ -273,4 +297,30 @@ fn every_bad_input_gets_one_line_and_its_exit_status() {
         let _ = std::fs::remove_dir_all(&dir);
     }
     assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+/// An interface that exists but is not CAN (`lo`, on every machine): the
+/// kernel's reason depends on the kernel (with SocketCAN: binding a CAN socket
+/// to a non-CAN device is "No such device"; without CAN, as on this test
+/// machine: "Address family not supported"), the line and status do not.
+#[test]
+fn a_network_interface_that_is_not_can_is_a_device_error() {
+    for args in [
+        &["monitor", "--iface", "lo", "--count", "1"][..],
+        &["move-to", "-85", "90", "670", "--iface", "lo"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(4), "{stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        let reason = stderr.split("lo: cannot open SocketCAN interface: ").nth(1);
+        assert!(
+            reason.is_some_and(|r| r.starts_with("No such device")
+                || r.starts_with("Address family not supported")),
+            "{stderr}"
+        );
+    }
 }

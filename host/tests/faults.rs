@@ -127,9 +127,9 @@ fn clean_run_completes() {
 
 #[test]
 fn frame_loss_is_recovered_by_retransmission() {
-    // From just after the start: the set-up commands are not retried (a
-    // lost one ends the session before anything moves, exit status 4).
-    // The spiral streams segments for its whole duration.
+    // From just after the start (lost set-up frames: see
+    // `lost_set_up_frames_are_sent_again`). The spiral streams segments
+    // for its whole duration.
     let w = vec![FaultWindow::new(
         Fault::Loss { rate: 0.01 },
         400 * MS,
@@ -138,6 +138,21 @@ fn frame_loss_is_recovered_by_retransmission() {
     let r = run(&spiral(), &scenario(w, 12));
     assert_recovered("loss 1 %", &r);
     assert!(r.injected.lost > 10 && r.retransmits > 0, "{r:?}");
+}
+
+#[test]
+fn lost_set_up_frames_are_sent_again() {
+    // Configuration writes and command answers lost: a drive refuses a
+    // commit whose writes did not all arrive, and Arm/commit answers go
+    // missing; the host writes and commits again, re-sends Arm (same token:
+    // a drive that did arm answers again), and the plan runs.
+    let w = vec![
+        FaultWindow::new(Fault::Loss { rate: 0.03 }, 0, FOREVER).on_ids(0x040..=0x043),
+        FaultWindow::new(Fault::Loss { rate: 0.3 }, 0, FOREVER).on_ids(0x1A1..=0x1A3),
+    ];
+    let r = run(&case1(), &scenario(w, 21));
+    assert_recovered("set-up frames lost", &r);
+    assert!(r.injected.lost >= 3, "{r:?}");
 }
 
 #[test]

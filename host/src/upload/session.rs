@@ -28,6 +28,11 @@ pub struct SessionOptions {
     pub start_lead_us: u64,
     /// Waiting for nodes (heartbeats, acknowledgements).
     pub response_timeout_us: u64,
+    /// A set-up command (configuration, Arm) not answered within this is
+    /// sent again: a configuration refused or unanswered at most
+    /// `setup_resends` times, Arm at most twice (see [`ARM_RESENDS`]).
+    pub setup_retry_us: u64,
+    pub setup_resends: u32,
     /// After the plan's end, how long nodes may take to report Idle.
     pub finish_grace_us: u64,
     /// Test hook: stop streaming after this many segments (provokes underrun).
@@ -48,6 +53,8 @@ impl Default for SessionOptions {
             fast_sync_period_us: 10_000,
             start_lead_us: 50_000,
             response_timeout_us: 2_000_000,
+            setup_retry_us: 30_000,
+            setup_resends: 4,
             finish_grace_us: 5_000_000,
             stall_after: None,
             configure_only: false,
@@ -208,6 +215,12 @@ pub struct Session {
     next_to_send: usize,
     in_flight: Vec<InFlight>,
     readback: Option<(u8, [Option<f32>; PARAM_COUNT])>,
+    /// Per node: token of the latest ConfigCommit, when it went out, resends.
+    commit: [(u8, u64, u32); 3],
+    /// Token of the Arm, when it last went out, resends.
+    arm: (u8, u64, u32),
+    /// Token of the Start, when it last went out.
+    start_cmd: (u8, u64),
     start_us: u64,
     faults: Vec<FaultReport>,
     frames_sent: u64,
@@ -215,6 +228,16 @@ pub struct Session {
     retransmits: u64,
     rejects_seen: u64,
 }
+
+/// Arm resends, `setup_retry_us` apart: all within the drives' 100 ms
+/// repeat window of the first, so a drive that did arm (its answer lost)
+/// answers again instead of executing Arm twice (which it would refuse).
+pub const ARM_RESENDS: u32 = 2;
+
+/// Start resends to a drive that has not answered, this far apart, only
+/// before the start time (`start_lead_us` after the first) and within the
+/// repeat window: a drive that missed Start would stop every axis (`PeerLost`).
+const START_RETRY_US: u64 = 10_000;
 
 /// A segment is resent on a rejection only if its last transmission is older
 /// than this: a full window of classic segments takes about 11 ms on the wire.
@@ -266,6 +289,9 @@ impl Session {
             next_to_send: 0,
             in_flight: Vec::new(),
             readback: None,
+            commit: [(0, 0, 0); 3],
+            arm: (0, 0, 0),
+            start_cmd: (0, 0),
             start_us: 0,
             faults: Vec::new(),
             frames_sent: 0,
@@ -330,6 +356,79 @@ impl Session {
         };
         self.out.push_back(c.to_frame(node));
         self.token
+    }
+
+    /// Writes node `i`'s configuration and commits it (a new token each
+    /// time); `resends` counts the earlier attempts.
+    fn send_config(&mut self, i: usize, now: u64, resends: u32) {
+        self.write_config(i);
+        self.commit_config(i, now, resends);
+    }
+
+    fn write_config(&mut self, i: usize) {
+        for (k, val) in self.configs[i].to_values().iter().enumerate() {
+            self.out
+                .push_back(config_write_frame(i as u8 + 1, k as u8, *val));
+        }
+    }
+
+    fn commit_config(&mut self, i: usize, now: u64, resends: u32) {
+        let token = self.command(
+            i as u8 + 1,
+            CommandCode::ConfigCommit,
+            self.configs[i].crc(),
+        );
+        self.commit[i] = (token, now, resends);
+    }
+
+    /// Configure phase: `Ok(true)` once every node committed its
+    /// configuration. A commit refused (a configuration write was lost) or
+    /// not answered is sent again, configuration and all, up to
+    /// `setup_resends` times.
+    fn configured(&mut self, now: u64) -> Result<bool, UploadError> {
+        let mut done = 0;
+        for i in 0..3 {
+            let (token, sent_at, resends) = self.commit[i];
+            let can_resend = resends < self.opts.setup_resends;
+            match self.nodes[i].last_ack {
+                Some((c, _, 0, _)) if c == CommandCode::ConfigCommit as u8 => done += 1,
+                // The latest commit was refused.
+                Some((c, t, _, crc)) if c == CommandCode::ConfigCommit as u8 && t == token => {
+                    if !can_resend {
+                        return Err(UploadError::ConfigCrc {
+                            node: i as u8 + 1,
+                            node_crc: crc,
+                            plan_crc: self.configs[i].crc(),
+                        });
+                    }
+                    self.send_config(i, now, resends + 1);
+                }
+                _ if can_resend && now.saturating_sub(sent_at) > self.opts.setup_retry_us => {
+                    self.send_config(i, now, resends + 1);
+                }
+                _ => {}
+            }
+        }
+        Ok(done == 3)
+    }
+
+    /// Start again (same token) to each drive that has not answered it,
+    /// while the start time is ahead.
+    fn resend_start(&mut self, now: u64) {
+        let (token, sent_at) = self.start_cmd;
+        if now + START_RETRY_US >= self.start_us || now.saturating_sub(sent_at) < START_RETRY_US {
+            return;
+        }
+        let acks = self.acks_for(token);
+        for i in (0..3).filter(|&i| acks[i].is_none()) {
+            let c = Command {
+                command: CommandCode::Start as u8,
+                token,
+                arg: self.start_us as u32,
+            };
+            self.out.push_front(c.to_frame(i as u8 + 1));
+        }
+        self.start_cmd.1 = now;
     }
 
     fn set_phase(&mut self, p: Phase, now: u64) {
@@ -572,15 +671,11 @@ impl Session {
                     }
                     self.command(0, CommandCode::Reset, 0);
                     if self.opts.configure {
-                        for (i, c) in self.configs.clone().iter().enumerate() {
-                            let node = i as u8 + 1;
-                            for (k, val) in c.to_values().iter().enumerate() {
-                                self.out.push_back(config_write_frame(node, k as u8, *val));
-                            }
+                        for i in 0..3 {
+                            self.write_config(i);
                         }
                         for i in 0..3 {
-                            let crc = self.configs[i].crc();
-                            self.command(i as u8 + 1, CommandCode::ConfigCommit, crc);
+                            self.commit_config(i, now, 0);
                         }
                         self.set_phase(Phase::Configure, now);
                     } else {
@@ -594,21 +689,7 @@ impl Session {
                 }
             }
             Phase::Configure => {
-                let done = self.nodes.iter().all(|v| {
-                    matches!(v.last_ack, Some((c, _, _, _)) if c == CommandCode::ConfigCommit as u8)
-                });
-                if done {
-                    for (i, v) in self.nodes.iter().enumerate() {
-                        if let Some((_, _, r, crc)) = v.last_ack
-                            && r != 0
-                        {
-                            return Err(UploadError::ConfigCrc {
-                                node: i as u8 + 1,
-                                node_crc: crc,
-                                plan_crc: self.configs[i].crc(),
-                            });
-                        }
-                    }
+                if self.configured(now)? {
                     self.set_phase(Phase::VerifyConfig, now);
                 } else {
                     let nodes = self.nodes;
@@ -693,15 +774,32 @@ impl Session {
                 let want = if cap == 0 { 1 } else { cap.min(n_seg) };
                 let want = want.min(self.opts.stall_after.unwrap_or(usize::MAX)).max(1);
                 if self.all_acked_through(want) {
-                    self.command(0, CommandCode::Arm, 0);
+                    let token = self.command(0, CommandCode::Arm, 0);
+                    self.arm = (token, now, 0);
                     self.set_phase(Phase::Arm, now);
                 } else {
                     self.timeout(now, "acknowledging the first segments", |_| true)?;
                 }
             }
             Phase::Arm => {
-                let token = self.token;
+                let (token, sent_at, resends) = self.arm;
                 let acks = self.acks_for(token);
+                if acks.iter().any(Option::is_none)
+                    && resends < ARM_RESENDS
+                    && now.saturating_sub(sent_at) > self.opts.setup_retry_us
+                {
+                    // The same command (same token) to each silent node: one
+                    // that did arm answers again, one that missed it arms.
+                    for i in (0..3).filter(|&i| acks[i].is_none()) {
+                        let c = Command {
+                            command: CommandCode::Arm as u8,
+                            token,
+                            arg: 0,
+                        };
+                        self.out.push_back(c.to_frame(i as u8 + 1));
+                    }
+                    self.arm = (token, now, resends + 1);
+                }
                 if acks.iter().all(Option::is_some) {
                     if let Some(i) = acks.iter().position(|r| *r != Some(0)) {
                         let code = acks[i]
@@ -714,7 +812,8 @@ impl Session {
                         });
                     }
                     let start = now + self.opts.start_lead_us;
-                    self.command(0, CommandCode::Start, start as u32);
+                    let token = self.command(0, CommandCode::Start, start as u32);
+                    self.start_cmd = (token, now);
                     self.start_us = start;
                     self.set_phase(Phase::Stream, now);
                 } else {
@@ -722,6 +821,7 @@ impl Session {
                 }
             }
             Phase::Stream => {
+                self.resend_start(now);
                 if !self.faults.is_empty() {
                     self.set_phase(Phase::Finish, now);
                 } else {
