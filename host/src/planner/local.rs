@@ -637,6 +637,16 @@ impl Problem {
         }
     }
 
+    /// A solution of the relaxation as a solution of this problem, when it
+    /// meets every limit here (then it is this problem's optimum too).
+    pub fn accept_relaxed(&self, r: &Solution) -> Option<Solution> {
+        let full = self.evaluate(&r.h, &r.x);
+        (full.violation == 0.0).then_some(Solution {
+            lp_solves: r.lp_solves,
+            ..full
+        })
+    }
+
     /// The inner optimum at fixed h, through the relaxation when its answer
     /// meets every limit (then it is exact, and the cutting planes are skipped).
     pub fn inner_via_relaxation(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<Solution> {
@@ -648,12 +658,8 @@ impl Problem {
         if !self.jerk_only
             && let Some(r) = self.relaxed().inner(h, x0)
         {
-            let full = self.evaluate(h, &r.x);
-            if full.violation == 0.0 {
-                return Some(Solution {
-                    lp_solves: r.lp_solves,
-                    ..full
-                });
+            if let Some(sol) = self.accept_relaxed(&r) {
+                return Some(sol);
             }
             return self.inner_rounds(h, &r.x, max_rounds).map(|s| Solution {
                 lp_solves: s.lp_solves + r.lp_solves,

@@ -151,12 +151,7 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
     let mut starts = starts;
     let mut lp_solves = 0;
     if let Some(r) = relaxed {
-        let full = p.evaluate(&r.best.h, &r.best.x);
-        if full.violation == 0.0 {
-            let best = Solution {
-                lp_solves: r.best.lp_solves,
-                ..full
-            };
+        if let Some(best) = p.accept_relaxed(&r.best) {
             return Some(SearchResult { best, ..r });
         }
         lp_solves = r.lp_solves;
