@@ -72,7 +72,7 @@ grep -E "^#[0-9]+|Done|panicked" "$OUT/canary.log" | tail -2
 rm -f "$OUT"/crashes/canary-*
 
 status=0
-for t in frames job; do
+for t in frames job points; do
     step "$t: ${SECONDS_PER_TARGET} s from the committed corpus"
     if fuzz "$t" "$SECONDS_PER_TARGET" "$ROOT/fuzz/corpus/$t" "$ROOT/fuzz/regressions/$t"; then
         grep -E "^stat::(number_of_executed_units|new_units_added)|^Done" "$OUT/$t.log" || true

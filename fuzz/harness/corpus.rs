@@ -4,8 +4,12 @@
 
 /// The contents of every file in `fuzz/<dir>` (dot files skipped).
 fn inputs(dir: &str) -> Vec<Vec<u8>> {
+    // The tests live in crates at different depths below the workspace.
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../fuzz")
+        .ancestors()
+        .map(|a| a.join("fuzz"))
+        .find(|f| f.join("Cargo.toml").is_file())
+        .unwrap_or_else(|| panic!("no fuzz/ above {}", env!("CARGO_MANIFEST_DIR")))
         .join(dir);
     let mut out = Vec::new();
     for e in std::fs::read_dir(&root).unwrap_or_else(|e| panic!("{}: {e}", root.display())) {

@@ -7,7 +7,7 @@ pub fn fuzz_job(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    match triquint_host::job::Job::from_toml(text, "fuzz.toml") {
+    match triquint_planner::Job::from_toml(text) {
         Ok(job) => {
             let pts = job.points_m();
             assert!(pts.len() >= 2);

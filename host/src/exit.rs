@@ -16,6 +16,10 @@ pub enum Status {
     Device = 4,
     /// Motion fault: a node stopped with a fault code.
     MotionFault = 5,
+    /// The planner's numerical solver failed on a valid job (worth a report).
+    SolverFailure = 6,
+    /// Planning was cancelled (Ctrl-C) before it finished.
+    Cancelled = 7,
 }
 
 /// An error that ends a command with a status from the table and a one-line message.
@@ -56,6 +60,19 @@ impl fmt::Display for CliError {
 }
 
 impl std::error::Error for CliError {}
+
+impl From<triquint_planner::PlanError> for CliError {
+    fn from(e: triquint_planner::PlanError) -> Self {
+        use triquint_planner::PlanError as E;
+        let status = match &e {
+            E::Infeasible { .. } => Status::Infeasible,
+            E::Cancelled { .. } => Status::Cancelled,
+            E::Solver(_) => Status::SolverFailure,
+            _ => Status::BadInput,
+        };
+        Self::new(status, e)
+    }
+}
 
 pub type CliResult<T = ()> = Result<T, CliError>;
 

@@ -1,9 +1,9 @@
-//! Host side of triquint: job files, the planner, plan checks and reports.
+//! Host side of triquint: the `triquint` command's subcommands, plan
+//! reports, and the host side of the CAN session. Planning itself is the
+//! `triquint-planner` library.
 
 pub mod cli;
 pub mod exit;
-pub mod job;
-pub mod planner;
 pub mod report;
 pub mod robot_file;
 pub mod svg;

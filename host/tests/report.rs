@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use nalgebra::Vector3;
-use triquint_host::report::{parse_plan, plan_stats, plots};
+use triquint_host::report::{plan_stats, plots};
+use triquint_planner::parse_plan;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{MaxAbs, Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
 use triquint_shared::{Limits, Robot, dynamics};

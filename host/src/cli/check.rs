@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult};
-use crate::planner::verify;
-use crate::report::load_plan;
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -16,7 +15,7 @@ pub struct CheckArgs {
 
 pub fn run(args: &CheckArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let rows = verify::check(&plan).map_err(|e| {
+    let rows = triquint_planner::check(&plan).map_err(|e| {
         CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
     })?;
     println!("{:<42} {:>14} {:>14}  result", "check", "value", "bound");

@@ -59,7 +59,7 @@ pub fn same_robot(robot_file: Option<&std::path::Path>, plan: &std::path::Path) 
         return Ok(());
     };
     let robot = crate::robot_file::load_robot(Some(file))?;
-    let p = crate::report::load_plan(plan)?;
+    let p = load_plan(plan)?;
     if p.robot == robot {
         return Ok(());
     }
@@ -83,4 +83,14 @@ pub fn same_robot(robot_file: Option<&std::path::Path>, plan: &std::path::Path) 
         plan.display(),
         file.display()
     )))
+}
+
+/// Reads a plan file through the planner's one loader; any failure is bad
+/// input (exit 2), with the path in the one-line message.
+pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    triquint_planner::parse_plan(&text).map_err(|e| {
+        CliError::bad_input(format!("{}: not a valid plan: {e}", path.display()))
+    })
 }

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant, SystemTime};
 use clap::Args;
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::Objective;
+use triquint_planner::{Job, Objective, Options, plan};
 use triquint_shared::protocol::config::{DriveSettings, stop_time};
 use triquint_shared::protocol::{DriveConfig, Msg, decode};
 use triquint_shared::{Limits, Robot};
@@ -17,9 +17,6 @@ use triquint_sim::socketcan_port::SocketCanPort;
 use crate::cli::finite;
 use crate::cli::upload::{BusArgs, report, run_plan};
 use crate::exit::{CliError, CliResult};
-use crate::job::{Job, PathSpec, Units};
-use crate::planner::plan;
-use crate::planner::search::SearchOptions;
 use crate::upload::{Session, SessionOptions};
 
 #[derive(Args, Debug)]
@@ -147,19 +144,15 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
         println!("already within 1 µm of the target on every axis");
         return Ok(());
     }
-    let job = Job {
-        objective: Objective::MinTime,
-        robot: robot.clone(),
-        limits,
-        path: PathSpec {
-            units: Units::Metres,
-            points: vec![start.r.into(), target.into()],
-        },
-    };
-    let opts = SearchOptions {
+    let job = Job::builder()
+        .objective(Objective::MinTime)
+        .robot(robot.clone())
+        .limits(limits)
+        .points_m([start.r.into(), target.into()])
+        .build()?;
+    let opts = Options {
         starts: 3,
-        progress: false,
-        ..SearchOptions::default()
+        ..Options::default()
     };
     let p = plan(&job, &opts)?;
     eprintln!(

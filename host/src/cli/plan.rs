@@ -1,12 +1,14 @@
 //! `triquint plan JOB.toml -o PLAN.json [--plot DIR]`: plans a job.
 
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
 
 use crate::exit::{CliError, CliResult, write_atomic};
-use crate::job::Job;
-use crate::planner::{plan, search::SearchOptions};
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
@@ -19,7 +21,7 @@ pub struct PlanArgs {
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
     /// Starting interval sets of the global search.
-    #[arg(long, default_value_t = SearchOptions::default().starts)]
+    #[arg(long, default_value_t = Options::default().starts)]
     pub starts: usize,
     /// Seed of the random starts (same seed, same plan).
     #[arg(long, default_value_t = 1)]
@@ -29,15 +31,63 @@ pub struct PlanArgs {
     pub quiet: bool,
 }
 
+/// The search's progress on stderr, and Ctrl-C as cancellation.
+struct Watcher {
+    bar: ProgressBar,
+    interrupted: Arc<AtomicBool>,
+}
+
+impl Watcher {
+    fn new(show: bool) -> Self {
+        let interrupted = Arc::new(AtomicBool::new(false));
+        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+            // Without the handler Ctrl-C still ends the process, just abruptly.
+            let _ = signal_hook::flag::register(sig, Arc::clone(&interrupted));
+        }
+        let bar = if show {
+            let bar = ProgressBar::new_spinner();
+            if let Ok(style) = ProgressStyle::with_template("{spinner} {elapsed:>4} {msg}") {
+                bar.set_style(style);
+            }
+            bar
+        } else {
+            ProgressBar::hidden()
+        };
+        Self { bar, interrupted }
+    }
+
+    fn progress(&self, p: &Progress) -> Control {
+        let stage = match p.stage {
+            Stage::Searching => "searching",
+            Stage::LimitsBind => "limits bind",
+            Stage::MinTime => "shortest time",
+            _ => "finishing",
+        };
+        let best = p
+            .best_max_jerk
+            .map_or(String::new(), |j| format!(", best max jerk {j:.6} m/s³"));
+        self.bar
+            .set_message(format!("{stage}: {} LP solves{best}", p.lp_solves));
+        self.bar.tick();
+        if self.interrupted.load(Ordering::Relaxed) {
+            Control::Cancel
+        } else {
+            Control::Continue
+        }
+    }
+}
+
 pub fn run(args: &PlanArgs) -> CliResult {
     let job = Job::load(&args.job)?;
-    let opts = SearchOptions {
+    let opts = Options {
         starts: args.starts.max(1),
         seed: args.seed,
-        progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        ..SearchOptions::default()
+        ..Options::default()
     };
-    let plan = plan(&job, &opts)?;
+    let watcher = Watcher::new(!args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()));
+    let result = plan_with(&job, &opts, &mut |p: &Progress| watcher.progress(p));
+    watcher.bar.finish_and_clear();
+    let plan = result?;
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| CliError::bad_input(format!("cannot encode plan: {e}")))?;
     if let Some(dir) = &args.plot {
@@ -67,7 +117,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
 /// Writes the report's SVG plots of a plan into `dir`.
 fn write_plots(plan: &triquint_shared::plan::Plan, dir: &std::path::Path) -> CliResult {
     let bad = |e: crate::report::ReportError| CliError::bad_input(format!("plots: {e}"));
-    let stats = crate::report::plan_stats(plan).map_err(bad)?;
+    let stats = crate::report::plan_stats(plan).map_err(|e| bad(e.into()))?;
     for (name, svg) in crate::report::plots::plots(plan, &stats).map_err(bad)? {
         write_atomic(&dir.join(name), svg.as_bytes())?;
     }

@@ -3,7 +3,8 @@
 use clap::Args;
 
 use crate::exit::{CliError, CliResult, write_atomic};
-use crate::report::{load_plan, plan_stats, plots, tables};
+use crate::cli::load_plan;
+use crate::report::{ReportError, plan_stats, plots, tables};
 
 #[derive(Args, Debug)]
 pub struct ReportArgs {
@@ -19,10 +20,10 @@ pub struct ReportArgs {
 
 pub fn run(args: &ReportArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let bad = |e: crate::report::ReportError| {
+    let bad = |e: ReportError| {
         CliError::bad_input(format!("{}: {e}", args.plan.display()))
     };
-    let stats = plan_stats(&plan).map_err(bad)?;
+    let stats = plan_stats(&plan).map_err(|e| bad(e.into()))?;
     // Plots first, so a failure leaves no half-printed report.
     let mut written = Vec::new();
     if let Some(dir) = &args.plot {

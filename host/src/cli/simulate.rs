@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use triquint_shared::plan::{PLAN_FORMAT, Plan};
+use triquint_shared::plan::Plan;
 use triquint_sim::metrics::plan_position;
 use triquint_sim::plot::{Series, line_chart};
 use triquint_sim::report::{JsonFault, RunJson};
@@ -32,30 +32,6 @@ pub struct SimulateArgs {
     pub plot: Option<PathBuf>,
 }
 
-/// Reads and checks a plan file (exit 2 when it is not one).
-pub fn read_plan(path: &Path) -> CliResult<Plan> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
-    let plan: Plan = serde_json::from_str(&text)
-        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
-    if plan.format != PLAN_FORMAT {
-        return Err(CliError::bad_input(format!(
-            "{}: format `{}`, expected `{PLAN_FORMAT}`",
-            path.display(),
-            plan.format
-        )));
-    }
-    if plan.segments.is_empty() {
-        return Err(CliError::bad_input(format!(
-            "{}: no segments",
-            path.display()
-        )));
-    }
-    plan.robot.validate().map_err(CliError::bad_input)?;
-    plan.limits.validate().map_err(CliError::bad_input)?;
-    Ok(plan)
-}
-
 fn to_cli(e: SimulateError) -> CliError {
     match e {
         SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
@@ -75,7 +51,7 @@ pub fn run(args: &SimulateArgs) -> CliResult {
             args.rate
         )));
     }
-    let plan = read_plan(&args.plan)?;
+    let plan = crate::cli::load_plan(&args.plan)?;
     let opts = SimulateOptions {
         fd: args.fd,
         feedforward: !args.no_feedforward,

@@ -13,7 +13,7 @@ use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, State};
 
-use crate::cli::simulate::read_plan;
+use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult};
 use crate::upload::sim_port::configs_for;
 use crate::upload::socket_port::open_host;
@@ -232,7 +232,7 @@ pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
 }
 
 pub fn run(args: &UploadArgs) -> CliResult {
-    let plan = read_plan(&args.plan)?;
+    let plan = load_plan(&args.plan)?;
     let summary = run_plan(&plan, &args.bus)?;
     report(&summary, &args.bus, args.json)
 }

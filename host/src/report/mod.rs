@@ -1,20 +1,21 @@
-//! Plan reports: the paper's tables and figures, as text and SVG.
+//! Plan reports: the paper's tables and figures, as text and SVG. The
+//! statistics they show come from the planner library.
 //!
-//! - [`extrema`]: exact maxima and absolute integrals of polynomials (reused by the planner).
-//! - [`load`]: reading and validating a plan file.
-//! - [`stats`]: per-joint max and mean |v|, |a|, |jerk|, |τ| and per-segment maxima.
 //! - [`tables`]: the statistics as aligned text tables (paper Tables 4/5/7/8).
 //! - [`plots`]: SVG profiles against time and the platform path (paper Figures 10/12).
 
-pub mod extrema;
-pub mod load;
 pub mod plots;
-pub mod stats;
 pub mod tables;
 
-pub use extrema::{argmax_abs_on_interval, integral_abs_on_interval, max_abs_on_interval};
-pub use load::{load_plan, parse_plan};
-pub use stats::{PlanStats, Quantity, SegmentStats, plan_stats};
+/// The polynomial helpers of the planner, as the plots use them.
+pub(crate) use triquint_planner::poly as extrema;
+
+/// The planner's plan statistics, as the tables and plots use them.
+pub(crate) mod stats {
+    pub use triquint_planner::{PlanStats, Quantity, segment_torque};
+}
+
+pub use triquint_planner::{PlanStats, plan_stats};
 
 /// Why a report cannot be made from a plan.
 #[derive(Debug, thiserror::Error)]
@@ -29,4 +30,14 @@ pub enum ReportError {
         time_s: f64,
         source: triquint_shared::KinematicsError,
     },
+}
+
+impl From<triquint_planner::StatsError> for ReportError {
+    fn from(e: triquint_planner::StatsError) -> Self {
+        ReportError::Kinematics {
+            segment: e.segment,
+            time_s: e.time_s,
+            source: e.source,
+        }
+    }
 }

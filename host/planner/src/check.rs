@@ -1,18 +1,18 @@
-//! Independent verification of a plan file: interpolation, C3 continuity,
-//! rest at both ends, and every limit in continuous time (velocity,
-//! acceleration and jerk exactly, from the roots of their derivatives;
-//! torque on a fine grid).
+//! Independent verification of a plan: interpolation, C3 continuity, rest
+//! at both ends, and every limit in continuous time — velocity,
+//! acceleration and jerk exactly, by Sturm sequences ([`crate::sturm`], a
+//! method the search does not use); torque on a fine grid.
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::Vector3;
 use triquint_shared::dynamics;
-use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MaxAbs, PLAN_FORMAT, Plan};
+use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::quintic::eval_poly;
 
-use crate::report::extrema::{derivative, max_abs_on_interval};
+use crate::load::{LoadError, validate_plan};
+use crate::sturm;
 
 /// Torque samples per segment in checks and in the reported maxima.
 pub const TORQUE_CHECK_SAMPLES: usize = 400;
@@ -23,7 +23,7 @@ pub const LIMIT_TOL: f64 = 1e-9;
 pub const TORQUE_TOL: f64 = 1e-3;
 
 /// One line of a check: what, the measured value, the bound, and whether it holds.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CheckRow {
     pub what: String,
     pub value: f64,
@@ -37,13 +37,13 @@ pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
     let model = plan.robot.model::<f64>();
     for (k, seg) in plan.segments.iter().enumerate() {
         for j in 0..3 {
-            let vel = derivative(&seg.coeffs[j]);
-            let acc = derivative(&vel);
-            let jerk = derivative(&acc);
+            let vel = crate::extrema::derivative(&seg.coeffs[j]);
+            let acc = crate::extrema::derivative(&vel);
+            let jerk = crate::extrema::derivative(&acc);
             let h = seg.duration_s;
-            m.velocity[j] = m.velocity[j].max(max_abs_on_interval(&vel, 0.0, h));
-            m.acceleration[j] = m.acceleration[j].max(max_abs_on_interval(&acc, 0.0, h));
-            m.jerk[j] = m.jerk[j].max(max_abs_on_interval(&jerk, 0.0, h));
+            m.velocity[j] = m.velocity[j].max(sturm::max_abs(&vel, 0.0, h).1);
+            m.acceleration[j] = m.acceleration[j].max(sturm::max_abs(&acc, 0.0, h).1);
+            m.jerk[j] = m.jerk[j].max(sturm::max_abs(&jerk, 0.0, h).1);
         }
         for i in 0..=torque_samples {
             let t = seg.duration_s * i as f64 / torque_samples as f64;
@@ -59,33 +59,20 @@ pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
     Ok(m)
 }
 
-/// Checks a plan. Err: the file is not a usable plan (exit 2); Ok rows: each
-/// check with its figure (exit 1 if any fails).
-pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
-    if plan.format != PLAN_FORMAT {
-        return Err(format!(
-            "format is `{}`, expected `{PLAN_FORMAT}`",
-            plan.format
-        ));
-    }
-    plan.robot.validate().map_err(|e| format!("robot: {e}"))?;
-    plan.limits.validate().map_err(|e| format!("limits: {e}"))?;
-    let n = plan.knots_m.len();
-    if n < 2 || plan.segments.len() != n - 1 || plan.intervals_s.len() != n - 1 {
-        return Err(format!(
-            "{} knots need {} segments and intervals, found {} and {}",
-            n,
-            n.saturating_sub(1),
-            plan.segments.len(),
-            plan.intervals_s.len()
-        ));
-    }
-    let all_finite = plan.segments.iter().all(|s| {
-        s.t0_s.is_finite() && s.duration_s > 0.0 && s.coeffs.iter().flatten().all(|c| c.is_finite())
-    });
-    if !all_finite {
-        return Err("a segment has a non-finite coefficient or a non-positive duration".into());
-    }
+/// Checks a plan: Err when it is not a usable plan ([`validate_plan`]);
+/// else every check with its figure (any row not `ok` is a violation).
+///
+/// ```
+/// use triquint_planner::{Job, Options, check, plan};
+/// let job = Job::builder().points_mm([[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]]).build()?;
+/// let mut p = plan(&job, &Options::default())?;
+/// assert!(check(&p)?.iter().all(|r| r.ok));
+/// p.limits.jerk /= 10.0;
+/// assert!(check(&p)?.iter().any(|r| !r.ok && r.what.starts_with("max |jerk")));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
+    validate_plan(plan)?;
     let mut rows = Vec::new();
     let mut row = |what: &str, value: f64, bound: f64| {
         rows.push(CheckRow {
@@ -116,7 +103,6 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
     );
 
     // Interpolation of the knots, and via-points among the knots (in order).
-    let model = plan.robot.model::<f64>();
     let mut interp: f64 = 0.0;
     for (k, seg) in plan.segments.iter().enumerate() {
         for j in 0..3 {
@@ -128,24 +114,6 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
         }
     }
     row("knot interpolation error (m)", interp, CONTINUITY_TOL);
-    let mut via_err: f64 = 0.0;
-    let mut next = 0;
-    for (i, p) in plan.via_points_m.iter().enumerate() {
-        let q = Pose::from_cartesian(&model, Vector3::from(*p))
-            .map_err(|e| format!("via point {}: {e}", i + 1))?
-            .q;
-        let dist = |k: usize| {
-            (0..3)
-                .map(|j| (plan.knots_m[k][j] - q[j]).abs())
-                .fold(0.0, f64::max)
-        };
-        match (next..n).find(|&k| dist(k) <= 1e-9) {
-            Some(k) => next = k + 1,
-            None => via_err = f64::INFINITY,
-        }
-    }
-    row("via-points are knots, in order (m)", via_err, 1e-9);
-
     // C3 at interior knots and rest (v = a = jerk = 0) at both ends.
     let mut c3: f64 = 0.0;
     for k in 1..plan.segments.len() {
@@ -170,7 +138,7 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, String> {
     }
     row("end velocity/acceleration/jerk", rest, CONTINUITY_TOL);
 
-    let m = max_abs(plan, TORQUE_CHECK_SAMPLES.max(200))?;
+    let m = max_abs(plan, TORQUE_CHECK_SAMPLES).map_err(LoadError::Invalid)?;
     let l = &plan.limits;
     for (name, vals, lim, tol) in [
         ("velocity (m/s)", m.velocity, l.velocity, LIMIT_TOL),

@@ -21,13 +21,6 @@ pub struct Lp {
     pub refine: bool,
 }
 
-/// Primal and dual solution; `z` is ordered as the rows: equalities,
-/// inequalities, cones.
-#[derive(Debug, Clone)]
-pub struct LpSolution {
-    pub x: Vec<f64>,
-    pub z: Vec<f64>,
-}
 
 #[derive(Debug, Default)]
 struct Rows {
@@ -51,9 +44,12 @@ impl Rows {
     }
 }
 
-/// The LP has no solution (or the solver gave up).
+/// The LP has no solution, the solver gave up, or the search was cancelled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LpFailure(pub SolverStatus);
+pub enum LpFailure {
+    Status(SolverStatus),
+    Cancelled,
+}
 
 impl Lp {
     pub fn new(vars: usize) -> Self {
@@ -112,11 +108,6 @@ impl Lp {
 
     /// Solves; returns the primal solution.
     pub fn solve(&self) -> Result<Vec<f64>, LpFailure> {
-        self.solve_full().map(|s| s.x)
-    }
-
-    /// Solves; returns primal and dual solutions.
-    pub fn solve_full(&self) -> Result<LpSolution, LpFailure> {
         let neq = self.eq.rhs.len();
         let nineq = self.ineq.rhs.len();
         let m = self.rows();
@@ -141,9 +132,9 @@ impl Lp {
             .max_iter(200)
             .iterative_refinement_enable(self.refine)
             .build()
-            .map_err(|_| LpFailure(SolverStatus::NumericalError))?;
+            .map_err(|_| LpFailure::Status(SolverStatus::NumericalError))?;
         let mut solver = DefaultSolver::new(&p, &self.cost, &a, &b, &cones, settings)
-            .map_err(|_| LpFailure(SolverStatus::NumericalError))?;
+            .map_err(|_| LpFailure::Status(SolverStatus::NumericalError))?;
         solver.solve();
         if std::env::var_os("TRIQUINT_LP_DEBUG").is_some() {
             eprintln!(
@@ -156,11 +147,8 @@ impl Lp {
             );
         }
         match solver.solution.status {
-            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(LpSolution {
-                x: solver.solution.x.clone(),
-                z: solver.solution.z.clone(),
-            }),
-            other => Err(LpFailure(other)),
+            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver.solution.x.clone()),
+            other => Err(LpFailure::Status(other)),
         }
     }
 }

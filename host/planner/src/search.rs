@@ -8,40 +8,13 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use indicatif::{ProgressBar, ProgressStyle};
-
-use super::local::{Problem, Quantity, Solution};
-
-/// How hard to search.
-#[derive(Clone, Debug)]
-pub struct SearchOptions {
-    /// Starting interval sets (the first three are deterministic shapes, the rest seeded random).
-    pub starts: usize,
-    /// Seed of the random starts: the same seed always gives the same plan.
-    pub seed: u64,
-    /// Worker threads (results do not depend on it).
-    pub threads: usize,
-    /// Show a progress bar on stderr.
-    pub progress: bool,
-}
-
-impl Default for SearchOptions {
-    fn default() -> Self {
-        Self {
-            starts: 8,
-            seed: 1,
-            threads: std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
-            progress: false,
-        }
-    }
-}
+use crate::local::{Problem, Solution};
+use crate::options::{Options, Stage};
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
 pub struct SearchResult {
     pub best: Solution,
-    /// Merit reached from every start after refinement of the best few (coarse for the rest).
-    pub merits: Vec<f64>,
     pub starts: usize,
     pub lp_solves: u64,
 }
@@ -93,20 +66,6 @@ pub fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
     out
 }
 
-fn bar(len: usize, show: bool, what: &str) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new(len as u64);
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg:>14} [{bar:30}] {pos}/{len} starts, best {prefix}")
-    {
-        pb.set_style(style.progress_chars("=> "));
-    }
-    pb.set_message(what.to_string());
-    pb
-}
-
 /// Runs `f` on every item with `threads` workers; results keep the items' order.
 pub(crate) fn parallel<T: Sync, R: Send>(
     items: &[T],
@@ -145,9 +104,9 @@ const REFINE: usize = 3;
 /// Its global optimum bounds the problem's from below, so when it meets
 /// every other limit it is the answer; otherwise the full problem is
 /// searched, from the relaxation's optimum and the same starts.
-pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
+pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     let starts = start_points(p, opts.starts, opts.seed);
-    let relaxed = multistart(&p.relaxed(), &starts, opts, "searching");
+    let relaxed = multistart(&p.relaxed(), &starts, opts);
     let mut starts = starts;
     let mut lp_solves = 0;
     if let Some(r) = relaxed {
@@ -157,7 +116,10 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
         lp_solves = r.lp_solves;
         starts.insert(0, r.best.h);
     }
-    let mut r = multistart(p, &starts, opts, "limits bind")?;
+    if p.watch.progress().stage == Stage::Searching {
+        p.watch.set_stage(Stage::LimitsBind);
+    }
+    let mut r = multistart(p, &starts, opts)?;
     r.lp_solves += lp_solves;
     Some(r)
 }
@@ -165,19 +127,14 @@ pub fn global(p: &Problem, opts: &SearchOptions) -> Option<SearchResult> {
 fn multistart(
     p: &Problem,
     starts: &[Vec<f64>],
-    opts: &SearchOptions,
-    what: &str,
+    opts: &Options,
 ) -> Option<SearchResult> {
-    let pb = bar(starts.len() + REFINE, opts.progress, what);
-    let best_so_far = Mutex::new(f64::INFINITY);
     let coarse: Vec<Option<Solution>> = parallel(starts, opts.threads, |h| {
         let first = p.inner(h, &p.zero_x())?;
         let sol = p.local_search(&first, 60, 1e-5);
-        if let Ok(mut b) = best_so_far.lock() {
-            *b = b.min(sol.merit(p.weight));
-            pb.set_prefix(format!("{:.6}", *b));
+        if sol.violation == 0.0 {
+            p.watch.offer_jerk(sol.jerk);
         }
-        pb.inc(1);
         Some(sol)
     });
     let mut lp_solves: u64 = coarse.iter().flatten().map(|s| s.lp_solves).sum();
@@ -195,29 +152,20 @@ fn multistart(
     });
     let chosen: Vec<usize> = order.iter().copied().take(REFINE).collect();
     let refined: Vec<Solution> = parallel(&chosen, opts.threads, |&i| {
-        let sol = coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10));
-        pb.inc(1);
-        sol
+        coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10))
     })
     .into_iter()
     .flatten()
     .collect();
-    pb.finish_and_clear();
-    let mut merits: Vec<f64> = coarse
-        .iter()
-        .map(|s| s.as_ref().map_or(f64::INFINITY, merit))
-        .collect();
     let mut best: Option<Solution> = None;
     for (sol, &i) in refined.iter().zip(&chosen) {
         lp_solves += sol.lp_solves - coarse[i].as_ref().map_or(0, |s| s.lp_solves);
-        merits[i] = merit(sol);
         if best.as_ref().is_none_or(|b| merit(sol) < merit(b)) {
             best = Some(sol.clone());
         }
     }
     Some(SearchResult {
         best: best?,
-        merits,
         starts: starts.len(),
         lp_solves,
     })
@@ -255,8 +203,8 @@ pub fn feasible(p: &Problem, s: &Solution) -> bool {
 /// Why min-time found no plan: the binding limit and the shortest time tried.
 #[derive(Debug, Clone)]
 pub struct MinTimeFailure {
-    pub binding: Quantity,
-    pub tried_up_to: f64,
+    /// The best plan at the longest time tried, when the search got one.
+    pub best: Option<Solution>,
 }
 
 /// Shortest total time T ≤ `upper` with a plan meeting every limit, and the
@@ -266,7 +214,7 @@ pub struct MinTimeFailure {
 pub fn min_time(
     template: &Problem,
     upper: f64,
-    opts: &SearchOptions,
+    opts: &Options,
 ) -> Result<(Solution, SearchResult), MinTimeFailure> {
     let at = |t: f64| {
         let mut p = template.clone();
@@ -277,6 +225,7 @@ pub fn min_time(
     // the upper bound itself is infeasible), scaled to the jerk limit.
     let mut t_probe = upper;
     let mut probe = None;
+    let mut last = None;
     for _ in 0..8 {
         let p = at(t_probe);
         if let Some(r) = global(&p, opts) {
@@ -284,12 +233,15 @@ pub fn min_time(
                 probe = Some(r);
                 break;
             }
+            last = Some(r.best);
+        }
+        if p.watch.cancelled().is_some() {
+            break;
         }
         t_probe *= 2.0;
     }
-    let probe = probe.ok_or(MinTimeFailure {
-        binding: Quantity::Torque,
-        tried_up_to: t_probe,
+    let probe = probe.ok_or_else(|| MinTimeFailure {
+        best: last,
     })?;
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();
@@ -327,8 +279,7 @@ pub fn min_time(
     }
     let Some(mut best) = best else {
         return Err(MinTimeFailure {
-            binding: probe.best.binding,
-            tried_up_to: hi,
+            best: Some(probe.best.clone()),
         });
     };
     while hi > lo && hi - lo > 1e-5 * hi {
@@ -347,10 +298,17 @@ pub fn min_time(
 
 /// A solution's shape time-scaled to total time `t` (velocities ÷ α,
 /// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
-fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     let alpha = t / s.h.iter().sum::<f64>();
     let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-    let x = s.x.clone().map(|v| {
+    let mut p = p.clone();
+    p.total_time = t;
+    p.inner_via_relaxation(&h, &scaled_x(&s.x, alpha))
+}
+
+/// Knot derivatives of a shape time-scaled by α: velocities ÷ α, accelerations ÷ α².
+pub(crate) fn scaled_x(x: &[Vec<f64>; 3], alpha: f64) -> [Vec<f64>; 3] {
+    x.clone().map(|v| {
         let n = v.len() / 2;
         v.iter()
             .enumerate()
@@ -362,10 +320,7 @@ fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
                 }
             })
             .collect()
-    });
-    let mut p = p.clone();
-    p.total_time = t;
-    p.inner_via_relaxation(&h, &x)
+    })
 }
 
 /// A solution's shape time-scaled to total time `t`, re-solved and locally

@@ -56,9 +56,6 @@ impl Knots {
     pub fn len(&self) -> usize {
         self.q.len()
     }
-    pub fn is_empty(&self) -> bool {
-        self.q.is_empty()
-    }
     pub fn segments(&self) -> usize {
         self.q.len() - 1
     }
@@ -78,32 +75,40 @@ impl Knots {
         }
     }
 
+    /// Hermite datum `m` of segment `k` of joint `j`. Positions enter as
+    /// the start and the change over the segment (H₀ = 1 − H₃), not as two
+    /// absolute positions: their difference is small, and on short segments
+    /// the absolute terms q/h³ would swamp the jerk in rounding error.
+    fn datum(&self, x: &[f64], j: usize, k: usize, m: usize) -> f64 {
+        match m {
+            0 => self.q[k][j],
+            3 => self.q[k + 1][j] - self.q[k][j],
+            _ => self.var(k + m / 3, m % 3).map_or(0.0, |v| x[v]),
+        }
+    }
+
     /// Derivative of order `r` of joint `j` at normalised time `u` of segment `k`.
     pub fn functional(&self, x: &[f64], j: usize, k: usize, u: f64, r: usize, h: f64) -> Affine {
         let mut out = Affine::default();
         for (m, basis) in BASIS.iter().enumerate() {
-            let b = eval_poly(basis, u);
-            let br = if r < 4 {
-                b[r]
+            // Start position: H₀ + H₃ = 1, so only its value (r = 0) remains.
+            let b = if m == 0 {
+                if r == 0 { 1.0 } else { 0.0 }
             } else {
-                quartic_plus(basis, u, r)
+                let b = eval_poly(basis, u);
+                if r < 4 { b[r] } else { quartic_plus(basis, u, r) }
             };
-            if br == 0.0 {
+            if b == 0.0 {
                 continue;
             }
             let e = EXP[m] - r as i32;
-            let mult = br * h.powi(e);
-            let dmult = e as f64 * br * h.powi(e - 1);
-            let node = k + m / 3;
-            let kind = m % 3;
-            let datum = match kind {
-                0 => self.q[node][j],
-                _ => self.var(node, kind).map_or(0.0, |v| x[v]),
-            };
+            let mult = b * h.powi(e);
+            let dmult = e as f64 * b * h.powi(e - 1);
+            let datum = self.datum(x, j, k, m);
             out.value += mult * datum;
             out.dh += dmult * datum;
-            if kind > 0
-                && let Some(v) = self.var(node, kind)
+            if m % 3 > 0
+                && let Some(v) = self.var(k + m / 3, m % 3)
             {
                 out.dx[out.ndx] = (v, mult);
                 out.ndx += 1;
@@ -115,13 +120,9 @@ impl Knots {
     /// Power coefficients in segment-local time t of joint j on segment k.
     pub fn coefficients(&self, x: &[f64], j: usize, k: usize, h: f64) -> [f64; 6] {
         let mut c = [0.0; 6];
-        for (m, basis) in BASIS.iter().enumerate() {
-            let node = k + m / 3;
-            let kind = m % 3;
-            let datum = match kind {
-                0 => self.q[node][j],
-                _ => self.var(node, kind).map_or(0.0, |v| x[v]),
-            } * h.powi(EXP[m]);
+        c[0] = self.q[k][j];
+        for (m, basis) in BASIS.iter().enumerate().skip(1) {
+            let datum = self.datum(x, j, k, m) * h.powi(EXP[m]);
             for (ci, bi) in c.iter_mut().zip(basis) {
                 *ci += datum * bi;
             }

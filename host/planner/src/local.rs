@@ -23,9 +23,12 @@ use triquint_shared::kinematics::Pose;
 use triquint_shared::quintic::eval_poly;
 use triquint_shared::{Limits, Model, dynamics};
 
-use super::lp::Lp;
-use super::spline::{Affine, Knots};
-use crate::report::extrema::{argmax_abs_on_interval, derivative, eval, roots_in};
+use std::sync::Arc;
+
+use crate::extrema::{argmax_abs_on_interval, derivative, eval, roots_in};
+use crate::lp::{Lp, LpFailure};
+use crate::spline::{Affine, Knots};
+use crate::watch::Watch;
 
 /// Which limited quantity a constraint or a violation concerns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -34,17 +37,6 @@ pub enum Quantity {
     Acceleration,
     Jerk,
     Torque,
-}
-
-impl Quantity {
-    pub fn name(self) -> &'static str {
-        match self {
-            Quantity::Velocity => "velocity",
-            Quantity::Acceleration => "acceleration",
-            Quantity::Jerk => "jerk",
-            Quantity::Torque => "torque",
-        }
-    }
 }
 
 /// Torque samples per segment while searching (the final solve uses more).
@@ -70,6 +62,10 @@ pub struct Problem {
     pub model: Model<f64>,
     pub total_time: f64,
     pub h_min: f64,
+    /// Longest interval (the wire's segment limit).
+    pub h_max: f64,
+    /// Cancellation and progress, shared by every copy of the problem.
+    pub(crate) watch: Arc<Watch>,
     /// Price of one unit of relative limit violation, in m/s³.
     pub weight: f64,
     /// Torque samples per segment where local maxima get constraints.
@@ -168,7 +164,15 @@ impl Problem {
         self.knots.segments()
     }
 
-    fn limit(&self, q: Quantity) -> f64 {
+    /// Solves one of this problem's programs, unless the search is cancelled.
+    fn solve(&self, lp: &Lp) -> Result<Vec<f64>, LpFailure> {
+        if !self.watch.proceed() {
+            return Err(LpFailure::Cancelled);
+        }
+        lp.solve()
+    }
+
+    pub(crate) fn limit(&self, q: Quantity) -> f64 {
         match q {
             Quantity::Velocity => self.limits.velocity,
             Quantity::Acceleration => self.limits.acceleration,
@@ -384,7 +388,7 @@ impl Problem {
             let all: Vec<(usize, f64)> = (0..nseg).map(|k| (dh0 + k, 1.0)).collect();
             lp.at_most(&all, slack.max(0.0));
             for (k, &hk) in h.iter().enumerate() {
-                lp.at_most(&[(dh0 + k, 1.0)], delta * hk);
+                lp.at_most(&[(dh0 + k, 1.0)], (delta * hk).min(self.h_max - hk).max(0.0));
                 lp.at_most(
                     &[(dh0 + k, -1.0)],
                     (delta * hk).min(hk - self.h_min).max(0.0),
@@ -431,9 +435,10 @@ impl Problem {
     fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
         let nv = self.nv();
         let conds = self.jerk_conditions();
-        for (j, xj) in x.iter_mut().enumerate() {
-            let mut e = DMatrix::<f64>::zeros(conds.len(), nv);
+        // Jerk conditions of joint j at xj: residuals and (x-independent) rows.
+        let residual = |j: usize, xj: &[f64], e: Option<&mut DMatrix<f64>>| {
             let mut r = DVector::<f64>::zeros(conds.len());
+            let mut e = e;
             for (row, (a, b)) in conds.iter().enumerate() {
                 for (scale, (k, u)) in [(1.0, *a), (-1.0, b.unwrap_or((0, f64::NAN)))] {
                     if u.is_nan() {
@@ -441,16 +446,37 @@ impl Problem {
                     }
                     let f = self.knots.functional(xj, j, k, u, 3, h[k]);
                     r[row] += scale * f.value;
-                    for &(v, c) in f.dx() {
-                        e[(row, v)] += scale * c;
+                    if let Some(e) = e.as_deref_mut() {
+                        for &(v, c) in f.dx() {
+                            e[(row, v)] += scale * c;
+                        }
                     }
                 }
             }
-            let gram = &e * e.transpose();
-            if let Some(chol) = gram.cholesky() {
-                let corr = e.transpose() * chol.solve(&r);
+            r
+        };
+        for (j, xj) in x.iter_mut().enumerate() {
+            let mut e = DMatrix::<f64>::zeros(conds.len(), nv);
+            let mut r = residual(j, xj, Some(&mut e));
+            // Least change: Δ = Eᵀ(EEᵀ)⁻¹r, through the QR factors of Eᵀ
+            // (the normal equations would square E's condition number).
+            let qr = e.transpose().qr();
+            let (q, rt) = (qr.q(), qr.r().transpose());
+            for _ in 0..3 {
+                let Some(y) = rt.solve_lower_triangular(&r) else {
+                    break;
+                };
+                let corr = &q * y;
                 for (v, dv) in xj.iter_mut().zip(corr.iter()) {
                     *v -= dv;
+                }
+                let before = r.amax();
+                r = residual(j, xj, None);
+                if std::env::var_os("TRIQUINT_DEBUG").is_some() {
+                    eprintln!("project j{j}: {before:e} -> {:e}", r.amax());
+                }
+                if r.amax() >= 0.5 * before {
+                    break;
                 }
             }
         }
@@ -475,7 +501,7 @@ impl Problem {
         for _ in 0..max_rounds {
             let mut lp = self.build(h, &x, &cuts, None);
             lp.tolerance = INNER_TOL;
-            let sol = lp.solve().ok()?;
+            let sol = self.solve(&lp).ok()?;
             solves += 1;
             let s_lp = sol[3 * self.nv()];
             let sigma_lp = sol[3 * self.nv() + 1];
@@ -557,7 +583,7 @@ impl Problem {
             lp.tolerance = 1e-8;
             lp.refine = false;
             solves += 1;
-            let Ok(sol) = lp.solve() else {
+            let Ok(sol) = self.solve(&lp) else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -679,6 +705,8 @@ impl Problem {
 pub fn problem(knots: Knots, limits: &Limits, model: Model<f64>, total_time: f64) -> Problem {
     Problem {
         h_min: 1e-3,
+        h_max: f64::INFINITY,
+        watch: Arc::new(Watch::new(None)),
         torque_samples: TORQUE_SAMPLES,
         jerk_only: false,
         weight: 1e3 * limits.jerk.max(1.0),

@@ -13,11 +13,19 @@ use triquint_shared::Model;
 use triquint_shared::dynamics;
 use triquint_shared::plan::{Plan, Segment};
 
-use super::ReportError;
-use super::extrema::{argmax_abs_on_interval, derivative, integral_abs_on_interval};
+use crate::extrema::{argmax_abs_on_interval, derivative, integral_abs_on_interval};
 
 /// Torque grid intervals per segment (even, for Simpson's rule; ≥ 200).
 pub const TORQUE_INTERVALS: usize = 256;
+
+/// The dynamics (forward kinematics) failed along the trajectory.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("segment {segment} at t = {time_s:.6} s: {source}")]
+pub struct StatsError {
+    pub segment: usize,
+    pub time_s: f64,
+    pub source: triquint_shared::KinematicsError,
+}
 
 /// Max and time-averaged absolute value of one quantity, per joint.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -66,9 +74,9 @@ pub fn segment_torque(
     seg: &Segment,
     index: usize,
     t: f64,
-) -> Result<Vector3<f64>, ReportError> {
+) -> Result<Vector3<f64>, StatsError> {
     let m = seg.quintic().eval(t);
-    dynamics::torque(model, &m.q, &m.qd, &m.qdd).map_err(|source| ReportError::Kinematics {
+    dynamics::torque(model, &m.q, &m.qd, &m.qdd).map_err(|source| StatsError {
         segment: index + 1,
         time_s: seg.t0_s + t,
         source,
@@ -84,7 +92,7 @@ fn fold_max(q: &mut Quantity, j: usize, t_abs: f64, value: f64) {
 }
 
 /// Statistics of a (validated) plan.
-pub fn plan_stats(plan: &Plan) -> Result<PlanStats, ReportError> {
+pub fn plan_stats(plan: &Plan) -> Result<PlanStats, StatsError> {
     let model = plan.robot.model::<f64>();
     let mut out = PlanStats {
         total_time_s: plan.segments.iter().map(|s| s.duration_s).sum(),
@@ -164,7 +172,7 @@ fn segment_torque_stats(
     model: &Model<f64>,
     seg: &Segment,
     index: usize,
-) -> Result<TorqueSegment, ReportError> {
+) -> Result<TorqueSegment, StatsError> {
     let n = TORQUE_INTERVALS;
     let h = seg.duration_s;
     let dt = h / n as f64;

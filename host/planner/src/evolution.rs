@@ -5,8 +5,15 @@
 //! that solve. Generations are synchronous (trials built from one population,
 //! then selected), so the result does not depend on the thread count.
 
-use super::local::Problem;
-use super::search::{SplitMix, parallel};
+use std::sync::Arc;
+
+use crate::error::PlanError;
+use crate::job::Job;
+use crate::local::Problem;
+use crate::options::Options;
+use crate::planning::job_problem;
+use crate::search::{SplitMix, global, parallel};
+use crate::watch::Watch;
 
 /// Size and seed of a run.
 #[derive(Clone, Debug)]
@@ -29,8 +36,44 @@ pub struct Evolution {
     pub evaluations: usize,
 }
 
+/// Differential evolution against the planner's global search on one job,
+/// both at the job's total time, before rounding to whole microseconds.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    pub evolution: Evolution,
+    /// The search's optimum (merit, as [`Evolution::best`]).
+    pub search_best: f64,
+}
+
+/// Runs the planner's search and DE (with `population_per_segment` ×
+/// segments candidates) on a job; `report(generation, best)` after each
+/// generation.
+pub fn compare(
+    job: &Job,
+    generations: usize,
+    population_per_segment: usize,
+    opts: &Options,
+    report: &dyn Fn(usize, f64),
+) -> Result<Comparison, PlanError> {
+    let p = job_problem(job, &Arc::new(Watch::new(opts.time_budget)))?;
+    let search = global(&p, opts)
+        .ok_or_else(|| PlanError::Solver("the search found no solution".into()))?;
+    let o = EvolutionOptions {
+        population: population_per_segment * p.knots.segments(),
+        generations,
+        f: 0.6,
+        cr: 0.9,
+        seed: 2026,
+        threads: opts.threads,
+    };
+    Ok(Comparison {
+        evolution: differential_evolution(&p, &o, report),
+        search_best: search.best.merit(p.weight),
+    })
+}
+
 /// Runs DE on `p`; `report(generation, best)` is called after each generation.
-pub fn differential_evolution(
+pub(crate) fn differential_evolution(
     p: &Problem,
     o: &EvolutionOptions,
     report: &dyn Fn(usize, f64),

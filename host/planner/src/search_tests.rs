@@ -1,30 +1,33 @@
-//! Planner tests: the paper's cases beat the paper, the optimum is a true
+//! Search tests: the paper's cases beat the paper, the optimum is a true
 //! (local and multistart-global) optimum, plans pass the independent check,
-//! torque limits bind for real, and bad or infeasible jobs get their exit status.
+//! and torque limits bind for real.
 
 use std::path::Path;
-use std::process::Command;
+use std::sync::Arc;
 
-use triquint_host::job::Job;
-use triquint_host::planner::evolution::{EvolutionOptions, differential_evolution};
-use triquint_host::planner::local::Solution;
-use triquint_host::planner::search::{SearchOptions, global, start_points};
-use triquint_host::planner::{job_problem, plan, verify};
-use triquint_shared::plan::Plan;
+use crate::evolution::{EvolutionOptions, differential_evolution};
+use crate::local::{Problem, Solution};
+use crate::search::{global, start_points};
+use crate::watch::Watch;
+use crate::{Job, Options, Plan, check, plan};
+
+fn job_problem(job: &Job) -> Result<Problem, crate::PlanError> {
+    crate::planning::job_problem(job, &Arc::new(Watch::new(None)))
+}
 
 fn example(name: &str) -> Job {
     Job::load(
         &Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../examples")
+            .join("../../examples")
             .join(name),
     )
     .unwrap()
 }
 
-fn opts(starts: usize) -> SearchOptions {
-    SearchOptions {
+fn opts(starts: usize) -> Options {
+    Options {
         starts,
-        ..SearchOptions::default()
+        ..Options::default()
     }
 }
 
@@ -33,7 +36,7 @@ fn max_jerk(p: &Plan) -> f64 {
 }
 
 fn assert_checks(p: &Plan) {
-    let rows = verify::check(p).unwrap();
+    let rows = check(p).unwrap();
     for r in &rows {
         assert!(r.ok, "{}: {} > {}", r.what, r.value, r.bound);
     }
@@ -156,85 +159,33 @@ fn seeded_starts_agree_on_the_optimum() {
 /// limit, a plan comes back, passes check, and its peak sits at the limit.
 #[test]
 fn torque_limit_binds() {
-    let mut job = example("paper-case2.toml");
+    let job = example("paper-case2.toml");
     let free = plan(&job, &opts(2)).unwrap();
     let peak = free.max_abs.torque.iter().fold(0.0, |a: f64, b| a.max(*b));
-    job.limits.torque = 0.95 * peak;
+    let mut limits = job.limits().clone();
+    limits.torque = 0.95 * peak;
+    let job = job.to_builder().limits(limits).build().unwrap();
     let tight = plan(&job, &opts(2)).unwrap();
     assert_checks(&tight);
     let got = tight.max_abs.torque.iter().fold(0.0, |a: f64, b| a.max(*b));
-    eprintln!("peak torque {got} at limit {}", job.limits.torque);
+    eprintln!("peak torque {got} at limit {}", job.limits().torque);
     assert!(
-        got <= job.limits.torque * 1.001 && got >= 0.99 * job.limits.torque,
+        got <= job.limits().torque * 1.001 && got >= 0.99 * job.limits().torque,
         "{got}"
     );
 }
 
-fn triquint(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-#[test]
-fn cli_exit_statuses() {
-    let dir = std::env::temp_dir().join(format!("triquint-planner-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let write = |name: &str, text: &str| {
-        let p = dir.join(name);
-        std::fs::write(&p, text).unwrap();
-        p.to_string_lossy().into_owned()
-    };
-    let short = write(
-        "short.toml",
-        "[limits]\ntotal_time = 0.3\n[path]\nunits = \"mm\"\npoints = [[-90, 90, 680], [-90, 90, 660], [-90, 90, 640], [-60, 60, 620], [-20, 20, 620]]\n",
-    );
-    let out = dir.join("out.json");
-    let outs = out.to_string_lossy().into_owned();
-    let (code, err) = triquint(&["plan", &short, "-o", &outs, "--quiet", "--starts", "2"]);
-    assert_eq!(code, 3, "{err}");
-    assert!(err.contains("shortest total time"), "{err}");
-    assert!(!out.exists(), "a failing plan left an output file");
-    let far = write(
-        "far.toml",
-        "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [500, 0, 600]]\n",
-    );
-    let (code, err) = triquint(&["plan", &far, "-o", &outs, "--quiet"]);
-    assert_eq!(code, 2);
-    assert!(err.contains("point 2"), "{err}");
-    let one = write(
-        "one.toml",
-        "[path]\nunits = \"mm\"\npoints = [[0, 0, 600]]\n",
-    );
-    assert_eq!(triquint(&["plan", &one, "-o", &outs]).0, 2);
-    let garbage = write("garbage.json", "{\"format\": 3}");
-    assert_eq!(triquint(&["check", &garbage]).0, 2);
-    // A plan that violates its own limits: check exits 1.
-    let ok = write(
-        "ok.toml",
-        "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [20, 0, 600], [20, 20, 610], [0, 20, 620], [0, 0, 630]]\n",
-    );
-    assert_eq!(
-        triquint(&["plan", &ok, "-o", &outs, "--quiet", "--starts", "2"]).0,
-        0
-    );
-    let mut p: Plan = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
-    p.limits.jerk = max_jerk(&p) * 0.5;
-    let tampered = write("tampered.json", &serde_json::to_string(&p).unwrap());
-    assert_eq!(triquint(&["check", &tampered]).0, 1);
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
 #[test]
 fn min_time_finds_the_shortest_time() {
-    let mut job = example("paper-case1.toml");
-    job.objective = triquint_shared::plan::Objective::MinTime;
-    job.limits.jerk = 1.0;
+    let job = example("paper-case1.toml");
+    let mut limits = job.limits().clone();
+    limits.jerk = 1.0;
+    let job = job
+        .to_builder()
+        .objective(crate::Objective::MinTime)
+        .limits(limits)
+        .build()
+        .unwrap();
     let p = plan(&job, &opts(2)).unwrap();
     assert_checks(&p);
     // Jerk binds: any shorter time would exceed the jerk limit.
@@ -262,7 +213,6 @@ units = "mm"
 points = [[-86, 83.66, 597.66], [-43, 97.74, 654.74], [0, 84.85, 684.85],
           [43, 54.74, 697.74], [86, -2.34, 683.66]]
 "#,
-        "test",
     )
     .unwrap();
     let p = job_problem(&job).unwrap();

@@ -1,0 +1,148 @@
+//! The one error type of the planner: every way a job can fail to plan, with
+//! the data a program needs to act on it (which field, which point, which
+//! limit, the shortest feasible time), and a one-line message for people.
+
+use crate::readable::readable;
+
+/// A limit of a job (`[limits]` in a job file).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Limit {
+    /// Joint velocity (m/s).
+    Velocity,
+    /// Joint acceleration (m/s²).
+    Acceleration,
+    /// Joint jerk (m/s³).
+    Jerk,
+    /// Motor torque (N·m).
+    Torque,
+    /// Upper bound on the total time (s).
+    TotalTime,
+}
+
+impl Limit {
+    /// The key of the limit in a job file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Limit::Velocity => "velocity",
+            Limit::Acceleration => "acceleration",
+            Limit::Jerk => "jerk",
+            Limit::Torque => "torque",
+            Limit::TotalTime => "total_time",
+        }
+    }
+
+    /// The SI unit of the limit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Limit::Velocity => "m/s",
+            Limit::Acceleration => "m/s²",
+            Limit::Jerk => "m/s³",
+            Limit::Torque => "N·m",
+            Limit::TotalTime => "s",
+        }
+    }
+}
+
+/// Which kind of point an error is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum PointKind {
+    /// A via-point of the job.
+    ViaPoint,
+    /// A knot the planner adds on the straight line between two via-points
+    /// (jobs of fewer than five via-points).
+    Knot,
+}
+
+/// Why a plan was cancelled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum CancelReason {
+    /// The observer asked for it.
+    Observer,
+    /// The time budget of [`crate::Options::time_budget`] ran out.
+    TimeBudget,
+}
+
+/// Why a job did not plan. Indices are 0-based; messages count from 1.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// The job is malformed: `field` names it as in a job file
+    /// (`limits.jerk`, `path.points`, `robot.lead`, `path.file`).
+    #[error("{field}: {reason}")]
+    InvalidJob { field: String, reason: String },
+    /// A job file could not be read or parsed; `line` is 1-based.
+    #[error("{origin}{}: {reason}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    JobFile {
+        origin: String,
+        line: Option<usize>,
+        reason: String,
+    },
+    /// A via-point, or a knot between two via-points, that the robot cannot reach.
+    #[error(
+        "{} {} ({}, {}, {}) mm is outside the workspace: {reason}",
+        match point { PointKind::ViaPoint => "point", PointKind::Knot => "knot" },
+        index + 1,
+        readable(position_m[0] * 1e3),
+        readable(position_m[1] * 1e3),
+        readable(position_m[2] * 1e3)
+    )]
+    OutsideWorkspace {
+        point: PointKind,
+        index: usize,
+        position_m: [f64; 3],
+        reason: String,
+    },
+    /// A valid job that no plan satisfies: `limit` binds. `reached` is the
+    /// best value of the binding quantity the planner found (above
+    /// `limit_value`); `shortest_total_time` is the shortest total time at
+    /// which every limit holds, when there is one within reach.
+    #[error("{}", infeasible_message(*limit, *limit_value, *reached, *shortest_total_time))]
+    Infeasible {
+        limit: Limit,
+        limit_value: f64,
+        reached: f64,
+        shortest_total_time: Option<f64>,
+    },
+    /// Planning stopped before it finished.
+    #[error("{}", match reason {
+        CancelReason::Observer => "planning cancelled",
+        CancelReason::TimeBudget => "planning ran out of its time budget",
+    })]
+    Cancelled { reason: CancelReason },
+    /// The numerical solver failed on a job it should have solved: a bug or
+    /// a numerically extreme job, worth a report.
+    #[error("solver failure: {0}")]
+    Solver(String),
+}
+
+fn infeasible_message(limit: Limit, value: f64, reached: f64, shortest: Option<f64>) -> String {
+    let (name, unit) = (limit.name(), limit.unit());
+    let mut m = match limit {
+        Limit::TotalTime => format!("infeasible: total_time {} s is too short", readable(value)),
+        _ => format!(
+            "infeasible: the {name} limit {} {unit} binds (best reached {} {unit})",
+            readable(value),
+            readable(reached)
+        ),
+    };
+    match shortest {
+        Some(t) => m += &format!(
+            "; the shortest total time that meets every limit is {} s",
+            readable(t)
+        ),
+        None => m += "; no total time meets every limit",
+    }
+    m
+}
+
+impl PlanError {
+    pub(crate) fn invalid(field: &str, reason: impl Into<String>) -> Self {
+        PlanError::InvalidJob {
+            field: field.to_string(),
+            reason: reason.into(),
+        }
+    }
+}

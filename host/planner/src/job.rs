@@ -1,0 +1,279 @@
+//! A planning job: what to plan, validated when it is built.
+//!
+//! ```
+//! use triquint_planner::{Job, Objective};
+//!
+//! let job = Job::builder()
+//!     .objective(Objective::MinTime)
+//!     .points_mm([[-90.0, 90.0, 680.0], [-86.0, 83.66, 597.66]])
+//!     .build()?;
+//! assert_eq!(job.points_m().len(), 2);
+//! # Ok::<(), triquint_planner::PlanError>(())
+//! ```
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::Pose;
+use triquint_shared::plan::Objective;
+use triquint_shared::protocol::segment::MAX_DURATION_US;
+use triquint_shared::{Limits, Model, Robot};
+
+use crate::error::{PlanError, PointKind};
+use crate::readable::readable;
+
+/// Most via-points a job may have (the file reader refuses more at once).
+pub const MAX_POINTS: usize = 100_000;
+/// Range of every motion limit (SI units): what the drives' f32 configuration
+/// holds with room to spare.
+pub const LIMIT_RANGE: (f64, f64) = (1e-6, 1e6);
+/// Longest segment the wire carries (s).
+pub const MAX_SEGMENT_S: f64 = MAX_DURATION_US as f64 * 1e-6;
+/// Shortest interval the planner uses (s).
+pub const MIN_SEGMENT_S: f64 = 1e-3;
+
+/// A valid job: reachable via-points (and knots), limits in range.
+/// Build one with [`Job::builder`] or read one with `Job::from_toml`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    objective: Objective,
+    robot: Robot,
+    limits: Limits,
+    points_m: Vec<[f64; 3]>,
+}
+
+/// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
+/// jerk, the paper's robot (Table 1) and limits (Table 3), no points.
+#[derive(Clone, Debug, Default)]
+pub struct JobBuilder {
+    objective: Objective,
+    robot: Robot,
+    limits: Limits,
+    points_m: Vec<[f64; 3]>,
+}
+
+impl JobBuilder {
+    pub fn objective(mut self, objective: Objective) -> Self {
+        self.objective = objective;
+        self
+    }
+    pub fn robot(mut self, robot: Robot) -> Self {
+        self.robot = robot;
+        self
+    }
+    pub fn limits(mut self, limits: Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+    /// The upper bound on the total time (s).
+    pub fn total_time(mut self, seconds: f64) -> Self {
+        self.limits.total_time = seconds;
+        self
+    }
+    /// Replaces the via-points, in metres.
+    pub fn points_m(mut self, points: impl IntoIterator<Item = [f64; 3]>) -> Self {
+        self.points_m = points.into_iter().collect();
+        self
+    }
+    /// Replaces the via-points, in millimetres.
+    pub fn points_mm(self, points: impl IntoIterator<Item = [f64; 3]>) -> Self {
+        self.points_m(points.into_iter().map(|p| p.map(|x| x * 1e-3)))
+    }
+
+    /// Validates the job: limits finite and in [`LIMIT_RANGE`], total time
+    /// at most [`MAX_SEGMENT_S`] per segment, at least two via-points, each
+    /// finite, reachable and apart from the one before, and every knot added
+    /// between them reachable.
+    pub fn build(self) -> Result<Job, PlanError> {
+        self.robot
+            .validate()
+            .map_err(|e| {
+                let triquint_shared::params::ParamError::Invalid { name, .. } = e;
+                PlanError::invalid(&format!("robot.{name}"), e.to_string())
+            })?;
+        let l = &self.limits;
+        for (name, value) in [
+            ("velocity", l.velocity),
+            ("acceleration", l.acceleration),
+            ("jerk", l.jerk),
+            ("torque", l.torque),
+        ] {
+            let (lo, hi) = LIMIT_RANGE;
+            if !(value.is_finite() && (lo..=hi).contains(&value)) {
+                return Err(PlanError::invalid(
+                    &format!("limits.{name}"),
+                    format!(
+                        "{} is not a number in {}..{}",
+                        readable(value),
+                        readable(lo),
+                        readable(hi)
+                    ),
+                ));
+            }
+        }
+        let pts = &self.points_m;
+        if pts.len() < 2 {
+            return Err(PlanError::invalid(
+                "path.points",
+                format!("needs at least 2 points, got {}", pts.len()),
+            ));
+        }
+        if pts.len() > MAX_POINTS {
+            return Err(PlanError::invalid(
+                "path.points",
+                format!("{} points, at most {MAX_POINTS}", pts.len()),
+            ));
+        }
+        let model = self.robot.model::<f64>();
+        for (i, p) in pts.iter().enumerate() {
+            if p.iter().any(|x| !x.is_finite()) {
+                return Err(PlanError::invalid(
+                    "path.points",
+                    format!(
+                        "point {} ({}, {}, {}) is not finite",
+                        i + 1,
+                        readable(p[0]),
+                        readable(p[1]),
+                        readable(p[2])
+                    ),
+                ));
+            }
+            reachable(&model, *p, PointKind::ViaPoint, i)?;
+            if i > 0 && (Vector3::from(*p) - Vector3::from(pts[i - 1])).norm() < 1e-9 {
+                return Err(PlanError::invalid(
+                    "path.points",
+                    format!(
+                        "point {} repeats point {i}: consecutive via-points must differ",
+                        i + 1
+                    ),
+                ));
+            }
+        }
+        let knots = knot_points(pts);
+        for (i, k) in knots.iter().enumerate() {
+            reachable(&model, *k, PointKind::Knot, i)?;
+        }
+        let t = l.total_time;
+        let segments = (knots.len() - 1) as f64;
+        let longest = MAX_SEGMENT_S * segments;
+        if !(t.is_finite() && t >= MIN_SEGMENT_S * segments && t <= longest) {
+            return Err(PlanError::invalid(
+                "limits.total_time",
+                format!(
+                    "{} s is not a number in {}..{} s ({} segments of {} ms to {} s)",
+                    readable(t),
+                    readable(MIN_SEGMENT_S * segments),
+                    readable(longest),
+                    segments,
+                    readable(MIN_SEGMENT_S * 1e3),
+                    readable(MAX_SEGMENT_S)
+                ),
+            ));
+        }
+        Ok(Job {
+            objective: self.objective,
+            robot: self.robot,
+            limits: self.limits,
+            points_m: self.points_m,
+        })
+    }
+}
+
+fn reachable(model: &Model<f64>, p: [f64; 3], point: PointKind, index: usize) -> Result<(), PlanError> {
+    Pose::from_cartesian(model, Vector3::from(p))
+        .map(|_| ())
+        .map_err(|e| PlanError::OutsideWorkspace {
+            point,
+            index,
+            position_m: p,
+            reason: e.to_string(),
+        })
+}
+
+impl Job {
+    pub fn builder() -> JobBuilder {
+        JobBuilder::default()
+    }
+    /// A builder holding this job, to change and build again.
+    pub fn to_builder(&self) -> JobBuilder {
+        JobBuilder {
+            objective: self.objective,
+            robot: self.robot.clone(),
+            limits: self.limits.clone(),
+            points_m: self.points_m.clone(),
+        }
+    }
+    pub fn objective(&self) -> Objective {
+        self.objective
+    }
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+    pub fn limits(&self) -> &Limits {
+        &self.limits
+    }
+    /// Via-points in metres.
+    pub fn points_m(&self) -> &[[f64; 3]] {
+        &self.points_m
+    }
+    /// The knots the planner interpolates: the via-points, with points on
+    /// the straight lines between them when there are fewer than five.
+    pub fn knots_m(&self) -> Vec<[f64; 3]> {
+        knot_points(&self.points_m)
+    }
+}
+
+/// Knots of a path: the via-points, with straight-line points added between
+/// them when there are fewer than five (a C3 quintic spline at rest at both
+/// ends needs n ≥ 4 knots, and one more leaves the jerk a free variable).
+pub(crate) fn knot_points(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let n = points.len();
+    if !(2..5).contains(&n) {
+        return points.to_vec();
+    }
+    let pieces = 4usize.div_ceil(n - 1);
+    let mut out = Vec::new();
+    for w in points.windows(2) {
+        let (a, b) = (Vector3::from(w[0]), Vector3::from(w[1]));
+        for i in 0..pieces {
+            out.push((a + (b - a) * (i as f64 / pieces as f64)).into());
+        }
+    }
+    out.push(points[n - 1]);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn err(b: JobBuilder) -> PlanError {
+        b.build().unwrap_err()
+    }
+
+    #[test]
+    fn errors_name_the_field_or_the_point() {
+        let ok = Job::builder().points_mm([[0.0, 0.0, 600.0], [10.0, 0.0, 600.0]]);
+        assert!(ok.clone().build().is_ok());
+        let e = err(ok.clone().points_mm([[0.0, 0.0, 600.0], [900.0, 0.0, 600.0]]));
+        assert!(
+            matches!(e, PlanError::OutsideWorkspace { point: PointKind::ViaPoint, index: 1, .. }),
+            "{e:?}"
+        );
+        assert!(e.to_string().starts_with("point 2 (900, 0, 600) mm"), "{e}");
+        let e = err(ok.clone().total_time(1e300));
+        assert!(matches!(&e, PlanError::InvalidJob { field, .. } if field == "limits.total_time"));
+        assert!(e.to_string().contains("1e300"), "{e}");
+        assert!(e.to_string().len() < 120, "{e}");
+        let mut l = Limits::default();
+        l.jerk = -1.0;
+        let e = err(ok.clone().limits(l.clone()));
+        assert!(matches!(&e, PlanError::InvalidJob { field, .. } if field == "limits.jerk"));
+        l.jerk = f64::NAN;
+        assert!(err(ok.clone().limits(l)).to_string().contains("NaN"));
+        let e = err(ok.clone().points_mm([[0.0, 0.0, 600.0]]));
+        assert!(e.to_string().contains("at least 2"));
+        let e = err(ok.clone().points_mm([[0.0, 0.0, 600.0], [0.0, 0.0, 600.0]]));
+        assert!(e.to_string().contains("repeats"));
+        let e = err(ok.points_m([[0.0, 0.0, f64::NAN], [0.0, 0.0, 0.6]]));
+        assert!(e.to_string().contains("not finite"));
+    }
+}

@@ -1,0 +1,188 @@
+//! Job files (TOML):
+//!
+//! ```toml
+//! objective = "min-max-jerk"        # or "min-time"
+//! [robot]                            # optional; defaults = paper Table 1
+//! [limits]                           # defaults = paper Table 3
+//! [path]
+//! units = "mm"                       # or "m"
+//! points = [[-90, 90, 680], [-90, 90, 660]]
+//! # or: file = "points.csv"         # relative to the job file
+//! ```
+//!
+//! ```
+//! let job = triquint_planner::Job::from_toml(
+//!     "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [10, 0, 600]]\n",
+//! )?;
+//! assert_eq!(job.points_m()[1], [0.01, 0.0, 0.6]);
+//! # Ok::<(), triquint_planner::PlanError>(())
+//! ```
+
+use std::path::Path;
+
+use serde::Deserialize;
+use triquint_shared::plan::Objective;
+use triquint_shared::{Limits, Robot};
+
+use crate::error::PlanError;
+use crate::job::Job;
+use crate::points_file::parse_points;
+
+/// Length unit of the via-points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+enum Units {
+    #[serde(rename = "mm")]
+    Millimetres,
+    #[serde(rename = "m")]
+    Metres,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathSpec {
+    units: Units,
+    points: Option<Vec<[f64; 3]>>,
+    file: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JobFile {
+    #[serde(default)]
+    objective: Objective,
+    #[serde(default)]
+    robot: Robot,
+    #[serde(default)]
+    limits: Limits,
+    path: PathSpec,
+}
+
+impl Job {
+    /// Parses a job; a `[path] file` is read relative to the working directory.
+    pub fn from_toml(text: &str) -> Result<Job, PlanError> {
+        parse(text, "job", Path::new("."))
+    }
+
+    /// Reads a job file; a `[path] file` is read relative to the job file.
+    /// Errors of the file itself carry its path and line.
+    pub fn load(path: &Path) -> Result<Job, PlanError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| PlanError::JobFile {
+            origin: origin.clone(),
+            line: None,
+            reason: e.to_string(),
+        })?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        parse(&text, &origin, dir)
+    }
+}
+
+fn parse(text: &str, origin: &str, dir: &Path) -> Result<Job, PlanError> {
+    let file_error = |line: Option<usize>, reason: String| PlanError::JobFile {
+        origin: origin.to_string(),
+        line,
+        reason,
+    };
+    let f: JobFile = toml::from_str(text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        file_error(line, e.message().replace('\n', " "))
+    })?;
+    let points = match (f.path.points, f.path.file) {
+        (Some(p), None) => p,
+        (None, Some(name)) => {
+            let path = dir.join(&name);
+            let shown = path.display().to_string();
+            let text = std::fs::read_to_string(&path).map_err(|e| PlanError::JobFile {
+                origin: shown.clone(),
+                line: None,
+                reason: e.to_string(),
+            })?;
+            parse_points(&text).map_err(|e| PlanError::JobFile {
+                origin: shown,
+                line: e.line(),
+                reason: e.to_string(),
+            })?
+        }
+        _ => {
+            return Err(PlanError::invalid(
+                "path",
+                "give exactly one of `points` and `file`",
+            ));
+        }
+    };
+    let scale = match f.path.units {
+        Units::Millimetres => 1e-3,
+        Units::Metres => 1.0,
+    };
+    Job::builder()
+        .objective(f.objective)
+        .robot(f.robot)
+        .limits(f.limits)
+        .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
+        .build()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn err(text: &str) -> String {
+        Job::from_toml(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn rejects_bad_jobs_with_where() {
+        let ok = "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [10, 0, 600]]\n";
+        assert!(Job::from_toml(ok).is_ok());
+        assert!(err("bogus = 1\n[path]\nunits = \"mm\"\npoints = []\n").contains("job:1"));
+        assert!(err("[path]\nunits = \"inch\"\npoints = []\n").contains("job:2"));
+        assert!(err("[path]\nunits = \"mm\"\npoints = [[0, 0, 600]]\n").contains("at least 2"));
+        assert!(
+            err("[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [900, 0, 600]]\n")
+                .contains("point 2 (900, 0, 600) mm is outside the workspace")
+        );
+        assert!(
+            err(
+                "[limits]\njerk = -1\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [1, 0, 600]]\n"
+            )
+            .contains("limits.jerk")
+        );
+        assert!(
+            err("[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [0, 0, 600]]\n")
+                .contains("repeats")
+        );
+        assert!(
+            err("[path]\nunits = \"m\"\npoints = [[0, 0, nan], [0, 0, 0.6]]\n")
+                .contains("not finite")
+        );
+        assert!(err("[path]\nunits = \"mm\"\n").contains("exactly one"));
+        let both = "[path]\nunits = \"mm\"\nfile = \"a.csv\"\npoints = [[0, 0, 600], [1, 0, 600]]\n";
+        assert!(err(both).contains("exactly one"));
+    }
+
+    #[test]
+    fn points_from_a_file_beside_the_job() {
+        let dir = std::env::temp_dir().join(format!("triquint-jobfile-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("pts.csv"),
+            "x,y,z\n# a comment\n0, 0, 600\n10 0 600 # trailing\n20,0,610\n",
+        )
+        .unwrap();
+        std::fs::write(dir.join("bad.csv"), "0,0,600\n10,0\n").unwrap();
+        let job_path = dir.join("job.toml");
+        std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"pts.csv\"\n").unwrap();
+        let job = Job::load(&job_path).unwrap();
+        assert_eq!(job.points_m().len(), 3);
+        assert!((job.points_m()[2][2] - 0.61).abs() < 1e-12);
+        std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"bad.csv\"\n").unwrap();
+        let e = Job::load(&job_path).unwrap_err();
+        assert!(matches!(e, PlanError::JobFile { line: Some(2), .. }), "{e:?}");
+        assert!(e.to_string().contains("bad.csv:2"), "{e}");
+        std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"none.csv\"\n").unwrap();
+        assert!(Job::load(&job_path).unwrap_err().to_string().contains("none.csv"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

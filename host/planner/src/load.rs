@@ -1,0 +1,161 @@
+//! The one plan loader: what every tool reading a plan file relies on,
+//! beyond what serde checks. Every plan the planner writes passes it.
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::Pose;
+use triquint_shared::plan::{PLAN_FORMAT, Plan};
+use triquint_shared::protocol::segment::MAX_DURATION_US;
+
+/// Why a text is not a usable plan.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LoadError {
+    /// Not plan JSON: the parser's message, with line and column.
+    #[error("{0}")]
+    Json(String),
+    /// Another format or version than this library reads.
+    #[error("format is `{found}`, expected `{PLAN_FORMAT}`")]
+    Format { found: String },
+    /// Plan JSON whose contents do not fit together.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Parses and validates plan JSON.
+///
+/// ```
+/// let e = triquint_planner::parse_plan("{\"format\": 3}").unwrap_err();
+/// assert!(e.to_string().contains("line 1"));
+/// ```
+pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
+    // The format tag first, so another version is named as such.
+    if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
+        && let Some(f) = v.get("format").and_then(|f| f.as_str())
+        && f != PLAN_FORMAT
+    {
+        return Err(LoadError::Format {
+            found: f.to_string(),
+        });
+    }
+    let plan: Plan = serde_json::from_str(text).map_err(|e| LoadError::Json(e.to_string()))?;
+    validate_plan(&plan)?;
+    Ok(plan)
+}
+
+/// The structural rules of a plan: format; robot and limits valid; knots =
+/// segments + 1 = intervals + 1; each segment's start time and duration
+/// consistent, its duration whole microseconds of 1 µs..60 s (what the wire
+/// carries); finite numbers; the via-points are knots, in order, first and
+/// last included.
+pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
+    let bad = |m: String| Err(LoadError::Invalid(m));
+    if plan.format != PLAN_FORMAT {
+        return Err(LoadError::Format {
+            found: plan.format.clone(),
+        });
+    }
+    plan.robot
+        .validate()
+        .map_err(|e| LoadError::Invalid(format!("robot: {e}")))?;
+    plan.limits
+        .validate()
+        .map_err(|e| LoadError::Invalid(format!("limits: {e}")))?;
+    let n = plan.segments.len();
+    if n == 0 {
+        return bad("no segments".into());
+    }
+    if plan.intervals_s.len() != n || plan.knots_m.len() != n + 1 {
+        return bad(format!(
+            "{n} segments need {n} intervals and {} knots, found {} and {}",
+            n + 1,
+            plan.intervals_s.len(),
+            plan.knots_m.len()
+        ));
+    }
+    let finite = |p: &[f64; 3]| p.iter().all(|x| x.is_finite());
+    if !plan.via_points_m.iter().all(finite) || !plan.knots_m.iter().all(finite) {
+        return bad("a via-point or knot is not finite".into());
+    }
+    let mut t = 0.0;
+    for (i, (s, h)) in plan.segments.iter().zip(&plan.intervals_s).enumerate() {
+        let us = s.duration_s * 1e6;
+        if !(us.is_finite() && us >= 0.5 && us <= MAX_DURATION_US as f64 + 0.5) {
+            return bad(format!(
+                "segment {} lasts {} s, not 1 µs to 60 s",
+                i + 1,
+                crate::readable::readable(s.duration_s)
+            ));
+        }
+        if (us - us.round()).abs() > 1e-3 {
+            return bad(format!(
+                "segment {} lasts {} s, not a whole number of microseconds",
+                i + 1,
+                s.duration_s
+            ));
+        }
+        if (s.duration_s - h).abs() > 1e-9 || (s.t0_s - t).abs() > 1e-6 {
+            return bad(format!(
+                "segment {} starts at {} s for {} s, but the intervals say {} s for {} s",
+                i + 1,
+                s.t0_s,
+                s.duration_s,
+                t,
+                h
+            ));
+        }
+        if s.coeffs.iter().flatten().any(|c| !c.is_finite()) {
+            return bad(format!("segment {} has a non-finite coefficient", i + 1));
+        }
+        t += h;
+    }
+    if !plan.total_time_s.is_finite() || (plan.total_time_s - t).abs() > 1e-6 {
+        return bad(format!(
+            "total_time_s is {}, the intervals add up to {t} s",
+            plan.total_time_s
+        ));
+    }
+    via_points_are_knots(plan)
+}
+
+fn via_points_are_knots(plan: &Plan) -> Result<(), LoadError> {
+    let model = plan.robot.model::<f64>();
+    let pts = &plan.via_points_m;
+    if pts.len() < 2 {
+        return Err(LoadError::Invalid(format!(
+            "{} via-points, at least 2 needed",
+            pts.len()
+        )));
+    }
+    let mut next = 0;
+    for (i, p) in pts.iter().enumerate() {
+        let q = Pose::from_cartesian(&model, Vector3::from(*p))
+            .map_err(|e| LoadError::Invalid(format!("via-point {}: {e}", i + 1)))?
+            .q;
+        let dist = |k: usize| {
+            (0..3)
+                .map(|j| (plan.knots_m[k][j] - q[j]).abs())
+                .fold(0.0, f64::max)
+        };
+        let last = plan.knots_m.len() - 1;
+        let found = match i {
+            0 => (dist(0) <= 1e-9).then_some(0),
+            _ if i == pts.len() - 1 => (dist(last) <= 1e-9 && next <= last).then_some(last),
+            _ => (next..=last).find(|&k| dist(k) <= 1e-9),
+        };
+        match found {
+            Some(k) => next = k + 1,
+            None => {
+                return Err(LoadError::Invalid(format!(
+                    "via-point {} is not a knot after the previous via-point's{}",
+                    i + 1,
+                    if i == 0 || i == pts.len() - 1 {
+                        " (the first and last via-points must be the first and last knots)"
+                    } else {
+                        ""
+                    }
+                )));
+            }
+        }
+    }
+    Ok(())
+}
