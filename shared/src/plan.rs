@@ -30,7 +30,7 @@ pub enum Objective {
     MinTime,
 }
 
-/// One segment: joint j is q_j(t0 + t) = Σ_k coeffs[j][k] t^k, t ∈ [0, duration].
+/// One segment: joint j is `q_j(t0 + t) = Σ_k coeffs[j][k] t^k`, t ∈ [0, duration].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Segment {
