@@ -2,7 +2,7 @@
 //! bus load, start skew, and the f32-vs-f64 evaluation error of the drives.
 
 use triquint_firmware::segment::Seg;
-use triquint_shared::plan::{Plan, Segment};
+use triquint_shared::plan::{Plan, Segment, eval};
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 
@@ -16,22 +16,19 @@ pub struct Tracking {
     pub samples: usize,
 }
 
-/// Plan position of every joint at plan time `t` (s), clamped to the plan.
+/// Plan position of every joint at plan time `t` (s), clamped to the plan
+/// ([`Plan::at`]); zeros for a plan with no segments, NaN for a NaN `t`.
 pub fn plan_position(plan: &Plan, t: f64) -> [f64; 3] {
-    segments_position(&plan.segments, t.clamp(0.0, plan.total_time_s))
+    segments_position(&plan.segments, t)
 }
 
 /// Position of every joint at time `t` (s) along consecutive segments
-/// (the first or last segment outside them).
+/// ([`eval::at`]: the start position before them, the end position after);
+/// zeros for no segments, NaN for a NaN `t`.
 pub fn segments_position(segments: &[Segment], t: f64) -> [f64; 3] {
-    let idx = segments
-        .partition_point(|s| s.t0_s + s.duration_s < t)
-        .min(segments.len().saturating_sub(1));
-    match segments.get(idx) {
-        Some(s) => {
-            let m = s.quintic().eval((t - s.t0_s).clamp(0.0, s.duration_s));
-            [m.q[0], m.q[1], m.q[2]]
-        }
+    match eval::at(segments, t) {
+        Some(s) => s.q,
+        None if t.is_nan() && !segments.is_empty() => [f64::NAN; 3],
         None => [0.0; 3],
     }
 }
@@ -162,6 +159,47 @@ mod tests {
                 assert!((a[j] - b[j]).abs() < 1e-9, "t {t}: {} vs {}", a[j], b[j]);
             }
         }
+    }
+
+    /// The planner's plans through the shared evaluation: duration, the end
+    /// sample, q/v/a continuity at every knot, rest outside the plan.
+    #[test]
+    fn real_plans_evaluate_consistently() {
+        for plan in [
+            testplan::paper_case1().unwrap(),
+            testplan::paper_case2().unwrap(),
+            testplan::spiral(121, 3.0, 30.0).unwrap(),
+        ] {
+            let d = plan.duration();
+            assert!((d - plan.total_time_s).abs() < 1e-9);
+            let samples: Vec<_> = plan.sample(1e-3).unwrap().collect();
+            assert_eq!(samples.last().map(|s| s.0), Some(d));
+            for (t, s) in samples.iter().step_by(97) {
+                assert_eq!(plan_position(&plan, *t), s.q);
+            }
+            for (i, s) in plan.segments.iter().enumerate().skip(1) {
+                assert_eq!(plan.segment_at(s.t0_s).map(|(k, _)| k), Some(i));
+                let before = plan.segments[i - 1].quintic().end();
+                let after = plan.at(s.t0_s).unwrap();
+                for j in 0..3 {
+                    assert!((before.q[j] - after.q[j]).abs() < 1e-9);
+                    assert!((before.qd[j] - after.v[j]).abs() < 1e-8);
+                    assert!((before.qdd[j] - after.a[j]).abs() < 1e-7);
+                }
+            }
+            let end = plan.at(d + 1.0).unwrap();
+            assert_eq!((end.v, end.a, end.jerk), ([0.0; 3], [0.0; 3], [0.0; 3]));
+            let (a, b) = (plan_position(&plan, d + 1.0), plan_position(&plan, d));
+            assert!((0..3).all(|j| (a[j] - b[j]).abs() < 1e-12));
+            assert_eq!(plan_position(&plan, -1.0), plan_position(&plan, 0.0));
+        }
+    }
+
+    #[test]
+    fn position_of_no_segments_is_zero_and_of_nan_is_nan() {
+        assert_eq!(segments_position(&[], 0.5), [0.0; 3]);
+        let plan = testplan::paper_case1().unwrap();
+        assert!(plan_position(&plan, f64::NAN).iter().all(|q| q.is_nan()));
     }
 
     #[test]

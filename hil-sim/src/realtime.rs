@@ -16,7 +16,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_firmware::hal::service;
 use triquint_shared::Robot;
-use triquint_shared::plan::Segment;
+use triquint_shared::plan::{Segment, eval};
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{
     CommandCode, FaultCode, Frame, Msg, PartEvent, Reassembler, State, decode, frame_time_ns,
@@ -391,7 +391,7 @@ fn observe(
 fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunReport {
     let since = watch.since_ns.unwrap_or(now);
     let window = now.saturating_sub(since).max(1) as f64;
-    let plan_time_s = watch.segments.last().map_or(0.0, |s| s.t0_s + s.duration_s);
+    let plan_time_s = eval::duration(&watch.segments);
     let tracking = match watch.start_host_ns {
         Some(s) if !watch.segments.is_empty() => tracking_segments(
             &watch.segments,

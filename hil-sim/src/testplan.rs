@@ -161,7 +161,7 @@ pub fn sampled_max_abs(plan: &Plan) -> Result<MaxAbs, KinematicsError> {
         let q = s.quintic();
         for k in 0..=400 {
             let jm = q.eval(s.duration_s * k as f64 / 400.0);
-            let tau = dynamics::torque(&m, &jm.q, &jm.qd, &jm.qdd)?;
+            let tau = dynamics::state_torque(&m, jm)?;
             for j in 0..3 {
                 out.velocity[j] = out.velocity[j].max(jm.qd[j].abs());
                 out.acceleration[j] = out.acceleration[j].max(jm.qdd[j].abs());

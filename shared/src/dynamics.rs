@@ -24,6 +24,7 @@
 use nalgebra::Vector3;
 
 use crate::kinematics::{KinematicsError, Pose};
+use crate::quintic::JointMotion;
 use crate::{Model, Real, c};
 
 /// Motor torques (N·m) for joint positions (m), velocities (m/s) and accelerations (m/s²).
@@ -35,6 +36,35 @@ pub fn torque<T: Real>(
 ) -> Result<Vector3<T>, KinematicsError> {
     let pose = Pose::from_joints(m, *q)?;
     Ok(torque_at(m, &pose, qd, qdd))
+}
+
+/// Motor torques (N·m) for a joint state: a [`JointMotion`] (what a quintic
+/// evaluates to) or, with `alloc`, a plan's `JointState` at a plan time
+/// (`plan.at(t)`). The jerk does not enter. Fails, as [`torque`] does, where
+/// the joints admit no pose (outside the workspace, singular, non-finite).
+///
+/// ```
+/// use triquint_shared::dynamics::state_torque;
+/// use triquint_shared::quintic::Quintic;
+/// use triquint_shared::{KinematicsError, Robot};
+///
+/// let m = Robot::default().model::<f64>();
+/// // All three sliders at 0.3 m, rising at 0.1 m/s: the platform straight up.
+/// let seg = Quintic { coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3], duration: 1.0 };
+/// let tau = state_torque(&m, seg.eval(0.0))?;
+/// assert!(tau.iter().all(|t| *t > 0.0)); // holding the platform up
+/// assert!((tau[0] - tau[1]).abs() < 1e-9 && (tau[1] - tau[2]).abs() < 1e-9);
+/// // Sliders too far apart for the struts to meet.
+/// let apart = Quintic { coeffs: [[0.0; 6], [0.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]], duration: 1.0 };
+/// assert_eq!(state_torque(&m, apart.eval(0.0)), Err(KinematicsError::NoAssembly));
+/// # Ok::<(), KinematicsError>(())
+/// ```
+pub fn state_torque<T: Real>(
+    m: &Model<T>,
+    state: impl Into<JointMotion<T>>,
+) -> Result<Vector3<T>, KinematicsError> {
+    let s = state.into();
+    torque(m, &s.q, &s.qd, &s.qdd)
 }
 
 /// [`torque`] for a pose already solved.

@@ -215,6 +215,28 @@ impl<T: Real> Pose<T> {
     }
 }
 
+/// Platform centre r (m) for slider heights `q` (m): the closed-form forward
+/// kinematics of [`Pose::from_joints`], for example of a plan's `q(t)`
+/// (`plan.at(t)?.q`). Takes an array or a vector.
+///
+/// ```
+/// use triquint_shared::kinematics::platform_position;
+/// use triquint_shared::{KinematicsError, Robot};
+///
+/// let m = Robot::default().model::<f64>();
+/// // Paper Table 2, P1: q = (376.68, 244.16, 336.13) mm ↔ r = (−90, 90, 680) mm.
+/// let r = platform_position(&m, [0.37668, 0.24416, 0.33613])?;
+/// assert!((r - nalgebra::Vector3::new(-0.090, 0.090, 0.680)).norm() < 1e-4);
+/// assert_eq!(platform_position(&m, [0.0, 0.0, f64::NAN]), Err(KinematicsError::NonFinite));
+/// # Ok::<(), KinematicsError>(())
+/// ```
+pub fn platform_position<T: Real>(
+    m: &Model<T>,
+    q: impl Into<Vector3<T>>,
+) -> Result<Vector3<T>, KinematicsError> {
+    Pose::from_joints(m, q.into()).map(|pose| pose.r)
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

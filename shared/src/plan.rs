@@ -1,5 +1,6 @@
 //! The plan file (`triquint-plan/1`): what the planner writes and every other
-//! tool (check, report, simulate, upload) reads.
+//! tool (check, report, simulate, upload) reads, and its evaluation at a
+//! plan time ([`Plan::at`], [`Plan::sample`]; the conventions are in [`eval`]).
 
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -10,6 +11,10 @@ use crate::protocol::WireSegment;
 use crate::protocol::segment::{FLAG_FIRST, FLAG_LAST, SegmentError};
 use crate::quintic::Quintic;
 use crate::{Limits, Robot};
+
+pub mod eval;
+
+pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 
 /// Value of the `format` field.
 pub const PLAN_FORMAT: &str = "triquint-plan/1";
@@ -25,7 +30,7 @@ pub enum Objective {
     MinTime,
 }
 
-/// One segment: joint j is q_j(t0 + t) = Σ_k coeffs[j][k] t^k, t ∈ [0, duration].
+/// One segment: joint j is `q_j(t0 + t) = Σ_k coeffs[j][k] t^k`, t ∈ [0, duration].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Segment {
@@ -80,6 +85,103 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Total duration (s): the sum of the segments' durations (what the
+    /// planner writes as `total_time_s`); 0 for a plan with no segments.
+    ///
+    /// ```
+    /// # use triquint_shared::plan::*;
+    /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
+    /// assert_eq!(plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]).duration(), 2.0);
+    /// assert_eq!(plan(vec![]).duration(), 0.0);
+    /// ```
+    pub fn duration(&self) -> f64 {
+        eval::duration(&self.segments)
+    }
+
+    /// The segment running at plan time `t` (s) and its index, by binary
+    /// search on the segments' start times: at a knot the later segment, at
+    /// `t == duration()` the last. `None` outside [0, [`duration`](Self::duration)],
+    /// for a NaN `t` and for a plan with no segments ([`Plan::at`] clamps instead).
+    ///
+    /// ```
+    /// # use triquint_shared::plan::*;
+    /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
+    /// let p = plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]);
+    /// assert_eq!(p.segment_at(0.0).map(|(i, _)| i), Some(0));
+    /// assert_eq!(p.segment_at(1.5).map(|(i, _)| i), Some(1));
+    /// assert_eq!(p.segment_at(2.0).map(|(i, s)| (i, s.t0_s)), Some((1, 1.5)));
+    /// assert!(p.segment_at(-0.1).is_none() && p.segment_at(2.1).is_none());
+    /// assert!(p.segment_at(f64::NAN).is_none());
+    /// ```
+    pub fn segment_at(&self, t: f64) -> Option<(usize, &Segment)> {
+        eval::segment_at(&self.segments, t)
+    }
+
+    /// Position, velocity, acceleration and jerk of every joint at plan time
+    /// `t` (s), from the quintic of the segment running at `t`. Time is
+    /// clamped to the plan: before 0 the joints rest at the start position,
+    /// after the end at the end position (velocity, acceleration and jerk 0).
+    /// `None` for a NaN `t` or a plan with no segments (it has no position).
+    ///
+    /// ```
+    /// # use triquint_shared::plan::*;
+    /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
+    /// let p = plan(vec![
+    ///     Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.0, 0.1, 0.0, 0.0, 0.0]; 3] },
+    ///     Segment { t0_s: 1.0, duration_s: 1.0, coeffs: [[0.4, 0.2, 0.0, 0.0, 0.0, 0.0]; 3] },
+    /// ]);
+    /// let s = p.at(0.5).unwrap();
+    /// assert!((s.q[0] - 0.325).abs() < 1e-12);
+    /// assert!((s.v[1] - 0.1).abs() < 1e-12 && s.a[2] == 0.2 && s.jerk == [0.0; 3]);
+    /// assert!((p.at(1.0).unwrap().q[0] - 0.4).abs() < 1e-12);
+    /// let end = p.at(5.0).unwrap();
+    /// assert!((end.q[0] - 0.6).abs() < 1e-12 && end.v == [0.0; 3]);
+    /// assert_eq!(p.at(-1.0), Some(JointState::at_rest([0.3; 3])));
+    /// assert!(p.at(f64::NAN).is_none());
+    /// assert!(plan(vec![]).at(0.0).is_none());
+    /// ```
+    pub fn at(&self, t: f64) -> Option<JointState> {
+        eval::at(&self.segments, t)
+    }
+
+    /// `(t, self.at(t))` at t = 0, dt, 2dt, … and at the end time exactly
+    /// (last), lazily; a plan with no segments gives none. A grid time within
+    /// dt·10⁻⁹ of the end is dropped for the end itself. Errors for `dt` not
+    /// finite and positive, a duration not finite and non-negative, or more
+    /// than [`MAX_SAMPLES`] samples (a step too small is refused, not enlarged).
+    ///
+    /// ```
+    /// # use triquint_shared::plan::*;
+    /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
+    /// let samples: Vec<(f64, JointState)> = p.sample(0.4)?.collect();
+    /// let times: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
+    /// assert_eq!(times, [0.0, 0.4, 0.8, 1.0]);
+    /// assert!((samples[3].1.q[0] - 0.4).abs() < 1e-12);
+    /// assert_eq!(p.sample(0.001)?.len(), 1001);
+    /// assert_eq!(p.sample(-1.0).unwrap_err(), SampleError::InvalidStep);
+    /// assert_eq!(p.sample(f64::NAN).unwrap_err(), SampleError::InvalidStep);
+    /// # Ok::<(), SampleError>(())
+    /// ```
+    pub fn sample(&self, dt: f64) -> Result<Samples<'_>, SampleError> {
+        eval::sample(&self.segments, dt)
+    }
+
     /// The segments as they go on the wire: sequence numbers from 0, first and
     /// last flagged. On error, the index of the segment that cannot be sent.
     pub fn wire_segments(&self) -> Result<Vec<WireSegment>, (usize, SegmentError)> {
