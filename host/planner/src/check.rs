@@ -67,7 +67,7 @@ pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
 /// let job = Job::builder().points_mm([[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]]).build()?;
 /// let mut p = plan(&job, &Options::default())?;
 /// assert!(check(&p)?.iter().all(|r| r.ok));
-/// p.limits.jerk /= 10.0;
+/// p.limits.jerk = 0.5 * p.max_abs.jerk.iter().fold(0.0, |a, &b| f64::max(a, b));
 /// assert!(check(&p)?.iter().any(|r| !r.ok && r.what.starts_with("max |jerk")));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```

@@ -16,7 +16,7 @@
 //!     .points_mm([[-90.0, 90.0, 680.0], [-86.0, 83.66, 597.66]])
 //!     .build()?;
 //! let p = plan(&job, &Options::default())?;
-//! let mid = p.at(p.duration() / 2.0);
+//! let mid = p.at(p.duration() / 2.0).expect("a plan has segments");
 //! assert!(mid.v.iter().any(|v| v.abs() > 0.0));
 //! assert!(triquint_planner::check(&p)?.iter().all(|row| row.ok));
 //!
@@ -26,7 +26,7 @@
 //!     Err(PlanError::Infeasible { shortest_total_time: Some(t), .. }) => assert!(t > 0.3),
 //!     other => panic!("{other:?}"),
 //! }
-//! # Ok::<(), PlanError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
 //! How it works: for fixed intervals the min-max-jerk spline is one exact

@@ -153,11 +153,11 @@ fn infeasible(p: &Problem, s: &Solution, shortest: Option<f64>) -> PlanError {
     }
 }
 
-/// The shortest plan in whole microseconds that meets every limit, found
-/// up to `upper` (s): min-time search, then rounding and repair.
-fn shortest(p: &Problem, upper: f64, opts: &Options) -> Result<(Solution, usize), MinTimeFailure> {
+/// The shortest plan in whole microseconds that meets every limit:
+/// min-time search, then rounding and repair.
+fn shortest(p: &Problem, opts: &Options) -> Result<(Solution, usize), MinTimeFailure> {
     p.watch.set_stage(Stage::MinTime);
-    let (best, probe) = min_time(p, upper, opts)?;
+    let (best, probe) = min_time(p, opts)?;
     p.watch.set_stage(Stage::Finishing);
     let Some(rounded) = lengthen_until_feasible(p, &best) else {
         return Err(MinTimeFailure {
@@ -183,7 +183,7 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
             // Restoration: the shortest feasible plan, stretched to the time
             // budget and optimised there; or, when rounding that fails, the
             // shortest plan itself.
-            let short = shortest(p, total_time * 8.0, opts);
+            let short = shortest(p, opts);
             let Ok((s, starts)) = short else {
                 return Err(infeasible(p, &r.best, None));
             };
@@ -197,7 +197,7 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
             Ok((stretched.unwrap_or(s), starts))
         }
         Objective::MinTime => {
-            let (s, starts) = shortest(p, total_time, opts).map_err(|f| match &f.best {
+            let (s, starts) = shortest(p, opts).map_err(|f| match &f.best {
                 Some(b) => infeasible(p, b, None),
                 None => solver_failure(p),
             })?;

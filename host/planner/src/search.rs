@@ -207,53 +207,35 @@ pub struct MinTimeFailure {
     pub best: Option<Solution>,
 }
 
-/// Shortest total time T ≤ `upper` with a plan meeting every limit, and the
-/// min-max-jerk plan there. Jerk alone gives a lower bound (jerk scales as
-/// T⁻³ for the optimal shape, which does not depend on T when only jerk
-/// binds); velocity, acceleration and torque are handled by bisection.
-pub fn min_time(
-    template: &Problem,
-    upper: f64,
-    opts: &Options,
-) -> Result<(Solution, SearchResult), MinTimeFailure> {
+/// Shortest total time with a plan meeting every limit, and the
+/// min-max-jerk plan there. It does not depend on the job's total-time
+/// limit, so a job's verdict and its shortest time agree whatever bound is
+/// asked.
+///
+/// Jerk alone gives a lower bound: the jerk-only optimum's shape does not
+/// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
+/// to the jerk limit, is the shortest time when nothing else binds.
+/// Velocity, acceleration and torque are handled by walking up from there
+/// and bisecting, each time from that shape, optimised locally until
+/// feasible; then the multistart search at slightly less time checks that
+/// no other basin does better (and continues from there if one does).
+pub fn min_time(template: &Problem, opts: &Options) -> Result<(Solution, SearchResult), MinTimeFailure> {
     let at = |t: f64| {
         let mut p = template.clone();
         p.total_time = t;
         p
     };
-    // Probe: the global min-max-jerk shape at the upper bound (or beyond, if
-    // the upper bound itself is infeasible), scaled to the jerk limit.
-    let mut t_probe = upper;
-    let mut probe = None;
-    let mut last = None;
-    for _ in 0..8 {
-        let p = at(t_probe);
-        if let Some(r) = global(&p, opts) {
-            if r.best.violation <= 1e-9 {
-                probe = Some(r);
-                break;
-            }
-            last = Some(r.best);
-        }
-        if p.watch.cancelled().is_some() {
-            break;
-        }
-        t_probe *= 2.0;
-    }
-    let probe = probe.ok_or_else(|| MinTimeFailure {
-        best: last,
-    })?;
+    // A reference time of 1 s per segment: any would do but for h_min and h_max.
+    let t_ref = template.knots.segments() as f64;
+    let probe = global(&at(t_ref).relaxed(), opts).ok_or(MinTimeFailure { best: None })?;
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();
-    // Jerk-only lower bound on the time, valid because `s` is the global optimum.
     let t_low = total * (s.jerk / template.limits.jerk).cbrt();
     let mut spent = 0;
-    // A plan at t from the probe's shape: scaled to t first (exact when only
+    let mut last = None;
+    // A plan at t from `from`'s shape: scaled to t first (exact when only
     // jerk binds), then locally optimised when another limit is violated.
-    // (Starting from the last feasible plan instead ends at longer times: the
-    // local search then stays in that plan's basin.)
-    let mut try_at = |t: f64| {
-        let from = s;
+    let mut try_at = |t: f64, from: &Solution| {
         let p = at(t);
         let guess = scale(&p, from, t)?;
         spent += guess.lp_solves;
@@ -263,38 +245,68 @@ pub fn min_time(
         // Only feasibility is asked here: stop at the first feasible point.
         let sol = p.local_search_until(&guess, 200, 1e-9, &|sol| feasible(&p, sol));
         spent += sol.lp_solves - guess.lp_solves;
-        feasible(&p, &sol).then_some(sol)
+        if feasible(&p, &sol) {
+            Some(sol)
+        } else {
+            last = Some(sol);
+            None
+        }
     };
     // Walk up from the lower bound until feasible, then bisect.
     let mut lo = t_low;
     let mut hi = t_low;
     let mut best = None;
     for _ in 0..40 {
-        if let Some(sol) = try_at(hi) {
+        if let Some(sol) = try_at(hi, s) {
             best = Some(sol);
+            break;
+        }
+        if template.watch.cancelled().is_some() {
             break;
         }
         lo = hi;
         hi *= 1.1;
     }
     let Some(mut best) = best else {
-        return Err(MinTimeFailure {
-            best: Some(probe.best.clone()),
-        });
+        return Err(MinTimeFailure { best: last });
     };
-    while hi > lo && hi - lo > 1e-5 * hi {
-        let mid = 0.5 * (lo + hi);
-        match try_at(mid) {
-            Some(sol) => {
-                hi = mid;
-                best = sol;
+    let mut shape = s.clone();
+    for round in 0..=GLOBAL_CHECKS {
+        while hi > lo && hi - lo > 1e-5 * hi {
+            let mid = 0.5 * (lo + hi);
+            match try_at(mid, &shape) {
+                Some(sol) => {
+                    hi = mid;
+                    best = sol;
+                }
+                None => lo = mid,
             }
-            None => lo = mid,
+        }
+        // When only jerk binds the lower bound is the answer: nothing to check.
+        if hi <= t_low * (1.0 + 1e-5) || round == GLOBAL_CHECKS {
+            break;
+        }
+        let t = hi * (1.0 - GLOBAL_CHECK_STEP);
+        if t <= lo {
+            break;
+        }
+        let p = at(t);
+        match global(&p, opts) {
+            Some(r) if feasible(&p, &r.best) => {
+                hi = t;
+                shape = r.best.clone();
+                best = r.best;
+            }
+            _ => break,
         }
     }
     best.lp_solves = spent;
     Ok((best, probe))
 }
+
+/// Multistart checks below the bisection's answer, and how far below.
+const GLOBAL_CHECKS: usize = 3;
+const GLOBAL_CHECK_STEP: f64 = 0.005;
 
 /// A solution's shape time-scaled to total time `t` (velocities ÷ α,
 /// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
