@@ -6,5 +6,4 @@ pub mod job;
 pub mod planner;
 pub mod report;
 pub mod robot_file;
-pub mod svg;
 pub mod upload;
