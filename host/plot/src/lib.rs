@@ -92,9 +92,11 @@ fn font(px: f64) -> TextStyle<'static> {
 
 /// Width of `text` in pixels as drawn at `px`.
 fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px: f64) -> f64 {
-    // plotters measures at the nominal size and draws at size / 1.24.
+    // plotters measures at the nominal size and draws at size / 1.24, and
+    // ab_glyph's scale is the line height (ascent − descent = 1.164 em in
+    // DejaVu Sans), not the em that SVG's font-size is.
     area.estimate_text_size(text, &font(px))
-        .map(|(w, _)| w as f64 / 1.24)
+        .map(|(w, _)| w as f64 / 1.24 * 1.164)
         .unwrap_or(0.6 * px * text.chars().count() as f64)
 }
 

@@ -5,10 +5,12 @@
 //! - [`stats`]: per-joint max and mean |v|, |a|, |jerk|, |τ| and per-segment maxima.
 //! - [`tables`]: the statistics as aligned text tables (paper Tables 4/5/7/8).
 //! - [`plots`]: SVG profiles against time and the platform path (paper Figures 10/12).
+//! - [`sim_plots`]: SVG traces of a simulation run.
 
 pub mod extrema;
 pub mod load;
 pub mod plots;
+pub mod sim_plots;
 pub mod stats;
 pub mod tables;
 
