@@ -465,12 +465,29 @@ impl Chart {
                 let (pw, ph) = chart.plotting_area().dim_in_pixel();
                 (pw as f64 / (xa.hi - xa.lo), ph as f64 / (ya.hi - ya.lo))
             };
+            // Markers along a line: "outward" would put labels on the line,
+            // so they all go to its side instead.
+            let (sxx, syy, sxy) = finite.iter().fold((0.0, 0.0, 0.0), |a, p| {
+                let (dx, dy) = ((p.0 - c.0) * sx, (p.1 - c.1) * sy);
+                (a.0 + dx * dx, a.1 + dy * dy, a.2 + dx * dy)
+            });
+            let tr = sxx + syy;
+            let det = sxx * syy - sxy * sxy;
+            let minor = 0.5 * tr - (0.25 * tr * tr - det).max(0.0).sqrt();
+            let side = if tr > 0.0 && minor < 0.02 * tr {
+                // Normal of the principal axis, pointing up.
+                let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+                let (nx, ny) = (-angle.sin(), angle.cos());
+                Some(if ny < 0.0 { (-nx, -ny) } else { (nx, ny) })
+            } else {
+                None
+            };
             for (k, &(px, py)) in m.points.iter().enumerate() {
                 if !(px.is_finite() && py.is_finite()) {
                     continue;
                 }
                 let label = m.labels.get(k).cloned().unwrap_or_default();
-                let (offset, pos) = outward(((px - c.0) * sx, (py - c.1) * sy));
+                let (offset, pos) = outward(side.unwrap_or(((px - c.0) * sx, (py - c.1) * sy)));
                 chart
                     .draw_series(std::iter::once(
                         EmptyElement::at((px, py))
@@ -544,7 +561,7 @@ impl Chart {
 /// centre, `d` pixels from it (screen y down is handled here: `d.1` is up).
 fn outward(d: (f64, f64)) -> ((i32, i32), Pos) {
     let len = d.0.hypot(d.1);
-    let (ux, uy) = if len > 1.0 {
+    let (ux, uy) = if len > 1e-9 {
         (d.0 / len, d.1 / len)
     } else {
         (0.6, 0.8)
