@@ -203,3 +203,52 @@ pub fn sim_plots(
         ("overview.svg", svg(overview.to_svg())?),
     ])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::upload::sim_port::simulate;
+
+    fn case1() -> Plan {
+        let text = include_str!("../../../testdata/protocol/plans/case1-spline.json");
+        crate::report::parse_plan(text).unwrap()
+    }
+
+    /// The recomputed feedforward is the drives' own: with feedforward on,
+    /// what the feedback adds on top of it stays a small part of the command.
+    #[test]
+    fn recomputed_feedforward_matches_the_drives_command() {
+        let plan = case1();
+        let opts = SimulateOptions::default();
+        let r = simulate(&plan, &opts).unwrap();
+        let start = r.start_us as f64 * 1e-6;
+        let (mut rest, mut ff_sq, mut n) = (0.0, 0.0, 0);
+        for s in &r.samples {
+            let t = s.t_ns as f64 * 1e-9 - start;
+            // Away from the start's transient.
+            if !(0.2..=plan.total_time_s).contains(&t) {
+                continue;
+            }
+            let f = feedforward(&plan, &opts, t).unwrap();
+            for (total, f) in s.torque.iter().zip(f) {
+                rest += (*total as f64 - f).powi(2);
+                ff_sq += f * f;
+                n += 1;
+            }
+        }
+        assert!(n > 1000);
+        let ratio = (rest / ff_sq).sqrt();
+        assert!(ratio < 0.15, "feedback is {ratio:.3} of the feedforward");
+    }
+
+    #[test]
+    fn every_chart_is_drawn_for_a_run_without_samples() {
+        let plan = case1();
+        let opts = SimulateOptions::default();
+        let mut r = simulate(&plan, &opts).unwrap();
+        r.samples.clear();
+        let files = sim_plots(&plan, &opts, &r).unwrap();
+        assert_eq!(files.len(), 5);
+        assert!(files.iter().all(|(_, s)| s.trim_end().ends_with("</svg>")));
+    }
+}
