@@ -90,6 +90,14 @@ fn font(px: f64) -> TextStyle<'static> {
     (FAMILY, px * 1.24).into_font().color(&BLACK)
 }
 
+/// Titles: bold where the viewer has the bold face (measured as regular,
+/// which only centred titles use).
+fn bold(px: f64) -> TextStyle<'static> {
+    (FAMILY, px * 1.24, FontStyle::Bold)
+        .into_font()
+        .color(&BLACK)
+}
+
 /// Width of `text` in pixels as drawn at `px`.
 fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px: f64) -> f64 {
     // plotters measures at the nominal size and draws at size / 1.24, and
@@ -404,6 +412,15 @@ impl Chart {
             .draw()
             .map_err(err)?;
 
+        // The zero line of a signed quantity, darker than the grid.
+        if ya.lo < 0.0 && ya.hi > 0.0 {
+            chart
+                .draw_series(LineSeries::new(
+                    [(xa.lo, 0.0), (xa.hi, 0.0)],
+                    RGBColor(0xa0, 0xa0, 0xa0).stroke_width(1),
+                ))
+                .map_err(err)?;
+        }
         // Knots under the data, then the lines (wide ones first), then limits.
         for (x, _) in &self.knots {
             if x.is_finite() {
@@ -616,7 +633,7 @@ fn header(
     area.draw(&Text::new(
         title.to_string(),
         ((w / 2.0) as i32, y as i32),
-        font(16.0).pos(centre),
+        bold(16.0).pos(centre),
     ))
     .map_err(err)?;
     y += 24.0;
@@ -743,7 +760,7 @@ impl Figure {
             root.draw(&Text::new(
                 self.title.clone(),
                 ((w / 2) as i32, 10),
-                font(19.0).pos(Pos::new(HPos::Center, VPos::Top)),
+                bold(19.0).pos(Pos::new(HPos::Center, VPos::Top)),
             ))
             .map_err(err)?;
             let (_, grid) = root.split_vertically(title_h);
