@@ -629,7 +629,7 @@ fn header(
     let (w, _) = area.dim_in_pixel();
     let w = w as f64;
     let centre = Pos::new(HPos::Center, VPos::Top);
-    let mut y = 8.0;
+    let mut y = 14.0;
     area.draw(&Text::new(
         title.to_string(),
         ((w / 2.0) as i32, y as i32),
