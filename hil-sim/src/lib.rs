@@ -9,7 +9,6 @@ pub mod bus;
 pub mod faults;
 pub mod metrics;
 pub mod plant;
-pub mod plot;
 pub mod proxy;
 pub mod realtime;
 pub mod report;

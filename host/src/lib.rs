@@ -6,5 +6,4 @@ pub mod cli;
 pub mod exit;
 pub mod report;
 pub mod robot_file;
-pub mod svg;
 pub mod upload;

@@ -178,7 +178,7 @@ fn plots_are_complete_svg_documents() {
         assert!(!svg.contains("NaN") && !svg.contains("inf"), "{name}");
     }
     let path = &files.iter().find(|f| f.0 == "path3d.svg").unwrap().1;
-    assert!(path.contains(">P3<") && path.contains("x (mm)"));
+    assert!(path.contains(">\nP3\n</text>") && path.contains("x (mm)"));
 }
 
 fn triquint() -> Command {

@@ -4,8 +4,6 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use triquint_shared::plan::Plan;
-use triquint_sim::metrics::plan_position;
-use triquint_sim::plot::{Series, line_chart};
 use triquint_sim::report::{JsonFault, RunJson};
 
 use crate::exit::{CliError, CliResult, write_atomic};
@@ -27,7 +25,8 @@ pub struct SimulateArgs {
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Write tracking-error and torque plots (SVG) into DIR.
+    /// Write SVG plots into DIR: joint positions (reference and measured),
+    /// tracking error, torque command, feedforward against the total, overview.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 }
@@ -60,7 +59,7 @@ pub fn run(args: &SimulateArgs) -> CliResult {
     };
     let report = simulate(&plan, &opts).map_err(to_cli)?;
     if let Some(dir) = &args.plot {
-        write_plots(dir, &plan, &report)?;
+        write_plots(dir, &plan, &opts, &report)?;
     }
     let start_s = report.start_us as f64 * 1e-6;
     let faults: Vec<JsonFault> = report
@@ -154,56 +153,11 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
     }
 }
 
-fn write_plots(dir: &Path, plan: &Plan, r: &SimReport) -> CliResult {
-    let start = r.start_us * 1000;
-    let colours = ["#d62728", "#1f77b4", "#2ca02c"];
-    let labels = ["q1", "q2", "q3"];
-    let t = |ns: u64| (ns as f64 - start as f64) * 1e-9;
-    let err: Vec<Series> = (0..3)
-        .map(|j| Series {
-            label: labels[j],
-            colour: colours[j],
-            points: r
-                .samples
-                .iter()
-                .filter(|s| s.t_ns >= start)
-                .map(|s| {
-                    let ts = t(s.t_ns);
-                    (ts, (s.q[j] - plan_position(plan, ts)[j]) * 1e6)
-                })
-                .collect(),
-        })
-        .collect();
-    let torque: Vec<Series> = (0..3)
-        .map(|j| Series {
-            label: labels[j],
-            colour: colours[j],
-            points: r
-                .samples
-                .iter()
-                .map(|s| (t(s.t_ns), s.torque[j] as f64))
-                .collect(),
-        })
-        .collect();
-    write_atomic(
-        &dir.join("tracking_error.svg"),
-        line_chart(
-            "Tracking error (plant − plan)",
-            "time since start (s)",
-            "error (µm)",
-            &err,
-        )
-        .as_bytes(),
-    )?;
-    write_atomic(
-        &dir.join("torque.svg"),
-        line_chart(
-            "Motor torque command",
-            "time since start (s)",
-            "torque (N·m)",
-            &torque,
-        )
-        .as_bytes(),
-    )?;
+fn write_plots(dir: &Path, plan: &Plan, opts: &SimulateOptions, r: &SimReport) -> CliResult {
+    let plots = crate::report::sim_plots::sim_plots(plan, opts, r)
+        .map_err(|e| CliError::bad_input(format!("plots: {e}")))?;
+    for (name, svg) in plots {
+        write_atomic(&dir.join(name), svg.as_bytes())?;
+    }
     Ok(())
 }

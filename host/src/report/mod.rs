@@ -3,8 +3,10 @@
 //!
 //! - [`tables`]: the statistics as aligned text tables (paper Tables 4/5/7/8).
 //! - [`plots`]: SVG profiles against time and the platform path (paper Figures 10/12).
+//! - [`sim_plots`]: SVG traces of a simulation run.
 
 pub mod plots;
+pub mod sim_plots;
 pub mod tables;
 
 /// The polynomial helpers of the planner, as the plots use them.

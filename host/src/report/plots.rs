@@ -9,7 +9,7 @@ use triquint_shared::plan::Plan;
 use super::ReportError;
 use super::extrema::{derivative, roots_in};
 use super::stats::{PlanStats, Quantity, segment_torque};
-use crate::svg::{Chart, Figure, Panel, Path3d};
+use triquint_plot::{Chart, Figure, Line, Path3d, PlotError};
 
 /// Approximate number of samples over the whole plan (plus each segment's
 /// extremum times, so drawn peaks are the exact ones).
@@ -94,10 +94,13 @@ fn time_chart(title: &str, y_label: &str, samples: &Samples, q: usize, knots: &[
             .zip(&samples.values[q][j])
             .map(|(&t, &v)| (t, v))
             .collect();
-        chart = chart.series(format!("joint {}", j + 1), &pts);
+        chart = chart.line(Line::joint(j, format!("joint {}", j + 1), pts));
     }
     for (k, &t) in knots.iter().enumerate() {
-        chart = chart.vline(t, format!("P{}", k + 1));
+        chart = chart.knot(t, format!("P{}", k + 1));
+    }
+    if let (Some(&a), Some(&b)) = (knots.first(), knots.last()) {
+        chart = chart.x_range(a, b);
     }
     chart
 }
@@ -111,8 +114,8 @@ fn with_limit(chart: Chart, name: &str, unit: &str, stat: &Quantity, limit: f64)
     ));
     if peak >= LIMIT_DRAW_FRACTION * limit {
         chart
-            .hline(limit, format!("+{limit} {unit}"))
-            .hline(-limit, format!("−{limit} {unit}"))
+            .limit(limit, format!("+{limit} {unit}"))
+            .limit(-limit, format!("−{limit} {unit}"))
     } else {
         chart.note(format!(
             "limit ±{limit} {unit} not drawn (off scale: the peak is {:.1} % of it)",
@@ -201,8 +204,7 @@ pub fn plots(plan: &Plan, stats: &PlanStats) -> Result<Vec<(&'static str, String
             stats.jerk.max.iter().copied().fold(0.0, f64::max)
         ),
         3,
-        640.0,
-        440.0,
+        (640, 460),
     )
     .panel(position.clone())
     .panel(velocity.clone())
@@ -210,13 +212,14 @@ pub fn plots(plan: &Plan, stats: &PlanStats) -> Result<Vec<(&'static str, String
     .panel(jerk.clone())
     .panel(torque.clone())
     .panel(path.clone());
+    let svg = |r: Result<String, PlotError>| r.map_err(|e| ReportError::Invalid(e.to_string()));
     Ok(vec![
-        ("position.svg", position.to_svg()),
-        ("velocity.svg", velocity.to_svg()),
-        ("acceleration.svg", acceleration.to_svg()),
-        ("jerk.svg", jerk.to_svg()),
-        ("torque.svg", torque.to_svg()),
-        ("path3d.svg", path.projections(true).to_svg()),
-        ("overview.svg", overview.to_svg()),
+        ("position.svg", svg(position.to_svg())?),
+        ("velocity.svg", svg(velocity.to_svg())?),
+        ("acceleration.svg", svg(acceleration.to_svg())?),
+        ("jerk.svg", svg(jerk.to_svg())?),
+        ("torque.svg", svg(torque.to_svg())?),
+        ("path3d.svg", svg(path.projections(true).to_svg())?),
+        ("overview.svg", svg(overview.to_svg())?),
     ])
 }
