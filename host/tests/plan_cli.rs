@@ -69,3 +69,56 @@ fn cli_exit_statuses() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn bad_numbers_are_named_readably() {
+    let dir = std::env::temp_dir().join(format!("triquint-plan-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let job = dir.join("huge.toml");
+    std::fs::write(
+        &job,
+        "[limits]\ntotal_time = 1e300\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [10, 0, 600]]\n",
+    )
+    .unwrap();
+    let out = dir.join("huge.json");
+    let (code, err) = triquint(&["plan", &job.to_string_lossy(), "-o", &out.to_string_lossy()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("limits.total_time") && err.contains("1e300"),
+        "{err}"
+    );
+    assert!(err.len() < 200, "{err}");
+    let (code, err) = triquint(&["ik", "0", "0", "1e308"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("1e308") && err.len() < 200, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn check_and_report_read_plans_of_two_to_four_points() {
+    let dir = std::env::temp_dir().join(format!("triquint-plan-few-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for n in 2..=4 {
+        let pts: Vec<String> = (0..n)
+            .map(|i| format!("[{}, 0, {}]", 10 * i, 600 + 5 * i))
+            .collect();
+        let job = dir.join(format!("few{n}.toml"));
+        std::fs::write(
+            &job,
+            format!("[path]\nunits = \"mm\"\npoints = [{}]\n", pts.join(", ")),
+        )
+        .unwrap();
+        let out = dir
+            .join(format!("few{n}.json"))
+            .to_string_lossy()
+            .into_owned();
+        assert_eq!(
+            triquint(&["plan", &job.to_string_lossy(), "-o", &out, "--quiet"]).0,
+            0
+        );
+        let (code, err) = triquint(&["check", &out]);
+        assert_eq!(code, 0, "{n} points: {err}");
+        let (code, err) = triquint(&["report", &out]);
+        assert_eq!(code, 0, "{n} points: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

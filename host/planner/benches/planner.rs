@@ -11,9 +11,12 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("planner");
     g.sample_size(10);
     for case in ["paper-case1", "paper-case2"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{case}.toml"));
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{case}.toml"));
         let job = Job::load(&path).expect("example job");
-        g.bench_function(case, |b| b.iter(|| plan(&job, &Options::default()).expect("plan")));
+        g.bench_function(case, |b| {
+            b.iter(|| plan(&job, &Options::default()).expect("plan"))
+        });
     }
     let p2p = Job::builder()
         .objective(Objective::MinTime)

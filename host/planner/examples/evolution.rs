@@ -21,11 +21,17 @@ fn main() -> ExitCode {
         return ExitCode::from(2);
     };
     let result = Job::load(Path::new(path)).and_then(|job| {
-        compare(&job, generations, per_segment, &Options::default(), &|g, best| {
-            if g % 10 == 0 {
-                eprintln!("generation {g}: best {best:.9}");
-            }
-        })
+        compare(
+            &job,
+            generations,
+            per_segment,
+            &Options::default(),
+            &|g, best| {
+                if g % 10 == 0 {
+                    eprintln!("generation {g}: best {best:.9}");
+                }
+            },
+        )
     });
     match result {
         Ok(c) => {

@@ -129,10 +129,12 @@ fn infeasible_message(limit: Limit, value: f64, reached: f64, shortest: Option<f
         ),
     };
     match shortest {
-        Some(t) => m += &format!(
-            "; the shortest total time that meets every limit is {} s",
-            readable(t)
-        ),
+        Some(t) => {
+            m += &format!(
+                "; the shortest total time that meets every limit is {} s",
+                readable(t)
+            )
+        }
         None => m += "; no total time meets every limit",
     }
     m

@@ -56,8 +56,8 @@ pub fn compare(
     report: &dyn Fn(usize, f64),
 ) -> Result<Comparison, PlanError> {
     let p = job_problem(job, &Arc::new(Watch::new(opts.time_budget)))?;
-    let search = global(&p, opts)
-        .ok_or_else(|| PlanError::Solver("the search found no solution".into()))?;
+    let search =
+        global(&p, opts).ok_or_else(|| PlanError::Solver("the search found no solution".into()))?;
     let o = EvolutionOptions {
         population: population_per_segment * p.knots.segments(),
         generations,

@@ -83,12 +83,10 @@ impl JobBuilder {
     /// finite, reachable and apart from the one before, and every knot added
     /// between them reachable.
     pub fn build(self) -> Result<Job, PlanError> {
-        self.robot
-            .validate()
-            .map_err(|e| {
-                let triquint_shared::params::ParamError::Invalid { name, .. } = e;
-                PlanError::invalid(&format!("robot.{name}"), e.to_string())
-            })?;
+        self.robot.validate().map_err(|e| {
+            let triquint_shared::params::ParamError::Invalid { name, .. } = e;
+            PlanError::invalid(&format!("robot.{name}"), e.to_string())
+        })?;
         let l = &self.limits;
         for (name, value) in [
             ("velocity", l.velocity),
@@ -177,7 +175,12 @@ impl JobBuilder {
     }
 }
 
-fn reachable(model: &Model<f64>, p: [f64; 3], point: PointKind, index: usize) -> Result<(), PlanError> {
+fn reachable(
+    model: &Model<f64>,
+    p: [f64; 3],
+    point: PointKind,
+    index: usize,
+) -> Result<(), PlanError> {
     Pose::from_cartesian(model, Vector3::from(p))
         .map(|_| ())
         .map_err(|e| PlanError::OutsideWorkspace {
@@ -253,9 +256,18 @@ mod tests {
     fn errors_name_the_field_or_the_point() {
         let ok = Job::builder().points_mm([[0.0, 0.0, 600.0], [10.0, 0.0, 600.0]]);
         assert!(ok.clone().build().is_ok());
-        let e = err(ok.clone().points_mm([[0.0, 0.0, 600.0], [900.0, 0.0, 600.0]]));
+        let e = err(ok
+            .clone()
+            .points_mm([[0.0, 0.0, 600.0], [900.0, 0.0, 600.0]]));
         assert!(
-            matches!(e, PlanError::OutsideWorkspace { point: PointKind::ViaPoint, index: 1, .. }),
+            matches!(
+                e,
+                PlanError::OutsideWorkspace {
+                    point: PointKind::ViaPoint,
+                    index: 1,
+                    ..
+                }
+            ),
             "{e:?}"
         );
         assert!(e.to_string().starts_with("point 2 (900, 0, 600) mm"), "{e}");
@@ -263,8 +275,10 @@ mod tests {
         assert!(matches!(&e, PlanError::InvalidJob { field, .. } if field == "limits.total_time"));
         assert!(e.to_string().contains("1e300"), "{e}");
         assert!(e.to_string().len() < 120, "{e}");
-        let mut l = Limits::default();
-        l.jerk = -1.0;
+        let mut l = Limits {
+            jerk: -1.0,
+            ..Limits::default()
+        };
         let e = err(ok.clone().limits(l.clone()));
         assert!(matches!(&e, PlanError::InvalidJob { field, .. } if field == "limits.jerk"));
         l.jerk = f64::NAN;

@@ -158,7 +158,8 @@ mod tests {
                 .contains("not finite")
         );
         assert!(err("[path]\nunits = \"mm\"\n").contains("exactly one"));
-        let both = "[path]\nunits = \"mm\"\nfile = \"a.csv\"\npoints = [[0, 0, 600], [1, 0, 600]]\n";
+        let both =
+            "[path]\nunits = \"mm\"\nfile = \"a.csv\"\npoints = [[0, 0, 600], [1, 0, 600]]\n";
         assert!(err(both).contains("exactly one"));
     }
 
@@ -179,10 +180,18 @@ mod tests {
         assert!((job.points_m()[2][2] - 0.61).abs() < 1e-12);
         std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"bad.csv\"\n").unwrap();
         let e = Job::load(&job_path).unwrap_err();
-        assert!(matches!(e, PlanError::JobFile { line: Some(2), .. }), "{e:?}");
+        assert!(
+            matches!(e, PlanError::JobFile { line: Some(2), .. }),
+            "{e:?}"
+        );
         assert!(e.to_string().contains("bad.csv:2"), "{e}");
         std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"none.csv\"\n").unwrap();
-        assert!(Job::load(&job_path).unwrap_err().to_string().contains("none.csv"));
+        assert!(
+            Job::load(&job_path)
+                .unwrap_err()
+                .to_string()
+                .contains("none.csv")
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -58,7 +58,6 @@ mod watch;
 #[cfg(test)]
 mod search_tests;
 
-
 pub use check::{CheckRow, check, max_abs};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
 pub use job::{Job, JobBuilder, LIMIT_RANGE, MAX_POINTS, MAX_SEGMENT_S};

@@ -388,7 +388,10 @@ impl Problem {
             let all: Vec<(usize, f64)> = (0..nseg).map(|k| (dh0 + k, 1.0)).collect();
             lp.at_most(&all, slack.max(0.0));
             for (k, &hk) in h.iter().enumerate() {
-                lp.at_most(&[(dh0 + k, 1.0)], (delta * hk).min(self.h_max - hk).max(0.0));
+                lp.at_most(
+                    &[(dh0 + k, 1.0)],
+                    (delta * hk).min(self.h_max - hk).max(0.0),
+                );
                 lp.at_most(
                     &[(dh0 + k, -1.0)],
                     (delta * hk).min(hk - self.h_min).max(0.0),

@@ -21,7 +21,6 @@ pub struct Lp {
     pub refine: bool,
 }
 
-
 #[derive(Debug, Default)]
 struct Rows {
     row: Vec<usize>,

@@ -72,14 +72,9 @@ pub fn plan_with(
             let _ = done.send(());
             r
         });
-        loop {
-            match finished.recv_timeout(OBSERVER_PERIOD) {
-                Err(RecvTimeoutError::Timeout) => {
-                    if observer.progress(&watch.progress()) == Control::Cancel {
-                        watch.cancel();
-                    }
-                }
-                _ => break,
+        while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(OBSERVER_PERIOD) {
+            if observer.progress(&watch.progress()) == Control::Cancel {
+                watch.cancel();
             }
         }
         worker
@@ -161,7 +156,7 @@ fn shortest(p: &Problem, opts: &Options) -> Result<(Solution, usize), MinTimeFai
     p.watch.set_stage(Stage::Finishing);
     let Some(rounded) = lengthen_until_feasible(p, &best) else {
         return Err(MinTimeFailure {
-            best: Some(best),
+            best: Some(Box::new(best)),
         });
     };
     Ok((rounded, probe.starts))
@@ -260,11 +255,10 @@ fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option<Solution> 
 /// limit holds, then is bisected back towards the smallest that holds.
 fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solution> {
     let at = |alpha: f64| -> Option<Solution> {
-        let h: Vec<f64> = s
-            .h
-            .iter()
-            .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
-            .collect();
+        let h: Vec<f64> =
+            s.h.iter()
+                .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
+                .collect();
         let f = fine(p, h.iter().sum());
         f.inner_via_relaxation(&h, &crate::search::scaled_x(&s.x, alpha))
     };

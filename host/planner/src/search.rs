@@ -113,6 +113,16 @@ pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
         if let Some(best) = p.accept_relaxed(&r.best) {
             return Some(SearchResult { best, ..r });
         }
+        // The relaxation bounds the jerk from below: when even it breaks the
+        // jerk limit no plan at this total time meets it, and the full
+        // search would only confirm that.
+        if !p.jerk_only && r.best.jerk > p.limits.jerk * (1.0 + 1e-9) {
+            let best = Solution {
+                lp_solves: r.best.lp_solves,
+                ..p.evaluate(&r.best.h, &r.best.x)
+            };
+            return Some(SearchResult { best, ..r });
+        }
         lp_solves = r.lp_solves;
         starts.insert(0, r.best.h);
     }
@@ -124,11 +134,7 @@ pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     Some(r)
 }
 
-fn multistart(
-    p: &Problem,
-    starts: &[Vec<f64>],
-    opts: &Options,
-) -> Option<SearchResult> {
+fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
     let coarse: Vec<Option<Solution>> = parallel(starts, opts.threads, |h| {
         let first = p.inner(h, &p.zero_x())?;
         let sol = p.local_search(&first, 60, 1e-5);
@@ -204,7 +210,7 @@ pub fn feasible(p: &Problem, s: &Solution) -> bool {
 #[derive(Debug, Clone)]
 pub struct MinTimeFailure {
     /// The best plan at the longest time tried, when the search got one.
-    pub best: Option<Solution>,
+    pub best: Option<Box<Solution>>,
 }
 
 /// Shortest total time with a plan meeting every limit, and the
@@ -219,7 +225,10 @@ pub struct MinTimeFailure {
 /// and bisecting, each time from that shape, optimised locally until
 /// feasible; then the multistart search at slightly less time checks that
 /// no other basin does better (and continues from there if one does).
-pub fn min_time(template: &Problem, opts: &Options) -> Result<(Solution, SearchResult), MinTimeFailure> {
+pub fn min_time(
+    template: &Problem,
+    opts: &Options,
+) -> Result<(Solution, SearchResult), MinTimeFailure> {
     let at = |t: f64| {
         let mut p = template.clone();
         p.total_time = t;
@@ -243,7 +252,7 @@ pub fn min_time(template: &Problem, opts: &Options) -> Result<(Solution, SearchR
             return Some(guess);
         }
         // Only feasibility is asked here: stop at the first feasible point.
-        let sol = p.local_search_until(&guess, 200, 1e-9, &|sol| feasible(&p, sol));
+        let sol = p.local_search_until(&guess, TRIAL_STEPS, 1e-9, &|sol| feasible(&p, sol));
         spent += sol.lp_solves - guess.lp_solves;
         if feasible(&p, &sol) {
             Some(sol)
@@ -268,11 +277,13 @@ pub fn min_time(template: &Problem, opts: &Options) -> Result<(Solution, SearchR
         hi *= 1.1;
     }
     let Some(mut best) = best else {
-        return Err(MinTimeFailure { best: last });
+        return Err(MinTimeFailure {
+            best: last.map(Box::new),
+        });
     };
     let mut shape = s.clone();
     for round in 0..=GLOBAL_CHECKS {
-        while hi > lo && hi - lo > 1e-5 * hi {
+        while hi > lo && hi - lo > BISECTION_TOL * hi {
             let mid = 0.5 * (lo + hi);
             match try_at(mid, &shape) {
                 Some(sol) => {
@@ -304,6 +315,12 @@ pub fn min_time(template: &Problem, opts: &Options) -> Result<(Solution, SearchR
     Ok((best, probe))
 }
 
+/// Trust-region steps of one bisection trial: a trial that has not found a
+/// feasible point by then counts as infeasible (the multistart checks below
+/// catch what that misses).
+const TRIAL_STEPS: usize = 60;
+/// Relative accuracy of the shortest time.
+const BISECTION_TOL: f64 = 1e-4;
 /// Multistart checks below the bisection's answer, and how far below.
 const GLOBAL_CHECKS: usize = 3;
 const GLOBAL_CHECK_STEP: f64 = 0.005;

@@ -96,7 +96,11 @@ impl Knots {
                 if r == 0 { 1.0 } else { 0.0 }
             } else {
                 let b = eval_poly(basis, u);
-                if r < 4 { b[r] } else { quartic_plus(basis, u, r) }
+                if r < 4 {
+                    b[r]
+                } else {
+                    quartic_plus(basis, u, r)
+                }
             };
             if b == 0.0 {
                 continue;

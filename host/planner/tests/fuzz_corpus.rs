@@ -44,7 +44,10 @@ const POINTS_ALPHABET: &[u8] =
 
 #[test]
 fn points_corpus_and_random_inputs_pass() {
-    for data in inputs("corpus/points").iter().chain(inputs("regressions/points").iter()) {
+    for data in inputs("corpus/points")
+        .iter()
+        .chain(inputs("regressions/points").iter())
+    {
         fuzz_points(data);
     }
     let mut next = xorshift(0x9E37_79B9_7F4A_7C15);
@@ -58,13 +61,31 @@ fn points_corpus_and_random_inputs_pass() {
             })
             .collect();
         fuzz_points(&data);
-        oks += usize::from(triquint_planner::parse_points(std::str::from_utf8(&data).unwrap_or("")).is_ok());
+        oks += usize::from(
+            triquint_planner::parse_points(std::str::from_utf8(&data).unwrap_or("")).is_ok(),
+        );
     }
     assert!(oks > 100, "only {oks} inputs parsed");
     for text in [
-        "1,,2,3", "1e999,0,0", "1 2", "1 2 3 4", "#", "x,y,z\nx,y,z", "", "\r\n", ",",
-        "1,2,3\r\r\n", "nan,nan,nan", "inf inf inf", "\u{feff}", "1 2 3 # a # b",
-        "1\u{a0}2\u{a0}3", "１ ２ ３", "1_000 2 3", "1e-400 0 0", "0x1 2 3",
+        "1,,2,3",
+        "1e999,0,0",
+        "1 2",
+        "1 2 3 4",
+        "#",
+        "x,y,z\nx,y,z",
+        "",
+        "\r\n",
+        ",",
+        "1,2,3\r\r\n",
+        "nan,nan,nan",
+        "inf inf inf",
+        "\u{feff}",
+        "1 2 3 # a # b",
+        "1\u{a0}2\u{a0}3",
+        "１ ２ ３",
+        "1_000 2 3",
+        "1e-400 0 0",
+        "0x1 2 3",
     ] {
         fuzz_points(text.as_bytes());
     }

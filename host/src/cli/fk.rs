@@ -3,6 +3,7 @@
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
+use triquint_planner::readable;
 use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
 
@@ -32,7 +33,9 @@ pub fn run(args: &FkArgs, robot: &Robot) -> CliResult {
     let pose = Pose::from_joints(&robot.model::<f64>(), q_mm / 1000.0).map_err(|e| {
         CliError::bad_input(format!(
             "joints ({}, {}, {}) mm have no valid pose: {e}",
-            q_mm.x, q_mm.y, q_mm.z
+            readable(q_mm.x),
+            readable(q_mm.y),
+            readable(q_mm.z)
         ))
     })?;
     let r_mm = pose.r * 1000.0;

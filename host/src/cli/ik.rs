@@ -3,6 +3,7 @@
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
+use triquint_planner::readable;
 use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
 
@@ -32,7 +33,9 @@ pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
     let pose = Pose::from_cartesian(&robot.model::<f64>(), r_mm / 1000.0).map_err(|e| {
         CliError::bad_input(format!(
             "position ({}, {}, {}) mm is outside the workspace: {e}",
-            r_mm.x, r_mm.y, r_mm.z
+            readable(r_mm.x),
+            readable(r_mm.y),
+            readable(r_mm.z)
         ))
     })?;
     let q_mm = pose.q * 1000.0;

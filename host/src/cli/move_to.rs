@@ -7,8 +7,8 @@ use std::time::{Duration, Instant, SystemTime};
 
 use clap::Args;
 use nalgebra::Vector3;
-use triquint_shared::kinematics::Pose;
 use triquint_planner::{Job, Objective, Options, plan};
+use triquint_shared::kinematics::Pose;
 use triquint_shared::protocol::config::{DriveSettings, stop_time};
 use triquint_shared::protocol::{DriveConfig, Msg, decode};
 use triquint_shared::{Limits, Robot};
@@ -102,7 +102,9 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
     Pose::from_cartesian(&m, target).map_err(|e| {
         CliError::bad_input(format!(
             "target ({}, {}, {}) mm is not reachable: {e}",
-            target_mm.x, target_mm.y, target_mm.z
+            triquint_planner::readable(target_mm.x),
+            triquint_planner::readable(target_mm.y),
+            triquint_planner::readable(target_mm.z)
         ))
     })?;
     let limits = Limits::default();

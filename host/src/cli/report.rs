@@ -2,8 +2,8 @@
 
 use clap::Args;
 
-use crate::exit::{CliError, CliResult, write_atomic};
 use crate::cli::load_plan;
+use crate::exit::{CliError, CliResult, write_atomic};
 use crate::report::{ReportError, plan_stats, plots, tables};
 
 #[derive(Args, Debug)]
@@ -20,9 +20,7 @@ pub struct ReportArgs {
 
 pub fn run(args: &ReportArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let bad = |e: ReportError| {
-        CliError::bad_input(format!("{}: {e}", args.plan.display()))
-    };
+    let bad = |e: ReportError| CliError::bad_input(format!("{}: {e}", args.plan.display()));
     let stats = plan_stats(&plan).map_err(|e| bad(e.into()))?;
     // Plots first, so a failure leaves no half-printed report.
     let mut written = Vec::new();
