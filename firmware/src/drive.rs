@@ -1,12 +1,11 @@
 //! The control side of a drive node: state machine, segment queue and
-//! control tick, fed with finished items by the receive side
-//! ([`crate::receiver::Receiver`]).
+//! control tick, fed with finished items by the receive side (through the
+//! hand-off types of the `inbox` module).
 
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
 use triquint_shared::dynamics;
-use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::protocol::{
     Command, CommandAck, CommandCode, DriveConfig, Emergency, FaultCode, Frame, Heartbeat,
     HeartbeatExt, PROTOCOL_VERSION, Reject, SegmentAck, State, Telemetry, TelemetryExt,
@@ -14,10 +13,15 @@ use triquint_shared::protocol::{
 };
 use triquint_shared::quintic::JointMotion;
 
+use triquint_shared::protocol::contract::{
+    CONTINUITY_TOL, LIMIT_TOL, MAX_DURATION_US, MIN_HEARTBEAT_US, PEER_SKEW_MARGIN_US,
+    REPEAT_WINDOW_US, UNCONFIGURED_HEARTBEAT_US, UNCONFIGURED_SYNC_TIMEOUT_US,
+};
+
+use crate::active::Active;
 use crate::hal::{Encoder, MotorOutput};
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Source, TAKE_PER_TICK};
+use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Source, Status, TAKE_PER_TICK};
 use crate::ns::{to_f32, to_i64};
-use crate::receiver::Status;
 use crate::scaling::{Phase, TimeScaling};
 use crate::segment::{Seg, scale};
 use crate::sync::SyncEstimator;
@@ -26,11 +30,6 @@ use crate::sync::SyncEstimator;
 pub const QUEUE_CAPACITY: usize = 8;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 64;
-/// A command repeated (same code, token, argument) within this time is a
-/// duplicate frame: CAN resends a frame whose ACK slot a receiver missed.
-pub const REPEAT_WINDOW_US: u64 = 100_000;
-/// Largest allowed jump between a segment's start and the previous end (m).
-pub const CONTINUITY_TOL: f32 = 10e-6;
 
 /// Why the node is slowing down.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,53 +40,6 @@ pub enum StopReason {
     Hold,
     /// Fault: Fault at rest.
     Fault(FaultCode),
-}
-
-/// What is derived once from a configuration (by the receive side, when it
-/// prepares a commit). Small on purpose: the tick copies it; the
-/// configuration and model stay in the drive.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Active {
-    crc: u32,
-    axis: usize,
-    dt: f32,
-    inv_cpm: f32,
-    vel_alpha: f32,
-    stop_ns: i64,
-    quick_stop_ns: i64,
-    margin_ns: i64,
-    sync_timeout_us: u64,
-    telemetry_us: u64,
-    heartbeat_us: u64,
-}
-
-impl Active {
-    /// Periods and filter constants of configuration `cfg` (with CRC `crc`),
-    /// in f32 and integers only.
-    pub fn new(cfg: &DriveConfig, crc: u32) -> Self {
-        let dt = 1.0 / cfg.control_rate;
-        let wc = 2.0 * core::f32::consts::PI * cfg.velocity_filter * dt;
-        // Whole microseconds (validated > 0; saturating far beyond any use).
-        let us = |s: f32| to_i64(s * 1e6).max(0) as u64;
-        let ns = |s: f32| (us(s) as i64).saturating_mul(1000);
-        Self {
-            crc,
-            axis: (cfg.axis as usize).min(2),
-            dt,
-            inv_cpm: 1.0 / cfg.counts_per_metre,
-            vel_alpha: wc / (1.0 + wc),
-            stop_ns: ns(cfg.stop_time),
-            quick_stop_ns: ns(cfg.quick_stop_time),
-            margin_ns: ns(cfg.underrun_margin),
-            sync_timeout_us: us(cfg.sync_timeout),
-            telemetry_us: if cfg.telemetry_rate > 0.0 {
-                us(1.0 / cfg.telemetry_rate)
-            } else {
-                0
-            },
-            heartbeat_us: us(cfg.heartbeat_period),
-        }
-    }
 }
 
 /// Counters and last values, for telemetry and tests.
@@ -161,11 +113,6 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
 fn limit(x: f32, lim: f32) -> f32 {
     x.max(-lim).min(lim)
 }
-
-/// Relative tolerance on the configured velocity, acceleration and jerk
-/// limits, and on the jump of q', q'', q''' between segments (as a fraction
-/// of those limits): f32 evaluation of an exact plan stays far inside it.
-pub const LIMIT_TOL: f32 = 0.01;
 
 /// The new segment starts where the previous one ended, in position (within
 /// [`CONTINUITY_TOL`]) and in velocity, acceleration and jerk (within
@@ -254,7 +201,7 @@ impl<const Q: usize> Drive<Q> {
     pub fn config_crc(&self) -> u32 {
         self.active.as_ref().map(|a| a.crc).unwrap_or(0)
     }
-    /// What the receive side needs to know (see [`crate::receiver::Receiver`]).
+    /// What the receive side needs to know, published every tick.
     pub fn status(&self) -> Status {
         Status {
             config_crc: self.config_crc(),
@@ -269,7 +216,9 @@ impl<const Q: usize> Drive<Q> {
     pub fn is_synced(&self) -> bool {
         match &self.active {
             Some(a) => self.sync.is_synced(self.last_local_us, a.sync_timeout_us),
-            None => self.sync.is_synced(self.last_local_us, 500_000),
+            None => self
+                .sync
+                .is_synced(self.last_local_us, UNCONFIGURED_SYNC_TIMEOUT_US),
         }
     }
     /// Host time (ns) estimated at local time `local_us`.
@@ -535,8 +484,8 @@ impl<const Q: usize> Drive<Q> {
         if self.state != State::Running {
             return;
         }
-        let peer = State::from_u8(h.state);
-        if h.fault != FaultCode::None as u8 && h.fault != FaultCode::QuickStop as u8 {
+        let peer = h.state().ok();
+        if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
             self.on_emergency(FaultCode::PeerEmergency, rx_us);
         } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
             self.on_emergency(FaultCode::PeerLost, rx_us);
@@ -547,7 +496,7 @@ impl<const Q: usize> Drive<Q> {
     /// started, or Idle before our plan's last segment: it is not moving
     /// with us. The margins cover the start skew (one tick) and the end skew.
     fn peer_left_behind(&self, peer: Option<State>, local_us: u64) -> bool {
-        const MARGIN_NS: i64 = 20_000_000;
+        const MARGIN_NS: i64 = PEER_SKEW_MARGIN_US as i64 * 1000;
         let (Some(t), Some(t0)) = (self.sync.host_ns(local_us), self.stats.started_at_ns) else {
             return false;
         };
@@ -584,7 +533,7 @@ impl<const Q: usize> Drive<Q> {
             self.send(f);
             return;
         }
-        let Some(code) = CommandCode::from_u8(c.command) else {
+        let Ok(code) = c.command() else {
             self.command_ack(c, FaultCode::BadCommand, 0);
             return;
         };
@@ -961,8 +910,8 @@ impl<const Q: usize> Drive<Q> {
 
     fn periodic(&mut self, now_us: u64) {
         let (hb_us, tel_us) = match &self.active {
-            Some(a) => (a.heartbeat_us.max(1000), a.telemetry_us),
-            None => (100_000, 0),
+            Some(a) => (a.heartbeat_us.max(MIN_HEARTBEAT_US), a.telemetry_us),
+            None => (UNCONFIGURED_HEARTBEAT_US, 0),
         };
         if now_us >= self.next_heartbeat_us {
             self.next_heartbeat_us = now_us + hb_us;
@@ -979,7 +928,7 @@ impl<const Q: usize> Drive<Q> {
                 .active
                 .as_ref()
                 .map(|a| a.sync_timeout_us)
-                .unwrap_or(500_000);
+                .unwrap_or(UNCONFIGURED_SYNC_TIMEOUT_US);
             let ext = HeartbeatExt {
                 next_seq: self.next_seq,
                 rejects: self.stats.rejects,

@@ -11,6 +11,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod active;
 pub mod drive;
 pub mod hal;
 pub mod inbox;
@@ -22,9 +23,9 @@ pub mod segment;
 pub mod sync;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
-pub use hal::{CanPort, Clock, Encoder, MotorOutput, RxFrame};
-pub use inbox::Item;
+pub use hal::{CanPort, Encoder, MotorOutput, RxFrame};
+pub use inbox::{Item, Status};
 pub use node::Node;
-pub use receiver::{Receiver, Status};
+pub use receiver::Receiver;
 #[cfg(test)]
 mod tests;
