@@ -5,7 +5,6 @@
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
-use triquint_shared::dynamics;
 use triquint_shared::protocol::{
     Command, CommandAck, CommandCode, DriveConfig, Emergency, FaultCode, Frame, Heartbeat,
     HeartbeatExt, PROTOCOL_VERSION, Reject, SegmentAck, State, Telemetry, TelemetryExt,
@@ -21,10 +20,19 @@ use triquint_shared::protocol::contract::{
 use crate::active::Active;
 use crate::hal::{Encoder, MotorOutput};
 use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Source, Status, TAKE_PER_TICK};
+use crate::law::{self, Gains, LawState};
 use crate::ns::{to_f32, to_i64};
 use crate::scaling::{Phase, TimeScaling};
 use crate::segment::{Seg, scale};
 use crate::sync::SyncEstimator;
+
+/// The feedforward is evaluated this many control periods ahead on the
+/// path: the torque computed now acts from the next tick on, held for one.
+pub const FF_LOOKAHEAD_TICKS: f32 = 1.5;
+const FF_LOOKAHEAD_NS_PER_S: f32 = FF_LOOKAHEAD_TICKS * 1e9;
+/// Encoder scale of a node without a configuration (m per count): only
+/// for the position it reports before it has one.
+pub const UNCONFIGURED_M_PER_COUNT: f32 = 1e-9;
 
 /// Segment queue capacity of a node (segments).
 pub const QUEUE_CAPACITY: usize = 8;
@@ -82,11 +90,8 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     plan_ns: i64,
     hold: Option<Vector3<f32>>,
     hold_own: f32,
-    integral: f32,
-    last_e: Option<f32>,
-    ev: f32,
-    last_ff: f32,
-    ff_active: bool,
+    /// The position loop's state (integral, error derivative, feedforward).
+    law: LawState,
     last_q: Option<f32>,
     vel: f32,
     enabled: bool,
@@ -106,12 +111,6 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     /// Local time (µs) of the last heartbeat of each node (index node − 1).
     peer_seen_us: [Option<u64>; 3],
     pub stats: Stats,
-}
-
-/// x limited to ±lim. Unlike `f32::clamp`, no panic path (clamp asserts
-/// min ≤ max), so the control tick has none.
-fn limit(x: f32, lim: f32) -> f32 {
-    x.max(-lim).min(lim)
 }
 
 /// The new segment starts where the previous one ended, in position (within
@@ -162,11 +161,7 @@ impl<const Q: usize> Drive<Q> {
             plan_ns: 0,
             hold: None,
             hold_own: 0.0,
-            integral: 0.0,
-            last_e: None,
-            ev: 0.0,
-            last_ff: 0.0,
-            ff_active: false,
+            law: LawState::default(),
             last_q: None,
             vel: 0.0,
             enabled: false,
@@ -245,8 +240,13 @@ impl<const Q: usize> Drive<Q> {
         self.dropped_tx
     }
 
+    /// The CAN controller's (transmit, receive) error counters, for HeartbeatExt.
     pub fn set_error_counters(&mut self, e: (u8, u8)) {
         self.errors = e;
+    }
+    /// The error counters the next HeartbeatExt reports.
+    pub fn error_counters(&self) -> (u8, u8) {
+        self.errors
     }
 
     /// Next frame to transmit.
@@ -560,7 +560,7 @@ impl<const Q: usize> Drive<Q> {
                     self.flush();
                     self.state = State::Idle;
                     self.fault = FaultCode::None;
-                    self.integral = 0.0;
+                    self.law.integral = 0.0;
                     FaultCode::None
                 } else {
                     FaultCode::WrongState
@@ -682,9 +682,10 @@ impl<const Q: usize> Drive<Q> {
 
     // ---------------------------------------------------------------- control
 
-    /// One control tick at local time `now_us`: read the encoder, run the
-    /// state machine and the time-scaling, evaluate the reference, compute
-    /// feedforward and PID, command the motor, queue periodic frames.
+    /// One control tick at local time `now_us`, in its parts: measure,
+    /// supervise time and peers, trigger the start, generate the reference,
+    /// run the control law, supervise the motion, command the motor, and
+    /// queue the periodic frames.
     pub fn tick<E: Encoder, M: MotorOutput>(&mut self, now_us: u64, enc: &mut E, motor: &mut M) {
         self.last_local_us = now_us;
         self.stats.ticks = self.stats.ticks.wrapping_add(1);
@@ -692,16 +693,61 @@ impl<const Q: usize> Drive<Q> {
             motor.enable(false);
             motor.set_torque(0.0);
             self.enabled = false;
-            self.last_q = Some(to_f32(enc.read_counts()) * 1e-9);
+            self.last_q = Some(to_f32(enc.read_counts()) * UNCONFIGURED_M_PER_COUNT);
             self.periodic(now_us);
             return;
         };
         if !self.enabled {
             motor.enable(true);
             self.enabled = true;
-            self.integral = 0.0;
+            self.law.integral = 0.0;
             self.last_q = None;
         }
+        let q = self.measure(&a, enc);
+        let host = self.sync.host_ns(now_us);
+        if let Some(code) = self.time_fault(&a, host.is_some(), now_us) {
+            self.on_time_fault(code, now_us);
+        }
+        let host_ns = host.unwrap_or(0);
+        self.trigger_start(host_ns);
+        let (reference, ff_ref) = self.reference(&a, host_ns);
+
+        // Feedforward and PID on our own axis (`min` lets the compiler drop
+        // the bounds checks: no panic path in the tick).
+        let i = a.axis.min(2);
+        let mut ff = 0.0;
+        if self.cfg.feedforward != 0.0 && self.hold.is_some() {
+            match law::feedforward(&self.model, &self.cfg, &ff_ref, i) {
+                Some(t) => ff = t,
+                None => {
+                    if matches!(self.state, State::Running) {
+                        self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, now_us);
+                    }
+                }
+            }
+        }
+        let out = law::step(
+            &mut self.law,
+            &Gains::new(&self.cfg, &a),
+            reference.q[i],
+            q,
+            ff,
+        );
+        if let Some(code) = self.motion_fault(out.error, q) {
+            self.begin_stop(StopReason::Fault(code), false, now_us);
+        }
+        motor.set_torque(out.torque * self.cfg.direction);
+
+        self.stats.torque = out.torque;
+        self.stats.following_error = out.error;
+        self.stats.q = q;
+        self.stats.v = self.vel;
+        self.stats.reference = reference;
+        self.periodic(now_us);
+    }
+
+    /// Reads the encoder: our position (m), and the filtered velocity.
+    fn measure<E: Encoder>(&mut self, a: &Active, enc: &mut E) -> f32 {
         let q = to_f32(enc.read_counts()) * a.inv_cpm;
         let raw_v = match self.last_q {
             Some(l) => (q - l) / a.dt,
@@ -712,24 +758,31 @@ impl<const Q: usize> Drive<Q> {
         }
         self.last_q = Some(q);
         self.vel += a.vel_alpha * (raw_v - self.vel);
+        q
+    }
 
-        let host = self.sync.host_ns(now_us);
-        let lost = self.sync.lost(now_us, a.sync_timeout_us) || host.is_none();
-        if lost {
-            match self.state {
-                State::Armed => self.fault_now(FaultCode::LostSync),
-                State::Running => {
-                    // Without a time base, keep stepping on the local clock.
-                    self.begin_stop(StopReason::Fault(FaultCode::LostSync), false, now_us)
-                }
-                _ => {}
-            }
+    /// Supervision of the time base and the peers: the fault it calls for, if any.
+    fn time_fault(&self, a: &Active, has_host_time: bool, now_us: u64) -> Option<FaultCode> {
+        let lost = self.sync.lost(now_us, a.sync_timeout_us) || !has_host_time;
+        if lost && matches!(self.state, State::Armed | State::Running) {
+            Some(FaultCode::LostSync)
+        } else if self.state == State::Running && self.peer_silent(a, now_us) {
+            Some(FaultCode::PeerLost)
+        } else {
+            None
         }
-        if self.state == State::Running && self.peer_silent(&a, now_us) {
-            self.begin_stop(StopReason::Fault(FaultCode::PeerLost), false, now_us);
-        }
-        let host_ns = host.unwrap_or(0);
+    }
 
+    fn on_time_fault(&mut self, code: FaultCode, now_us: u64) {
+        match self.state {
+            State::Armed => self.fault_now(code),
+            // Without a time base, keep stepping on the local clock.
+            _ => self.begin_stop(StopReason::Fault(code), false, now_us),
+        }
+    }
+
+    /// Armed with a start time that has come: Running from its plan time 0.
+    fn trigger_start(&mut self, host_ns: i64) {
         if self.state == State::Armed
             && let Some(t0) = self.start_ns
             && host_ns >= t0
@@ -739,9 +792,14 @@ impl<const Q: usize> Drive<Q> {
             self.stop_reason = None;
             self.stats.started_at_ns = Some(host_ns);
         }
+    }
 
-        let reference = if matches!(self.state, State::Running | State::Stopping) {
-            self.path_reference(&a, host_ns)
+    /// The position reference now, and the motion the feedforward is taken
+    /// from: on the path when Running or Stopping, else the hold pose.
+    fn reference(&mut self, a: &Active, host_ns: i64) -> (JointMotion<f32>, JointMotion<f32>) {
+        let moving = matches!(self.state, State::Running | State::Stopping);
+        let reference = if moving {
+            self.path_reference(a, host_ns)
         } else {
             None
         };
@@ -752,76 +810,27 @@ impl<const Q: usize> Drive<Q> {
         // The torque computed now acts from the next tick on (and is held for
         // one tick): evaluate the feedforward 1.5 ticks ahead on the path.
         let ff_ref = if matches!(self.state, State::Running | State::Stopping) {
-            self.lookahead(host_ns + to_i64(1.5e9 * a.dt))
+            self.lookahead(host_ns + to_i64(FF_LOOKAHEAD_NS_PER_S * a.dt))
                 .unwrap_or(reference)
         } else {
             reference
         };
+        (reference, ff_ref)
+    }
 
-        // Feedforward and PID on our own axis (`min` lets the compiler drop
-        // the bounds checks: no panic path in the tick).
-        let i = a.axis.min(2);
-        let mut ff = 0.0;
-        if self.cfg.feedforward != 0.0 && self.hold.is_some() {
-            match dynamics::torque(&self.model, &ff_ref.q, &ff_ref.qd, &ff_ref.qdd) {
-                Ok(t) => {
-                    // Identified friction of our slider, smoothed through zero speed.
-                    let v = ff_ref.qd[i];
-                    let x = (v * 1000.0).clamp(-20.0, 20.0);
-                    let e2 = libm::expf(2.0 * x);
-                    let sign = (e2 - 1.0) / (e2 + 1.0);
-                    let friction = self.cfg.friction_coulomb * sign + self.cfg.friction_viscous * v;
-                    ff = t[i] + friction * self.model.inv_ratio;
-                }
-                Err(_) => {
-                    if matches!(self.state, State::Running) {
-                        self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, now_us);
-                    }
-                }
-            }
+    /// Supervision of the motion (Running): following error beyond its
+    /// bound, or a measured position outside the soft limits (accepted
+    /// segments stay inside them: a runaway axis), stopped along the path.
+    fn motion_fault(&self, error: f32, q: f32) -> Option<FaultCode> {
+        if self.state != State::Running {
+            None
+        } else if error.abs() > self.cfg.following_error_max {
+            Some(FaultCode::FollowingError)
+        } else if !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max) {
+            Some(FaultCode::SoftLimit)
+        } else {
+            None
         }
-        // Bumpless transfer: when the feedforward appears or vanishes (hold
-        // pose known, arm), move the step into the integral instead of the motor.
-        let lim = self.cfg.integral_limit;
-        if self.ff_active != (ff != 0.0) {
-            self.integral = limit(self.integral + self.last_ff - ff, lim);
-            self.ff_active = ff != 0.0;
-        }
-        self.last_ff = ff;
-        let e = reference.q[i] - q;
-        // Derivative of the error, through the same backward difference and
-        // filter as the measured velocity, so the filter's lag does not turn
-        // into a torque error when tracking is perfect.
-        let raw_ev = match self.last_e {
-            Some(l) => (e - l) / a.dt,
-            None => 0.0,
-        };
-        self.last_e = Some(e);
-        self.ev += a.vel_alpha * (raw_ev - self.ev);
-        let ev = self.ev;
-        if self.state == State::Running && e.abs() > self.cfg.following_error_max {
-            self.begin_stop(StopReason::Fault(FaultCode::FollowingError), false, now_us);
-        }
-        // Accepted segments stay inside the soft limits: a measured position
-        // outside them is a runaway axis, stopped along the path.
-        if self.state == State::Running
-            && !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max)
-        {
-            self.begin_stop(StopReason::Fault(FaultCode::SoftLimit), false, now_us);
-        }
-        self.integral = limit(self.integral + self.cfg.ki * e * a.dt, lim);
-        let torque = limit(
-            ff + self.cfg.kp * e + self.cfg.kd * ev + self.integral,
-            self.cfg.max_torque,
-        );
-        motor.set_torque(torque * self.cfg.direction);
-
-        self.stats.torque = torque;
-        self.stats.following_error = e;
-        self.stats.q = q;
-        self.stats.v = self.vel;
-        self.stats.reference = reference;
-        self.periodic(now_us);
     }
 
     fn hold_reference(&self) -> JointMotion<f32> {

@@ -15,6 +15,7 @@ pub mod active;
 pub mod drive;
 pub mod hal;
 pub mod inbox;
+pub mod law;
 pub mod node;
 pub mod ns;
 pub mod receiver;
