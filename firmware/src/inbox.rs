@@ -90,6 +90,9 @@ impl<const N: usize> Sink for heapless::spsc::Queue<Item, N> {
 /// (then the caller waits for the tick and offers it again; a board's
 /// receive task does, so urgent items are never dropped).
 #[allow(clippy::result_large_err, reason = "as Sink::put")]
+// Never inlined: the boards' ELF check (scripts/elf_check.py --calls) finds
+// the receive task's hand-off through this symbol.
+#[inline(never)]
 pub fn offer(sink: &mut impl Sink, item: Item) -> Result<(), Item> {
     if !item.is_urgent() && sink.queued() + RESERVED_SLOTS >= sink.slots() {
         return Err(item);
