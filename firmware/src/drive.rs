@@ -1,29 +1,33 @@
-//! The control side of a drive node: state machine, segment queue and
-//! control tick, fed with finished items by the receive side (through the
-//! hand-off types of the `inbox` module).
+//! The control side of a drive node: state, segment queue and the control
+//! tick, fed with finished items by the receive side (through the hand-off
+//! types of the `inbox` module). Here: the drive's state, filing items,
+//! stopping, and the tick that runs the parts in order; the parts are in
+//! `drive/`: `segments` (filing a segment), `commands`, `supervision`
+//! (what else stops the drive), `reference` (start trigger and reference),
+//! `telemetry` (periodic frames); the control law is the `law` module.
+
+mod commands;
+mod reference;
+mod segments;
+mod supervision;
+mod telemetry;
 
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
+use triquint_shared::protocol::contract::UNCONFIGURED_SYNC_TIMEOUT_US;
 use triquint_shared::protocol::{
-    Command, CommandAck, CommandCode, DriveConfig, Emergency, FaultCode, Frame, Heartbeat,
-    HeartbeatExt, PROTOCOL_VERSION, Reject, SegmentAck, State, Telemetry, TelemetryExt,
-    config_value_frame,
+    Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, Reject, State,
 };
 use triquint_shared::quintic::JointMotion;
 
-use triquint_shared::protocol::contract::{
-    CONTINUITY_TOL, LIMIT_TOL, MAX_DURATION_US, MIN_HEARTBEAT_US, PEER_SKEW_MARGIN_US,
-    REPEAT_WINDOW_US, UNCONFIGURED_HEARTBEAT_US, UNCONFIGURED_SYNC_TIMEOUT_US,
-};
-
 use crate::active::Active;
 use crate::hal::{Encoder, MotorOutput};
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Source, Status, TAKE_PER_TICK};
+use crate::inbox::{Item, Source, Status, TAKE_PER_TICK};
 use crate::law::{self, Gains, LawState};
-use crate::ns::{to_f32, to_i64};
+use crate::ns::to_f32;
 use crate::scaling::{Phase, TimeScaling};
-use crate::segment::{Seg, scale};
+use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
 /// The feedforward is evaluated this many control periods ahead on the
@@ -103,7 +107,8 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     dropped_tx: u32,
     /// The last command executed and its answer: a CAN frame can arrive twice
     /// (a transmitter that missed the ACK resends it), so a repeat of the
-    /// same command, token and argument within [`REPEAT_WINDOW_US`] is
+    /// same command, token and argument within the repeat window
+    /// ([`triquint_shared::protocol::contract::REPEAT_WINDOW_US`]) is
     /// answered again, not executed again.
     last_command: Option<(Command, CommandAck, u64)>,
     /// Receive time (µs) of the command being handled.
@@ -111,20 +116,6 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     /// Local time (µs) of the last heartbeat of each node (index node − 1).
     peer_seen_us: [Option<u64>; 3],
     pub stats: Stats,
-}
-
-/// The new segment starts where the previous one ended, in position (within
-/// [`CONTINUITY_TOL`]) and in velocity, acceleration and jerk (within
-/// [`LIMIT_TOL`] of the limits): C3 continuity.
-fn c3_continuous(prev: &JointMotion<f32>, next: &JointMotion<f32>, cfg: &DriveConfig) -> bool {
-    (prev.q - next.q).amax() <= CONTINUITY_TOL
-        && (prev.qd - next.qd).amax() <= LIMIT_TOL * cfg.max_velocity
-        && (prev.qdd - next.qdd).amax() <= LIMIT_TOL * cfg.max_acceleration
-        && (prev.qddd - next.qddd).amax() <= LIMIT_TOL * cfg.max_jerk
-}
-
-fn seq_diff(a: u16, b: u16) -> i16 {
-    a.wrapping_sub(b) as i16
 }
 
 impl<const Q: usize> Drive<Q> {
@@ -269,8 +260,6 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
-    // ---------------------------------------------------------------- frames
-
     /// Takes up to [`TAKE_PER_TICK`] items from the queue from the receive
     /// side: what a board does at the start of every tick.
     pub fn take_from(&mut self, inbox: &mut impl Source) {
@@ -315,85 +304,6 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
-    fn count_reject(&mut self, r: Reject) -> u8 {
-        self.stats.rejects = self.stats.rejects.saturating_add(1);
-        self.stats.last_reject = r as u8;
-        let slot = self.stats.reason_counts.get_mut(r as usize);
-        match slot {
-            Some(c) => {
-                *c = c.saturating_add(1);
-                *c
-            }
-            None => 0,
-        }
-    }
-
-    fn ack(&mut self, seq: u16, result: Reject, reason_count: u8) {
-        let a = SegmentAck {
-            seq,
-            result: result as u8,
-            depth: self.queue.len() as u8,
-            next_seq: self.next_seq,
-            capacity: Q as u8,
-            reason_count,
-        };
-        let f = a.to_frame(self.node_id);
-        self.send(f);
-    }
-
-    /// Files a checked segment: the cheap, state-dependent checks (state,
-    /// sequence, queue room, C3 continuity with the previous segment) and
-    /// its place in plan time. The receive side did the expensive ones.
-    fn accept(&mut self, c: &CheckedSegment) -> Result<(), Reject> {
-        if !matches!(
-            self.state,
-            State::Idle | State::Loaded | State::Armed | State::Running
-        ) || self.active.is_none()
-        {
-            return Err(Reject::WrongState);
-        }
-        let seg = &c.seg;
-        let d = seq_diff(seg.seq, self.next_seq);
-        if d < 0 {
-            return Err(Reject::Duplicate);
-        }
-        if d > 0 {
-            return Err(Reject::OutOfOrder);
-        }
-        let max_ns = MAX_DURATION_US as i64 * 1000;
-        if seg.duration_ns == 0 || seg.duration_ns > max_ns || seg.first != (seg.seq == 0) {
-            return Err(Reject::Invalid);
-        }
-        if self.queue.is_full() {
-            return Err(Reject::QueueFull);
-        }
-        // Checked against another configuration (a commit in between).
-        if c.config_crc != self.config_crc() {
-            return Err(Reject::WrongState);
-        }
-        c.verdict?;
-        if let Some(prev) = self.prev_end
-            && !seg.first
-            && !c3_continuous(&prev, &c.begin, &self.cfg)
-        {
-            return Err(Reject::Discontinuous);
-        }
-        let start_ns = if seg.first { 0 } else { self.queued_end_ns };
-        if self.queue.push_back(*seg).is_err() {
-            return Err(Reject::QueueFull);
-        }
-        if let Some(s) = self.queue.back_mut() {
-            s.start_ns = start_ns;
-            self.queued_end_ns = s.end_ns();
-        }
-        self.prev_end = Some(c.end);
-        self.next_seq = self.next_seq.wrapping_add(1);
-        if self.state == State::Idle {
-            self.state = State::Loaded;
-        }
-        Ok(())
-    }
-
     fn flush(&mut self) {
         self.queue.clear();
         self.flushes = self.flushes.wrapping_add(1);
@@ -402,19 +312,6 @@ impl<const Q: usize> Drive<Q> {
         self.prev_end = None;
         self.start_ns = None;
         self.stop_reason = None;
-    }
-
-    fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
-        let a = CommandAck {
-            command: c.command,
-            token: c.token,
-            result: result as u8,
-            state: self.state as u8,
-            value,
-        };
-        self.last_command = Some((*c, a, self.command_rx_us));
-        let f = a.to_frame(self.node_id);
-        self.send(f);
     }
 
     /// Enters Fault at once (not moving): Emergency frame, hold where we are.
@@ -457,230 +354,6 @@ impl<const Q: usize> Drive<Q> {
             }
         }
     }
-
-    fn on_emergency(&mut self, code: FaultCode, local_us: u64) {
-        match self.state {
-            State::Running => self.begin_stop(StopReason::Fault(code), false, local_us),
-            State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
-                self.stop_reason = Some(StopReason::Fault(code));
-                self.fault = code;
-            }
-            State::Loaded | State::Armed => self.fault_now(code),
-            State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
-            _ => {}
-        }
-    }
-
-    /// Peer supervision: a peer that reports a fault (its Emergency may have
-    /// been lost) or has lost its configuration (it was reset) stops us too.
-    fn on_peer_heartbeat(&mut self, node: u8, h: &Heartbeat, rx_us: u64) {
-        let Some(slot) = (node as usize)
-            .checked_sub(1)
-            .and_then(|i| self.peer_seen_us.get_mut(i))
-        else {
-            return;
-        };
-        *slot = Some(rx_us);
-        if self.state != State::Running {
-            return;
-        }
-        let peer = h.state().ok();
-        if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
-            self.on_emergency(FaultCode::PeerEmergency, rx_us);
-        } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
-            self.on_emergency(FaultCode::PeerLost, rx_us);
-        }
-    }
-
-    /// A peer still Loaded or Armed (it missed the Start) well after we
-    /// started, or Idle before our plan's last segment: it is not moving
-    /// with us. The margins cover the start skew (one tick) and the end skew.
-    fn peer_left_behind(&self, peer: Option<State>, local_us: u64) -> bool {
-        const MARGIN_NS: i64 = PEER_SKEW_MARGIN_US as i64 * 1000;
-        let (Some(t), Some(t0)) = (self.sync.host_ns(local_us), self.stats.started_at_ns) else {
-            return false;
-        };
-        match peer {
-            Some(State::Loaded | State::Armed) => t - t0 > MARGIN_NS,
-            Some(State::Idle) => self
-                .queue
-                .back()
-                .is_some_and(|b| !b.last || self.plan_ns + MARGIN_NS < b.end_ns()),
-            _ => false,
-        }
-    }
-
-    /// A peer (seen at least once) whose heartbeat has been missing for the
-    /// sync timeout.
-    fn peer_silent(&self, a: &Active, now_us: u64) -> bool {
-        self.peer_seen_us
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| *i + 1 != self.node_id as usize)
-            .any(|(_, t)| t.is_some_and(|t| now_us.saturating_sub(t) > a.sync_timeout_us))
-    }
-
-    // Not inlined into the tick: commands are rare, and the tick's own code
-    // must fit the 10 KB of CCM SRAM on the ESC1 board.
-    #[inline(never)]
-    fn on_command(&mut self, c: &Command, local_us: u64, data: &CommandData) {
-        self.command_rx_us = local_us;
-        if let Some((last, ack, at)) = self.last_command
-            && last == *c
-            && local_us.saturating_sub(at) < REPEAT_WINDOW_US
-        {
-            let f = ack.to_frame(self.node_id);
-            self.send(f);
-            return;
-        }
-        let Ok(code) = c.command() else {
-            self.command_ack(c, FaultCode::BadCommand, 0);
-            return;
-        };
-        let r = match code {
-            CommandCode::Arm => self.arm(local_us),
-            CommandCode::Start => self.start(c.arg, local_us),
-            CommandCode::Stop | CommandCode::QuickStop => {
-                let quick = code == CommandCode::QuickStop;
-                match self.state {
-                    State::Running => {
-                        self.begin_stop(StopReason::Commanded, quick, local_us);
-                        FaultCode::None
-                    }
-                    State::Armed => {
-                        self.state = State::Loaded;
-                        self.start_ns = None;
-                        FaultCode::None
-                    }
-                    _ => FaultCode::None,
-                }
-            }
-            CommandCode::ClearFault => {
-                if self.state == State::Fault {
-                    self.flush();
-                    self.state = State::Idle;
-                    self.fault = FaultCode::None;
-                    self.law.integral = 0.0;
-                    FaultCode::None
-                } else {
-                    FaultCode::WrongState
-                }
-            }
-            CommandCode::FeedHold => {
-                if self.state == State::Running && self.scaling.phase != Phase::Rest {
-                    self.begin_stop(StopReason::Hold, false, local_us);
-                    FaultCode::None
-                } else {
-                    FaultCode::WrongState
-                }
-            }
-            CommandCode::Resume => match (self.state, self.active) {
-                (State::Running, Some(a)) if self.stop_reason == Some(StopReason::Hold) => {
-                    let t = self.sync.host_ns(local_us).unwrap_or(0);
-                    self.scaling.at(t);
-                    self.scaling.begin_accel(t, a.stop_ns);
-                    self.stop_reason = None;
-                    FaultCode::None
-                }
-                _ => FaultCode::WrongState,
-            },
-            CommandCode::ConfigCommit => {
-                let (r, crc) = match data {
-                    CommandData::Commit { crc, config } => (self.commit(config), *crc),
-                    _ => (FaultCode::ConfigMismatch, 0),
-                };
-                self.command_ack(c, r, crc);
-                return;
-            }
-            CommandCode::Reset => match self.state {
-                State::Idle | State::Loaded | State::Armed => {
-                    self.flush();
-                    self.state = State::Idle;
-                    FaultCode::None
-                }
-                _ => FaultCode::WrongState,
-            },
-            CommandCode::ReadConfig => {
-                if let CommandData::Values(values) = data {
-                    for (i, v) in values.iter().enumerate() {
-                        let f = config_value_frame(self.node_id, i as u8, *v);
-                        self.send(f);
-                    }
-                }
-                FaultCode::None
-            }
-        };
-        self.command_ack(c, r, 0);
-    }
-
-    /// Runs a configuration the receive side prepared (Idle only).
-    fn commit(&mut self, config: &Result<Prepared, FaultCode>) -> FaultCode {
-        if self.state != State::Idle {
-            return FaultCode::WrongState;
-        }
-        let p = match config {
-            Ok(p) => p,
-            Err(code) => return *code,
-        };
-        self.cfg = p.cfg;
-        self.model = p.model;
-        self.active = Some(p.active);
-        FaultCode::None
-    }
-
-    fn arm(&mut self, local_us: u64) -> FaultCode {
-        if self.state != State::Loaded {
-            return FaultCode::WrongState;
-        }
-        let Some(a) = self.active else {
-            self.fault_now(FaultCode::NoConfig);
-            return FaultCode::NoConfig;
-        };
-        if !self.sync.is_synced(local_us, a.sync_timeout_us) {
-            self.fault_now(FaultCode::NotSynced);
-            return FaultCode::NotSynced;
-        }
-        let Some(front) = self.queue.front().copied() else {
-            self.fault_now(FaultCode::EmptyQueue);
-            return FaultCode::EmptyQueue;
-        };
-        if !front.first {
-            self.fault_now(FaultCode::EmptyQueue);
-            return FaultCode::EmptyQueue;
-        }
-        let start = front.start_q();
-        let own = start[a.axis.min(2)];
-        match self.last_q {
-            Some(q) if (q - own).abs() <= self.cfg.arm_tolerance => {}
-            _ => {
-                self.fault_now(FaultCode::ArmTooFar);
-                return FaultCode::ArmTooFar;
-            }
-        }
-        self.hold = Some(start);
-        self.hold_own = own;
-        self.state = State::Armed;
-        FaultCode::None
-    }
-
-    fn start(&mut self, arg: u32, local_us: u64) -> FaultCode {
-        if self.state != State::Armed {
-            return FaultCode::WrongState;
-        }
-        let Some(now) = self.sync.host_us(local_us) else {
-            self.fault_now(FaultCode::NotSynced);
-            return FaultCode::NotSynced;
-        };
-        let d = arg.wrapping_sub(now as u32) as i32 as i64;
-        if d < 0 {
-            self.fault_now(FaultCode::StartInPast);
-            return FaultCode::StartInPast;
-        }
-        self.start_ns = Some((now + d) * 1000);
-        FaultCode::None
-    }
-
-    // ---------------------------------------------------------------- control
 
     /// One control tick at local time `now_us`, in its parts: measure,
     /// supervise time and peers, trigger the start, generate the reference,
@@ -759,214 +432,6 @@ impl<const Q: usize> Drive<Q> {
         self.last_q = Some(q);
         self.vel += a.vel_alpha * (raw_v - self.vel);
         q
-    }
-
-    /// Supervision of the time base and the peers: the fault it calls for, if any.
-    fn time_fault(&self, a: &Active, has_host_time: bool, now_us: u64) -> Option<FaultCode> {
-        let lost = self.sync.lost(now_us, a.sync_timeout_us) || !has_host_time;
-        if lost && matches!(self.state, State::Armed | State::Running) {
-            Some(FaultCode::LostSync)
-        } else if self.state == State::Running && self.peer_silent(a, now_us) {
-            Some(FaultCode::PeerLost)
-        } else {
-            None
-        }
-    }
-
-    fn on_time_fault(&mut self, code: FaultCode, now_us: u64) {
-        match self.state {
-            State::Armed => self.fault_now(code),
-            // Without a time base, keep stepping on the local clock.
-            _ => self.begin_stop(StopReason::Fault(code), false, now_us),
-        }
-    }
-
-    /// Armed with a start time that has come: Running from its plan time 0.
-    fn trigger_start(&mut self, host_ns: i64) {
-        if self.state == State::Armed
-            && let Some(t0) = self.start_ns
-            && host_ns >= t0
-        {
-            self.state = State::Running;
-            self.scaling = TimeScaling::nominal(t0, 0);
-            self.stop_reason = None;
-            self.stats.started_at_ns = Some(host_ns);
-        }
-    }
-
-    /// The position reference now, and the motion the feedforward is taken
-    /// from: on the path when Running or Stopping, else the hold pose.
-    fn reference(&mut self, a: &Active, host_ns: i64) -> (JointMotion<f32>, JointMotion<f32>) {
-        let moving = matches!(self.state, State::Running | State::Stopping);
-        let reference = if moving {
-            self.path_reference(a, host_ns)
-        } else {
-            None
-        };
-        let reference = match reference {
-            Some(r) => r,
-            None => self.hold_reference(),
-        };
-        // The torque computed now acts from the next tick on (and is held for
-        // one tick): evaluate the feedforward 1.5 ticks ahead on the path.
-        let ff_ref = if matches!(self.state, State::Running | State::Stopping) {
-            self.lookahead(host_ns + to_i64(FF_LOOKAHEAD_NS_PER_S * a.dt))
-                .unwrap_or(reference)
-        } else {
-            reference
-        };
-        (reference, ff_ref)
-    }
-
-    /// Supervision of the motion (Running): following error beyond its
-    /// bound, or a measured position outside the soft limits (accepted
-    /// segments stay inside them: a runaway axis), stopped along the path.
-    fn motion_fault(&self, error: f32, q: f32) -> Option<FaultCode> {
-        if self.state != State::Running {
-            None
-        } else if error.abs() > self.cfg.following_error_max {
-            Some(FaultCode::FollowingError)
-        } else if !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max) {
-            Some(FaultCode::SoftLimit)
-        } else {
-            None
-        }
-    }
-
-    fn hold_reference(&self) -> JointMotion<f32> {
-        let mut m = JointMotion::default();
-        if let Some(h) = self.hold {
-            m.q = h;
-        }
-        if let Some(a) = &self.active {
-            m.q[a.axis.min(2)] = self.hold_own;
-        }
-        m
-    }
-
-    /// The path motion at host time `host_ns` without changing any state.
-    fn lookahead(&self, host_ns: i64) -> Option<JointMotion<f32>> {
-        let mut sc = self.scaling;
-        let sc = sc.at(host_ns);
-        let seg = self
-            .queue
-            .iter()
-            .find(|g| sc.s_ns < g.end_ns())
-            .or_else(|| self.queue.back())?;
-        Some(scale(&seg.eval(sc.s_ns), sc.sigma, sc.sigma_d, sc.sigma_dd))
-    }
-
-    /// Reference on the path (Running/Stopping); handles queue advance, the
-    /// end of the plan, the end of a stop and underrun.
-    fn path_reference(&mut self, a: &Active, host_ns: i64) -> Option<JointMotion<f32>> {
-        let sc = self.scaling.at(host_ns);
-        while self.queue.len() > 1 {
-            match self.queue.front() {
-                Some(f) if sc.s_ns >= f.end_ns() => {
-                    self.queue.pop_front();
-                }
-                _ => break,
-            }
-        }
-        // Read the front in place (a copy of a segment costs the tick ~100 instructions).
-        let front = self.queue.front()?;
-        let path = front.eval(sc.s_ns);
-        let (front_last, front_end_ns) = (front.last, front.end_ns());
-        self.current_seq = front.seq;
-        self.plan_ns = sc.s_ns;
-        let m = scale(&path, sc.sigma, sc.sigma_d, sc.sigma_dd);
-        self.hold = Some(m.q);
-        self.hold_own = m.q[a.axis.min(2)];
-
-        let at_rest = self.scaling.phase == Phase::Rest;
-        let last_queued = self.queue.back().map(|b| b.last).unwrap_or(false);
-        if self.state == State::Stopping && at_rest {
-            match self.stop_reason {
-                Some(StopReason::Fault(code)) => {
-                    self.state = State::Fault;
-                    self.fault = code;
-                    self.queue.clear();
-                }
-                _ => {
-                    self.flush();
-                    self.state = State::Idle;
-                }
-            }
-            return Some(m);
-        }
-        if self.state == State::Running {
-            if front_last && sc.s_ns >= front_end_ns {
-                // Plan complete: hold the end.
-                self.flush();
-                self.state = State::Idle;
-                return Some(m);
-            }
-            let ahead = self.queued_end_ns - sc.s_ns;
-            let need = TimeScaling::stop_distance_ns(a.stop_ns) + a.margin_ns;
-            if !last_queued
-                && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
-                && ahead < need
-            {
-                self.begin_stop(
-                    StopReason::Fault(FaultCode::Underrun),
-                    false,
-                    self.last_local_us,
-                );
-            }
-        }
-        Some(m)
-    }
-
-    fn periodic(&mut self, now_us: u64) {
-        let (hb_us, tel_us) = match &self.active {
-            Some(a) => (a.heartbeat_us.max(MIN_HEARTBEAT_US), a.telemetry_us),
-            None => (UNCONFIGURED_HEARTBEAT_US, 0),
-        };
-        if now_us >= self.next_heartbeat_us {
-            self.next_heartbeat_us = now_us + hb_us;
-            let hb = Heartbeat {
-                state: self.state as u8,
-                fault: self.fault as u8,
-                queue_depth: self.queue.len() as u8,
-                protocol_version: PROTOCOL_VERSION,
-                config_crc: self.config_crc(),
-            };
-            let f = hb.to_frame(self.node_id);
-            self.send(f);
-            let timeout = self
-                .active
-                .as_ref()
-                .map(|a| a.sync_timeout_us)
-                .unwrap_or(UNCONFIGURED_SYNC_TIMEOUT_US);
-            let ext = HeartbeatExt {
-                next_seq: self.next_seq,
-                rejects: self.stats.rejects,
-                tx_errors: self.errors.0,
-                rx_errors: self.errors.1,
-                last_reject: self.stats.last_reject,
-                sync_ok: self.sync.is_synced(now_us, timeout) as u8,
-            };
-            let f = ext.to_frame(self.node_id);
-            self.send(f);
-            // At most one group of periodic frames per tick (bounds the
-            // tick's worst case): telemetry due now goes out next tick.
-            return;
-        }
-        if tel_us > 0 && now_us >= self.next_telemetry_us {
-            self.next_telemetry_us = now_us + tel_us;
-            let t = Telemetry {
-                position: self.stats.q,
-                velocity: self.stats.v,
-            };
-            let f = t.to_frame(self.node_id);
-            self.send(f);
-            let t = TelemetryExt {
-                torque: self.stats.torque,
-                following_error: self.stats.following_error,
-            };
-            let f = t.to_frame(self.node_id);
-            self.send(f);
-        }
     }
 
     /// Buffered plan time ahead of the current plan time (ns), for tests and monitors.
