@@ -8,7 +8,24 @@ calls (blx/bx to a register other than lr) cannot be followed: they fail too.
 With --no-double, the whole image must also contain no double-precision
 routine at all (reachable from anywhere).
 
-usage: elf_check.py [--no-double] OBJDUMP ELF ROOT [ROOT...]   (roots optional with --no-double)
+Two more checks for interrupt handlers and tasks, whose driver code is
+inlined so that no symbol names it:
+  --no-wait ROOT     ROOT and everything it reaches contain no loop (a
+                     cycle in the function's control flow from its entry),
+                     except the bounded math routines in BOUNDED_LOOPS: a
+                     handler that polls a peripheral flag (a blocking ADC
+                     read) loops; one raised when the data are ready does
+                     not. Panic routines end the flow (a panic halts; it does
+                     not wait) and are not followed.
+  --calls A=B        every function that calls a function matching regex A
+                     also calls one matching regex B (e.g. the task that runs
+                     the receive side hands its items through the inbox's
+                     `offer`, which keeps slots for Stop/Emergency/ClearFault).
+Neither forbids panics (the board images are checked with --no-double only).
+
+usage: elf_check.py [--no-double] [--no-wait ROOT]... [--calls A=B]... OBJDUMP ELF [ROOT...]
+       elf_check.py --self-test
+(roots optional with --no-double, --no-wait or --calls)
 exit 0 clean, 1 violation (with the call chain), 2 usage/tool error.
 """
 import re
@@ -24,13 +41,89 @@ DOUBLE = re.compile(r"^(__aeabi_d\w*|__aeabi_[lu]?[il]?2d|__aeabi_f2d|__\w*df[23
 FUNC = re.compile(r"^([0-9a-f]+) <(.+)>:$")
 CALL = re.compile(r"^\s*([0-9a-f]+):\s+(bl|blx|b|b\.w|b\.n)\s+(?:0x)?([0-9a-f]+)\s+<([^>]+)>")
 INDIRECT = re.compile(r"^\s*([0-9a-f]+):\s+(blx|bx)\s+(r\d+|ip|r1[0-2])\b")
+INSN = re.compile(r"^\s*([0-9a-f]+):\s+(\S+)\s*(.*)$")
+TARGET = re.compile(r"(?:0x)?([0-9a-f]+)\s+<([^>]+)>")
+CONDS = "eq|ne|cs|hs|cc|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le"
+COND_BRANCH = re.compile(rf"^(b({CONDS})(\.[wn])?|cbn?z)$")
+# Routines whose loops are bounded computation, not waiting.
+BOUNDED_LOOPS = re.compile(r"^(fminf|fmaxf|sqrtf|fmodf|.*libm.*|__aeabi_mem\w*|mem(cpy|set|move))$")
+
+
+def take(args: list[str], flag: str) -> list[str]:
+    """Removes every `flag VALUE` pair from args; returns the values."""
+    out = []
+    while flag in args:
+        i = args.index(flag)
+        if i + 1 >= len(args):
+            raise SystemExit(f"{flag} needs a value")
+        out.append(args[i + 1])
+        del args[i : i + 2]
+    return out
+
+
+# --self-test: a handler that polls a flag (as the ESC1's current loop did
+# with blocking ADC reads); one with a backward branch that is no cycle and
+# bytes after a panic call that disassemble as a branch (as embassy's
+# set_duty); a panic's halt; and a task that hands items over without `offer`.
+SELF_TEST = """
+08000100 <POLLING>:
+ 8000100:      \tpush\t{r7, lr}
+ 8000102:      \tldr\tr3, [r2]
+ 8000104:      \ttst.w\tr3, #0x4
+ 8000108:      \tbeq\t0x8000102 <POLLING+0x2> @ imm = #-0xa
+ 800010a:      \tbl\t0x8000200 <core::panicking::panic>
+ 800010e:      \tbmi\t0x8000102 <POLLING+0x2> @ imm = #-0x10
+08000110 <READY>:
+ 8000110:      \tpush\t{r7, lr}
+ 8000112:      \tcmp\tr1, r3
+ 8000114:      \tbhi\t0x8000120 <READY+0x10> @ imm = #0x8
+ 8000116:      \tcmp.w\tr1, #0x10000
+ 800011a:      \tit\tlo
+ 800011c:      \tpoplo\t{r7, pc}
+ 800011e:      \tbl\t0x8000200 <core::panicking::panic>
+ 8000120:      \tadds\tr3, #0x1
+ 8000122:      \tbls\t0x8000116 <READY+0x6> @ imm = #-0x10
+ 8000124:      \tbl\t0x8000200 <core::panicking::panic>
+ 8000128:      \tbmi\t0x8000112 <READY+0x2> @ imm = #-0x1a
+08000200 <core::panicking::panic>:
+ 8000200:      \tb\t0x8000200 <core::panicking::panic> @ imm = #-0x4
+08000300 <TASK>:
+ 8000300:      \tbl\t0x8000400 <Receiver4part>
+ 8000304:      \tpop\t{r7, pc}
+08000400 <Receiver4part>:
+ 8000400:      \tbx\tlr
+"""
+
+
+def self_test() -> int:
+    import os
+    import tempfile
+    with tempfile.TemporaryDirectory() as d:
+        dis, cat = os.path.join(d, "x.dis"), os.path.join(d, "cat.sh")
+        with open(dis, "w") as f:
+            f.write(SELF_TEST)
+        with open(cat, "w") as f:
+            f.write('#!/bin/sh\ncat "$3"\n')
+        os.chmod(cat, 0o755)
+        run = lambda *a: subprocess.run([sys.executable, __file__, *a, cat, dis], capture_output=True).returncode
+        got = (run("--no-wait", "POLLING"), run("--no-wait", "READY"), run("--calls", "Receiver4part=offer"))
+    ok = got == (1, 0, 1)
+    print(f"self-test {'passed' if ok else 'FAILED'}: polling, ready, task without offer -> {got}")
+    return 0 if ok else 1
 
 
 def main() -> int:
     args = sys.argv[1:]
+    if args == ["--self-test"]:
+        return self_test()
     no_double = "--no-double" in args
     args = [a for a in args if a != "--no-double"]
-    if len(args) < (2 if no_double else 3):
+    no_wait = take(args, "--no-wait")
+    together = [c.split("=", 1) for c in take(args, "--calls")]
+    if any(len(c) != 2 for c in together):
+        print("--calls wants A=B", file=sys.stderr)
+        return 2
+    if len(args) < (2 if no_double or no_wait or together else 3):
         print(__doc__, file=sys.stderr)
         return 2
     objdump, elf, roots = args[0], args[1], args[2:]
@@ -43,6 +136,7 @@ def main() -> int:
         return 2
     calls: dict[str, set[str]] = {}
     indirect: dict[str, list[str]] = {}
+    code: dict[str, list[tuple[int, str, str]]] = {}
     cur = None
     for line in text.splitlines():
         m = FUNC.match(line)
@@ -52,6 +146,9 @@ def main() -> int:
             continue
         if cur is None:
             continue
+        m = INSN.match(line)
+        if m:
+            code.setdefault(cur, []).append((int(m.group(1), 16), m.group(2), m.group(3)))
         m = CALL.match(line)
         if m:
             target = m.group(4)
@@ -63,6 +160,88 @@ def main() -> int:
         if m and m.group(3) != "lr":
             indirect.setdefault(cur, []).append(line.strip())
     bad = 0
+
+    def first_loop(f: str) -> str | None:
+        """An instruction closing a cycle of f's control flow, if any."""
+        insns = code.get(f, [])
+        index = {a: i for i, (a, _, _) in enumerate(insns)}
+
+        def successors(i: int) -> list[int]:
+            _, op, rest = insns[i]
+            nxt = [i + 1] if i + 1 < len(insns) else []
+            t = TARGET.search(rest)
+            inside = t is not None and t.group(2).split("+")[0] == f and int(t.group(1), 16) in index
+            if op in ("b", "b.w", "b.n"):
+                return [index[int(t.group(1), 16)]] if inside else []
+            if COND_BRANCH.match(op):
+                return nxt + ([index[int(t.group(1), 16)]] if inside else [])
+            if op in ("bl", "blx") and t is not None and FORBIDDEN.match(t.group(2).split("+")[0]):
+                return []  # a panic does not return
+            if op in ("udf", "bkpt") or (op in ("pop", "pop.w", "ldm", "ldmia.w") and "pc" in rest):
+                return []
+            if op in ("bx", "bx.n") and "lr" in rest:
+                return []
+            return nxt
+
+        state = [0] * len(insns)  # 0 new, 1 on the path, 2 done
+        stack = [(0, iter(successors(0)))] if insns else []
+        if insns:
+            state[0] = 1
+        while stack:
+            i, it = stack[-1]
+            j = next(it, None)
+            if j is None:
+                state[i] = 2
+                stack.pop()
+            elif state[j] == 1:
+                a, op, rest = insns[i]
+                return f"{a:x}: {op} {rest}"
+            elif state[j] == 0:
+                state[j] = 1
+                stack.append((j, iter(successors(j))))
+        return None
+
+    def reach(root: str) -> dict:
+        parent = {root: None}
+        queue = [root]
+        while queue:
+            f = queue.pop(0)
+            for g in sorted(calls.get(f, ())):
+                if g not in parent:
+                    parent[g] = f
+                    queue.append(g)
+        return parent
+
+    for root in no_wait:
+        if root not in calls:
+            print(f"elf_check: root symbol {root} not in {elf}", file=sys.stderr)
+            return 2
+        parent = {root: None}
+        queue = [root]
+        while queue:  # as reach(), but panic routines are not followed
+            f = queue.pop(0)
+            for g in sorted(calls.get(f, ())):
+                if g not in parent and not FORBIDDEN.match(g):
+                    parent[g] = f
+                    queue.append(g)
+        waiting = []
+        for f in parent:
+            at = None if BOUNDED_LOOPS.match(f) else first_loop(f)
+            if at:
+                waiting.append(f)
+                print(f"LOOP (a wait) reached from {root} in {f}: {at}")
+        bad += len(waiting)
+        print(f"{root}: {len(parent)} functions reachable, {len(waiting)} with loops")
+    for a, b in together:
+        ra, rb = re.compile(a), re.compile(b)
+        callers = sorted(f for f, cs in calls.items() if any(ra.search(c) for c in cs))
+        if not callers:
+            print(f"elf_check: nothing calls {a} in {elf}", file=sys.stderr)
+            return 2
+        for f in callers:
+            ok = any(rb.search(c) for c in calls[f])
+            print(f"{'ok' if ok else 'MISSING'}: {f} calls {a}{' and ' if ok else ' but not '}{b}")
+            bad += not ok
     if no_double:
         doubles = sorted(f for f in calls if DOUBLE.match(f))
         for f in doubles:
@@ -73,14 +252,7 @@ def main() -> int:
         if root not in calls:
             print(f"elf_check: root symbol {root} not in {elf}", file=sys.stderr)
             return 2
-        parent = {root: None}
-        queue = [root]
-        while queue:
-            f = queue.pop(0)
-            for g in sorted(calls.get(f, ())):
-                if g not in parent:
-                    parent[g] = f
-                    queue.append(g)
+        parent = reach(root)
         reached = [f for f in parent if FORBIDDEN.match(f)]
         unknown = [f for f in parent if f in indirect]
         for f in reached:

@@ -17,11 +17,6 @@ pub trait MotorOutput {
     fn enable(&mut self, on: bool);
 }
 
-/// Local free-running time (µs). Not synchronised: the core converts to host time.
-pub trait Clock {
-    fn now_us(&self) -> u64;
-}
-
 /// A received frame with the local receive timestamp (µs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RxFrame {
@@ -39,20 +34,5 @@ pub trait CanPort {
     /// (transmit, receive) error counters of the controller.
     fn error_counters(&self) -> (u8, u8) {
         (0, 0)
-    }
-}
-
-/// Runs one communication pass: every received frame into the node, then as
-/// many queued frames as the controller takes.
-pub fn service<P: CanPort, const Q: usize>(node: &mut crate::Node<Q>, port: &mut P) {
-    while let Some(rx) = port.receive() {
-        node.on_frame(&rx);
-    }
-    node.set_error_counters(port.error_counters());
-    while let Some(f) = node.peek_tx() {
-        if !port.transmit(&f) {
-            break;
-        }
-        node.pop_tx();
     }
 }

@@ -1,17 +1,21 @@
-//! What the CAN receive context hands to the control tick: finished items,
-//! already decoded, reassembled and (segments, configurations) validated by
-//! the [`crate::receiver::Receiver`]. The tick only files them
-//! ([`crate::Drive::take`]), so a frame costs the tick a short, bounded step.
+//! The hand-off between the two contexts of a node, in both directions:
+//! finished items from the CAN receive side to the control tick (already
+//! decoded, reassembled and, for segments and configurations, validated),
+//! and the [`Status`] the tick publishes back. A leaf below both sides, so
+//! neither depends on the other. The tick only files items, so a frame costs
+//! it a short, bounded step.
 
 use triquint_shared::Model;
-use triquint_shared::protocol::{Command, DriveConfig, FaultCode, Heartbeat, PARAM_COUNT, Reject};
+use triquint_shared::protocol::{
+    Command, CommandCode, DriveConfig, FaultCode, Heartbeat, PARAM_COUNT, Reject,
+};
 use triquint_shared::quintic::JointMotion;
 
-use crate::drive::Active;
+use crate::active::Active;
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
-/// Items the tick takes per tick at most ([`crate::Drive::take_from`]): the
+/// Items the tick takes per tick at most (`Drive::take_from`): the
 /// bus delivers at most about one frame per 100 µs tick, so the queue never
 /// builds up, and the tick's worst case stays bounded whatever arrives.
 pub const TAKE_PER_TICK: usize = 2;
@@ -20,8 +24,81 @@ pub const TAKE_PER_TICK: usize = 2;
 pub const INBOX_SLOTS: usize = 8;
 
 /// The lock-free single-producer (receive side), single-consumer (tick)
-/// queue of a board; it holds `INBOX_SLOTS − 1` items.
+/// queue of a board; it holds `INBOX_SLOTS − 1` items, of which
+/// [`RESERVED_SLOTS`] only for urgent items (see [`offer`]).
 pub type Inbox = heapless::spsc::Queue<Item, INBOX_SLOTS>;
+
+/// Slots of the inbox that only urgent items ([`Item::is_urgent`]) may
+/// fill: a flood of segments cannot keep a Stop, an Emergency or a
+/// ClearFault out. Segments dropped for want of room are resent by the
+/// host's flow control; those three have no resend.
+pub const RESERVED_SLOTS: usize = 3;
+
+/// What the receive side needs to know of the node, published by the tick
+/// (`Drive::status`); a board shares it through atomics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Status {
+    /// CRC of the running configuration (0: none).
+    pub config_crc: u32,
+    /// Queue flushes so far: a flush also drops a partial segment.
+    pub flushes: u32,
+    /// No motion pending (Idle or Fault): the time sync may take a new host time base.
+    pub may_rebase: bool,
+}
+
+/// The producer end of the inbox, as [`offer`] needs it.
+#[allow(
+    clippy::result_large_err,
+    reason = "the item goes back to the caller, as heapless's enqueue does (no allocation)"
+)]
+pub trait Sink {
+    /// Items queued now.
+    fn queued(&self) -> usize;
+    /// Items the queue holds at most.
+    fn slots(&self) -> usize;
+    /// Queues `item`; gives it back when the queue is full.
+    fn put(&mut self, item: Item) -> Result<(), Item>;
+}
+
+impl Sink for heapless::spsc::Producer<'_, Item> {
+    fn queued(&self) -> usize {
+        self.len()
+    }
+    fn slots(&self) -> usize {
+        self.capacity()
+    }
+    fn put(&mut self, item: Item) -> Result<(), Item> {
+        self.enqueue(item)
+    }
+}
+
+impl<const N: usize> Sink for heapless::spsc::Queue<Item, N> {
+    fn queued(&self) -> usize {
+        self.len()
+    }
+    fn slots(&self) -> usize {
+        self.capacity()
+    }
+    fn put(&mut self, item: Item) -> Result<(), Item> {
+        self.enqueue(item)
+    }
+}
+
+/// Queues an item for the tick, keeping [`RESERVED_SLOTS`] free for urgent
+/// items: an ordinary item is refused (given back) when only the reserved
+/// slots are left, an urgent one only when the queue is completely full
+/// (then the caller waits for the tick and offers it again; a board's
+/// receive task does, so urgent items are never dropped).
+#[allow(clippy::result_large_err, reason = "as Sink::put")]
+// Never inlined: the boards' ELF check (scripts/elf_check.py --calls) finds
+// the receive task's hand-off through this symbol.
+#[inline(never)]
+pub fn offer(sink: &mut impl Sink, item: Item) -> Result<(), Item> {
+    if !item.is_urgent() && sink.queued() + RESERVED_SLOTS >= sink.slots() {
+        return Err(item);
+    }
+    sink.put(item)
+}
 
 /// Where the tick takes items from. Items are large (a prepared
 /// configuration, a checked segment): the tick reads them in place and only
@@ -119,4 +196,20 @@ pub enum Item {
         reason: Reject,
     },
     Segment(CheckedSegment),
+}
+
+impl Item {
+    /// Stop, QuickStop, ClearFault and Emergency: what has no resend by the
+    /// host's flow control and must reach the tick even behind a flood of
+    /// segments.
+    pub fn is_urgent(&self) -> bool {
+        match self {
+            Item::Emergency { .. } => true,
+            Item::Command { command, .. } => matches!(
+                command.command(),
+                Ok(CommandCode::Stop | CommandCode::QuickStop | CommandCode::ClearFault)
+            ),
+            _ => false,
+        }
+    }
 }

@@ -11,9 +11,11 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod active;
 pub mod drive;
 pub mod hal;
 pub mod inbox;
+pub mod law;
 pub mod node;
 pub mod ns;
 pub mod receiver;
@@ -22,9 +24,9 @@ pub mod segment;
 pub mod sync;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
-pub use hal::{CanPort, Clock, Encoder, MotorOutput, RxFrame};
-pub use inbox::Item;
+pub use hal::{CanPort, Encoder, MotorOutput, RxFrame};
+pub use inbox::{Item, Status};
 pub use node::Node;
-pub use receiver::{Receiver, Status};
+pub use receiver::Receiver;
 #[cfg(test)]
 mod tests;

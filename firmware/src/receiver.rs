@@ -2,31 +2,22 @@
 //! tick): decodes every frame, reassembles segments, checks their CRC, limits
 //! and soft limits, keeps the written configuration and prepares a committed
 //! one (robot model included). What is left for the tick is a finished
-//! [`Item`]: see [`crate::inbox`].
+//! [`Item`] (the hand-off types are in the `inbox` module).
 
-use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::protocol::{
     Command, CommandCode, DriveConfig, FaultCode, Msg, PARAM_COUNT, PartEvent, Reassembler, Reject,
     WireSegment, config::config_crc, decode,
 };
 
-use crate::drive::{Active, Drive, LIMIT_TOL};
+use triquint_shared::protocol::contract::{
+    LIMIT_CHECK_INTERVALS, LIMIT_TOL, MAX_DURATION_US, MIN_DURATION_US,
+};
+
+use crate::active::Active;
 use crate::hal::RxFrame;
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared};
+use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Status};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
-
-/// What the receive side needs to know of the node, published by the tick
-/// ([`Drive::status`]); a board shares it through atomics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Status {
-    /// CRC of the running configuration (0: none).
-    pub config_crc: u32,
-    /// Queue flushes so far: a flush also drops a partial segment.
-    pub flushes: u32,
-    /// No motion pending (Idle or Fault): the time sync may take a new host time base.
-    pub may_rebase: bool,
-}
 
 /// Receive side of one node.
 pub struct Receiver {
@@ -43,9 +34,8 @@ pub struct Receiver {
 
 /// Velocity, acceleration and jerk of every axis within the configured
 /// limits (with [`LIMIT_TOL`]), else `Invalid`, and this axis's position
-/// within its soft limits, else `OutsideSoftLimits`; checked at 65 points of
-/// the segment (a safety net behind the host's exact verification, not a
-/// replacement for it).
+/// within its soft limits, else `OutsideSoftLimits`; checked at
+/// [`LIMIT_CHECK_INTERVALS`] + 1 points of the segment.
 fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
     let k = 1.0 + LIMIT_TOL;
     let (v, a, j) = (
@@ -54,8 +44,8 @@ fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
         cfg.max_jerk * k,
     );
     let axis = (cfg.axis as usize).min(2);
-    for i in 0..=64 {
-        let m = seg.eval(seg.start_ns + seg.duration_ns * i / 64);
+    for i in 0..=LIMIT_CHECK_INTERVALS {
+        let m = seg.eval(seg.start_ns + seg.duration_ns * i / LIMIT_CHECK_INTERVALS);
         if !(m.q.iter().all(|x| x.is_finite())
             && m.qd.amax() <= v
             && m.qdd.amax() <= a
@@ -86,13 +76,6 @@ impl Receiver {
 
     pub fn node_id(&self) -> u8 {
         self.node_id
-    }
-
-    /// Receive and file at once, in one context (simulators, host-side tests).
-    pub fn deliver<const Q: usize>(&mut self, rx: &RxFrame, drive: &mut Drive<Q>) {
-        if let Some(item) = self.on_frame(rx, drive.status()) {
-            drive.take(&item);
-        }
     }
 
     /// Handles one received frame; returns what the tick must take, if anything.
@@ -144,9 +127,9 @@ impl Receiver {
     }
 
     fn command_data(&mut self, c: &Command) -> CommandData {
-        match CommandCode::from_u8(c.command) {
-            Some(CommandCode::ReadConfig) => CommandData::Values(self.written),
-            Some(CommandCode::ConfigCommit) => self.prepare(c.arg),
+        match c.command() {
+            Ok(CommandCode::ReadConfig) => CommandData::Values(self.written),
+            Ok(CommandCode::ConfigCommit) => self.prepare(c.arg),
             _ => CommandData::None,
         }
     }
@@ -197,7 +180,7 @@ impl Receiver {
             // The node refuses it anyway (no configuration).
             None => Err(Reject::WrongState),
             // Out-of-range durations are the node's Invalid; skip the work.
-            Some(_) if w.duration_us == 0 || w.duration_us > MAX_DURATION_US => {
+            Some(_) if w.duration_us < MIN_DURATION_US || w.duration_us > MAX_DURATION_US => {
                 Err(Reject::Invalid)
             }
             Some((_, cfg)) => within_limits(&seg, cfg),

@@ -605,3 +605,107 @@ fn a_measured_position_beyond_the_soft_limits_stops_with_its_code() {
         r.max_stop_jerk
     );
 }
+
+/// Hole 1 of issue 18: a receive side that keeps finding the inbox full of
+/// segments must still get Stop through, and the tick must run it.
+#[test]
+fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
+    use crate::inbox::{INBOX_SLOTS, Inbox, Item, RESERVED_SLOTS, offer};
+    let segs = segments(16, 0.3);
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(20);
+    assert_eq!(r.node.state(), State::Running);
+    // The receive side runs apart from the tick, as on a board: every
+    // finished item is offered to the inbox, which the tick does not drain.
+    let mut inbox = Inbox::new();
+    let (mut queued, mut refused) = (0, 0);
+    for s in &segs[CAP..] {
+        for f in s.frames(false) {
+            let rx = RxFrame {
+                frame: f,
+                timestamp_us: r.t,
+            };
+            if let Some(item) = r.node.receiver.on_frame(&rx, r.node.drive.status()) {
+                assert!(matches!(item, Item::Segment(_)));
+                match offer(&mut inbox, item) {
+                    Ok(()) => queued += 1,
+                    Err(_) => refused += 1,
+                }
+            }
+        }
+    }
+    assert_eq!(queued, INBOX_SLOTS - 1 - RESERVED_SLOTS);
+    assert!(refused > 0, "the flood did not fill the inbox");
+    let stop = Command {
+        command: CommandCode::Stop as u8,
+        token: 77,
+        arg: 0,
+    };
+    let rx = RxFrame {
+        frame: stop.to_frame(2),
+        timestamp_us: r.t,
+    };
+    let item = r
+        .node
+        .receiver
+        .on_frame(&rx, r.node.drive.status())
+        .unwrap();
+    assert!(item.is_urgent());
+    assert!(
+        offer(&mut inbox, item).is_ok(),
+        "Stop refused behind segments"
+    );
+    // An Emergency and a ClearFault fit too; a further segment does not.
+    let emergency = Item::Emergency {
+        code: FaultCode::HostEmergency,
+        rx_us: r.t,
+    };
+    assert!(emergency.is_urgent());
+    assert!(!inbox.is_full());
+    // The tick takes its share each tick: the Stop runs within a few ticks.
+    let mut m = Motor(0.0, false);
+    for _ in 0..INBOX_SLOTS {
+        r.node.drive.take_from(&mut inbox);
+        let q = r.node.stats.reference.q[1];
+        let counts = (q as f64 * r.cfg.counts_per_metre as f64).round() as i64;
+        r.node.drive.tick(r.t, &mut Enc(counts), &mut m);
+        r.t += TICK;
+        while let Some(f) = r.node.pop_tx() {
+            r.sent.push(f);
+        }
+    }
+    assert!(inbox.is_empty());
+    assert_eq!(r.node.state(), State::Stopping);
+    let acked = r.sent.iter().any(
+        |f| matches!(decode(f), Ok((Msg::CommandAck(a), 2)) if a.token == 77 && a.result == 0),
+    );
+    assert!(acked, "the Stop was not answered");
+    r.run(1000);
+    assert_eq!(r.node.state(), State::Idle);
+}
+
+#[test]
+fn only_stop_quick_stop_clear_fault_and_emergency_are_urgent() {
+    use crate::inbox::{CommandData, Item};
+    let cmd = |c: CommandCode| Item::Command {
+        command: Command {
+            command: c as u8,
+            token: 1,
+            arg: 0,
+        },
+        rx_us: 0,
+        data: CommandData::None,
+    };
+    for c in [
+        CommandCode::Stop,
+        CommandCode::QuickStop,
+        CommandCode::ClearFault,
+    ] {
+        assert!(cmd(c).is_urgent(), "{c:?}");
+    }
+    for c in [CommandCode::Arm, CommandCode::Start, CommandCode::Reset] {
+        assert!(!cmd(c).is_urgent(), "{c:?}");
+    }
+    assert!(!Item::PartIgnored(Reject::Duplicate).is_urgent());
+}

@@ -1,3 +1,5 @@
 #![no_main]
 include!("../harness/frames.rs");
-libfuzzer_sys::fuzz_target!(|data: &[u8]| fuzz_frames(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    fuzz_frames(data);
+});

@@ -7,6 +7,19 @@
 //! active in time windows and may be limited to an identifier range, so one
 //! schedule describes e.g. "lose every TimeSync from 1.2 s on".
 //!
+//! The injector also keeps every station's CAN error counters by the
+//! fault-confinement rules ([`crate::confinement`], ISO 11898-1): a frame
+//! lost at a receiver is an error that receiver detected (its REC + 1, the
+//! sender's TEC + 8, once per frame), a duplicate is the sender's error in
+//! the last bit of the frame (TEC + 8; it resends a frame the receivers
+//! took), a frame received well is REC − 1 and a frame no receiver lost
+//! TEC − 1. A sender whose TEC exceeds 255 is bus-off until it has seen
+//! 128 × 11 recessive bits, then rejoins with both counters cleared. The
+//! simulator puts the counters into the drives' HeartbeatExt. Taking a
+//! bus-off station off the bus is [`FaultInjector::enforce_bus_off`]. Over vcan
+//! (the proxy) the drives' counters stay zero: the kernel's vcan has no
+//! error signalling, so the proxy's faults are not bus errors to them.
+//!
 //! Bit corruption is applied to segment parts only: every other message is
 //! a single frame guarded by CAN's own CRC-15, whereas a segment is
 //! reassembled from parts and guarded by the protocol's CRC-32, which is
@@ -21,6 +34,12 @@ use triquint_shared::protocol::Frame;
 use triquint_shared::protocol::segment::{SEGMENT_PART, SEGMENT_PART_FD};
 
 use crate::bus::{Bus, Delivery};
+use crate::confinement::{BUS_OFF_ABOVE, ErrorCounters, RECOVERY_NS};
+
+/// Frames per sender whose outcome (some receiver lost it or none) the
+/// injector remembers: deliveries of one frame to its receivers come
+/// interleaved with later frames when the stations are serviced apart.
+const RECENT_FRAMES: usize = 32;
 
 /// Station number of the babbling node on a bus with faults (host 0, nodes 1–3).
 pub const BABBLER: usize = 4;
@@ -123,6 +142,17 @@ pub struct FaultInjector {
     /// Per receiving station: a frame held back to be swapped with the next.
     swapped: Vec<Option<Delivery>>,
     pub stats: FaultStats,
+    /// Per station: CAN error counters.
+    counters: Vec<ErrorCounters>,
+    /// Per station: bus-off by its counters until this true time (ns).
+    off_until: Vec<Option<u64>>,
+    /// Per sender: (completion time, lost somewhere) of its recent frames.
+    recent: Vec<VecDeque<(u64, bool)>>,
+    /// Take a station whose TEC passed 255 off the bus (until it recovers).
+    /// Off by default: the scenarios' loss and duplication rates are far
+    /// beyond what a physical bus survives, and their figures are about the
+    /// protocol's recovery; the counters are kept and reported either way.
+    pub enforce_bus_off: bool,
 }
 
 fn is_segment_part(id: u16) -> bool {
@@ -138,14 +168,85 @@ impl FaultInjector {
             held: vec![VecDeque::new(); stations],
             swapped: vec![None; stations],
             stats: FaultStats::default(),
+            counters: vec![ErrorCounters::default(); stations],
+            off_until: vec![None; stations],
+            recent: vec![VecDeque::new(); stations],
+            enforce_bus_off: false,
         }
     }
 
-    /// Is `station` bus-off at `t_ns`?
+    /// Is `station` bus-off at `t_ns` (by a BusOff window or by its error counters)?
     pub fn bus_off(&self, station: usize, t_ns: u64) -> bool {
         self.windows
             .iter()
             .any(|w| w.active(t_ns) && w.fault == Fault::BusOff { station })
+            || self.enforce_bus_off
+                && self
+                    .off_until
+                    .get(station)
+                    .is_some_and(|u| u.is_some_and(|u| t_ns < u))
+    }
+
+    /// `station`'s error counters at `t_ns` (a recovered bus-off station
+    /// starts again from zero).
+    pub fn error_counters(&mut self, station: usize, t_ns: u64) -> ErrorCounters {
+        self.recover(station, t_ns);
+        self.counters.get(station).copied().unwrap_or_default()
+    }
+
+    /// A bus-off station whose recovery time has passed rejoins from zero.
+    fn recover(&mut self, station: usize, t_ns: u64) {
+        if let Some(until) = self.off_until.get(station).copied().flatten()
+            && t_ns >= until
+        {
+            self.off_until[station] = None;
+            self.counters[station] = ErrorCounters::default();
+        }
+    }
+
+    /// Fault confinement for one delivery of a frame from `from` completed
+    /// at `t`: `lost` at this receiver (its error), `resent` (the sender's error).
+    fn confine(&mut self, station: usize, from: usize, t: u64, lost: bool, resent: bool) {
+        if let Some(c) = self.counters.get_mut(station) {
+            if lost {
+                c.rx_error();
+            } else {
+                c.rx_ok();
+            }
+        }
+        let Some(recent) = self.recent.get_mut(from) else {
+            return;
+        };
+        let Some(c) = self.counters.get_mut(from) else {
+            return;
+        };
+        match recent.iter_mut().find(|(ft, _)| *ft == t) {
+            // A later receiver of a frame counted good: now it was an error.
+            Some((_, seen_lost)) if lost && !*seen_lost => {
+                *seen_lost = true;
+                c.tx_error();
+                c.tec = c.tec.saturating_add(1); // undo the frame's −1
+            }
+            Some(_) => {}
+            None => {
+                if recent.len() == RECENT_FRAMES {
+                    recent.pop_front();
+                }
+                recent.push_back((t, lost));
+                // A resent frame: the error first, then the frame's own outcome.
+                if resent {
+                    c.tx_error();
+                }
+                if lost {
+                    c.tx_error();
+                } else {
+                    c.tx_ok();
+                }
+            }
+        }
+        if self.enforce_bus_off && c.tec > BUS_OFF_ABOVE && self.off_until[from].is_none() {
+            self.off_until[from] = Some(t + RECOVERY_NS);
+        }
     }
 
     fn chance(&mut self, rate: f64) -> bool {
@@ -155,6 +256,8 @@ impl FaultInjector {
     /// Takes one delivery the bus made to `station` at true time `now_ns`.
     pub fn deliver(&mut self, station: usize, mut d: Delivery, now_ns: u64) {
         let t = d.t_ns;
+        self.recover(station, t);
+        self.recover(d.from, t);
         if self.bus_off(station, t) || self.bus_off(d.from, t) {
             self.stats.bus_off_dropped += 1;
             return;
@@ -177,6 +280,7 @@ impl FaultInjector {
                 Fault::Loss { rate } => {
                     if self.chance(rate) {
                         self.stats.lost += 1;
+                        self.confine(station, d.from, t, true, false);
                         return;
                     }
                 }
@@ -220,6 +324,7 @@ impl FaultInjector {
                 Fault::BusOff { .. } | Fault::Babble { .. } => {}
             }
         }
+        self.confine(station, d.from, t, false, copies > 1);
         d.t_ns = stamp;
         let due = due.max(stamp);
         if swap && self.swapped[station].is_none() {
@@ -366,5 +471,93 @@ mod tests {
         assert_eq!(firsts.len(), 200);
         // (the first frame was on the bus before the babbler started)
         assert!(firsts[1].t_ns >= 30_000_000);
+    }
+
+    /// The host (station 0) sends `n` frames 200 µs apart to nodes 1–3.
+    fn confined(windows: Vec<FaultWindow>, n: u16) -> FaultInjector {
+        let mut bus = Bus::new(BusConfig::default(), 4);
+        let mut inj = FaultInjector::new(windows, 7, 4);
+        for k in 0..n {
+            bus.send(0, Frame::new(0x100, 8, false), k as u64 * 200_000);
+        }
+        let mut t = 0;
+        while t < n as u64 * 200_000 + 1_000_000 {
+            t += 50_000;
+            bus.advance(t);
+            for s in 0..4 {
+                while let Some(d) = bus.receive(s) {
+                    inj.deliver(s, d, t);
+                }
+                while inj.ready(s, t).is_some() {}
+            }
+        }
+        inj
+    }
+
+    #[test]
+    fn injected_errors_move_the_counters_by_the_confinement_rules() {
+        // Clean: nothing counts.
+        let mut c = confined(vec![], 100);
+        assert_eq!(c.error_counters(0, 0).registers(), (0, 0));
+        // Every frame completing from 10 ms to 12 ms lost at every receiver.
+        let w = FaultWindow::new(Fault::Loss { rate: 1.0 }, 10_000_000, 12_000_000);
+        let mut inj = confined(vec![w], 70);
+        assert_eq!(
+            inj.stats.lost, 30,
+            "10 frames at 3 receivers: {:?}",
+            inj.stats
+        );
+        // Each receiver: REC + 1 per lost frame, − 1 per good one after.
+        // The sender: + 8 per lost frame, − 1 per good one.
+        let host = inj.error_counters(0, u64::MAX);
+        let n1 = inj.error_counters(1, u64::MAX);
+        assert_eq!(n1.rec, 0, "10 errors, then 10 good frames");
+        assert_eq!(host.tec, 80 - 10, "8 per error, then 10 good frames");
+        // A shorter run: the counters stand where the errors left them.
+        let w = FaultWindow::new(Fault::Loss { rate: 1.0 }, 10_000_000, 12_000_000);
+        let mut inj = confined(vec![w], 55);
+        assert_eq!(inj.error_counters(2, u64::MAX).registers(), (0, 5));
+        assert_eq!(inj.error_counters(0, u64::MAX).registers(), (40, 0));
+        // Duplicates are the sender's errors only.
+        let d = FaultWindow::new(Fault::Duplicate { rate: 1.0 }, 0, u64::MAX).on_ids(0x100..=0x100);
+        let mut dup = confined(vec![d], 10);
+        assert_eq!(dup.error_counters(0, u64::MAX).tec, 70);
+        assert_eq!(dup.error_counters(1, u64::MAX).rec, 0);
+    }
+
+    #[test]
+    fn a_sender_past_255_goes_bus_off_and_recovers_when_enforced() {
+        let all = || vec![FaultWindow::new(Fault::Loss { rate: 1.0 }, 0, u64::MAX)];
+        // Reported, not enforced (the default): every frame still goes out.
+        let mut seen = confined(all(), 100);
+        assert_eq!(seen.stats.bus_off_dropped, 0);
+        assert_eq!(seen.error_counters(0, u64::MAX).registers().0, 255);
+        let mut bus = Bus::new(BusConfig::default(), 4);
+        let mut inj = FaultInjector::new(all(), 7, 4);
+        inj.enforce_bus_off = true;
+        for k in 0..100u64 {
+            bus.send(0, Frame::new(0x100, 8, false), k * 200_000);
+        }
+        let mut t = 0;
+        // Bus-off periods of the host and the frames each receiver lost.
+        let (mut periods, mut was_off) = (0, false);
+        while t < 21_000_000 {
+            t += 50_000;
+            bus.advance(t);
+            for s in 0..4 {
+                while let Some(d) = bus.receive(s) {
+                    inj.deliver(s, d, t);
+                }
+            }
+            let off = inj.bus_off(0, t);
+            periods += (off && !was_off) as u32;
+            was_off = off;
+        }
+        // TEC > 255 after 32 errors; bus-off for 1.408 ms (about 7 frames
+        // 200 µs apart), then counters cleared, 32 more errors, off again,
+        // and the rest lost: two periods in 100 frames, errors after each.
+        assert_eq!(periods, 2, "{:?}", inj.stats);
+        let lost = inj.stats.lost / 3;
+        assert!((32 * 2 + 1..100).contains(&lost), "{:?}", inj.stats);
     }
 }

@@ -6,6 +6,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod bus;
+pub mod confinement;
 pub mod faults;
 pub mod metrics;
 pub mod plant;

@@ -14,7 +14,7 @@ use std::time::{Duration, SystemTime};
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_firmware::hal::service;
+use triquint_firmware::node::service;
 use triquint_shared::Robot;
 use triquint_shared::plan::{Segment, eval};
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};

@@ -383,6 +383,11 @@ impl Sim {
             .as_ref()
             .is_some_and(|f| f.bus_off(station, self.t_ns));
         let n = &mut self.nodes[i];
+        // The controller's error counters, as the fault layer's confinement keeps them.
+        if let Some(f) = self.faults.as_mut() {
+            n.node
+                .set_error_counters(f.error_counters(station, self.t_ns).registers());
+        }
         while !bus_off && self.bus.pending(station) < self.cfg.tx_mailboxes {
             let Some(f) = n.node.pop_tx() else { break };
             self.bus.send(station, f, self.t_ns);

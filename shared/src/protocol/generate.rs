@@ -269,26 +269,19 @@ pub fn markdown() -> String {
                 doc
             );
         }
-        match def.mux {
-            Some("part") => {
-                let wpp = words_per_part(def.fd);
-                let _ = writeln!(
-                    o,
-                    "| 2–{} | words | {}×6 bytes | | | Body words {}·part … {}·part+{} |",
-                    1 + wpp * WORD_LEN,
-                    wpp,
-                    wpp,
-                    wpp,
-                    wpp - 1
-                );
-            }
-            Some(_) => {
-                let _ = writeln!(
-                    o,
-                    "| 1 | value | f32 | per parameter | 1 | Parameter value (configuration table) |"
-                );
-            }
-            None => {}
+        // Segment parts: the body words after the declared bytes. Parameter
+        // frames need no extra row: index and value are declared fields.
+        if def.mux == Some("part") {
+            let wpp = words_per_part(def.fd);
+            let _ = writeln!(
+                o,
+                "| 2–{} | words | {}×6 bytes | | | Body words {}·part … {}·part+{} |",
+                1 + wpp * WORD_LEN,
+                wpp,
+                wpp,
+                wpp,
+                wpp - 1
+            );
         }
         o.push('\n');
     }
@@ -317,6 +310,12 @@ pub fn markdown() -> String {
             p.unit,
             p.doc.trim()
         );
+    }
+    o.push_str("\n### Acceptance bounds (applied by every drive)\n\n| Bound | Value | Unit | Meaning |\n|---|---:|---|---|\n");
+    for b in super::contract::BOUNDS {
+        // f32 constants in decimal units: round away the binary representation error.
+        let v = libm::round(b.value * 1e6) / 1e6;
+        let _ = writeln!(o, "| {} | {v} | {} | {} |", b.name, b.unit, b.doc);
     }
     o.push_str("\n### Code tables\n\n");
     enum_table(&mut o, "State", State::TABLE);

@@ -12,6 +12,7 @@
 //! 1–3; node 0 is the host or "all nodes".
 
 pub mod config;
+pub mod contract;
 pub mod crc;
 #[cfg(any(feature = "alloc", test))]
 pub mod describe;
@@ -129,30 +130,124 @@ pub enum DecodeError {
     },
 }
 
+/// Every message of the protocol, one variant each, in identifier order.
+/// [`decode`] and [`all_messages`] are exhaustive matches over it, so a
+/// message added here without its decoder does not compile; a fixed-layout
+/// message declared in [`messages`] but missing here fails the test
+/// `every_declared_message_has_a_kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MsgKind {
+    Emergency,
+    TimeSync,
+    Command,
+    ConfigWrite,
+    SegmentPart,
+    SegmentPartFd,
+    SegmentAck,
+    CommandAck,
+    ConfigValue,
+    Heartbeat,
+    HeartbeatExt,
+    Telemetry,
+    TelemetryExt,
+}
+
+impl MsgKind {
+    /// Every kind, in identifier order.
+    pub const ALL: [MsgKind; 13] = [
+        MsgKind::Emergency,
+        MsgKind::TimeSync,
+        MsgKind::Command,
+        MsgKind::ConfigWrite,
+        MsgKind::SegmentPart,
+        MsgKind::SegmentPartFd,
+        MsgKind::SegmentAck,
+        MsgKind::CommandAck,
+        MsgKind::ConfigValue,
+        MsgKind::Heartbeat,
+        MsgKind::HeartbeatExt,
+        MsgKind::Telemetry,
+        MsgKind::TelemetryExt,
+    ];
+
+    /// The declaration of this message.
+    pub const fn def(self) -> &'static MessageDef {
+        match self {
+            MsgKind::Emergency => &Emergency::DEF,
+            MsgKind::TimeSync => &TimeSync::DEF,
+            MsgKind::Command => &Command::DEF,
+            MsgKind::ConfigWrite => &config::CONFIG_WRITE,
+            MsgKind::SegmentPart => &segment::SEGMENT_PART,
+            MsgKind::SegmentPartFd => &segment::SEGMENT_PART_FD,
+            MsgKind::SegmentAck => &SegmentAck::DEF,
+            MsgKind::CommandAck => &CommandAck::DEF,
+            MsgKind::ConfigValue => &config::CONFIG_VALUE,
+            MsgKind::Heartbeat => &Heartbeat::DEF,
+            MsgKind::HeartbeatExt => &HeartbeatExt::DEF,
+            MsgKind::Telemetry => &Telemetry::DEF,
+            MsgKind::TelemetryExt => &TelemetryExt::DEF,
+        }
+    }
+
+    /// Decodes a payload of this kind (at least `def().len` bytes).
+    fn decode(self, p: &[u8]) -> Msg {
+        let param = || config::decode_param(p).unwrap_or((0, 0.0));
+        match self {
+            MsgKind::Emergency => Msg::Emergency(Emergency::decode(p)),
+            MsgKind::TimeSync => Msg::TimeSync(TimeSync::decode(p)),
+            MsgKind::Command => Msg::Command(Command::decode(p)),
+            MsgKind::ConfigWrite => {
+                let (index, value) = param();
+                Msg::ConfigWrite { index, value }
+            }
+            MsgKind::SegmentPart => Msg::SegmentPart,
+            MsgKind::SegmentPartFd => Msg::SegmentPartFd,
+            MsgKind::SegmentAck => Msg::SegmentAck(SegmentAck::decode(p)),
+            MsgKind::CommandAck => Msg::CommandAck(CommandAck::decode(p)),
+            MsgKind::ConfigValue => {
+                let (index, value) = param();
+                Msg::ConfigValue { index, value }
+            }
+            MsgKind::Heartbeat => Msg::Heartbeat(Heartbeat::decode(p)),
+            MsgKind::HeartbeatExt => Msg::HeartbeatExt(HeartbeatExt::decode(p)),
+            MsgKind::Telemetry => Msg::Telemetry(Telemetry::decode(p)),
+            MsgKind::TelemetryExt => Msg::TelemetryExt(TelemetryExt::decode(p)),
+        }
+    }
+}
+
+impl Msg {
+    /// Which message this is.
+    pub const fn kind(&self) -> MsgKind {
+        match self {
+            Msg::Emergency(_) => MsgKind::Emergency,
+            Msg::TimeSync(_) => MsgKind::TimeSync,
+            Msg::Command(_) => MsgKind::Command,
+            Msg::ConfigWrite { .. } => MsgKind::ConfigWrite,
+            Msg::SegmentPart => MsgKind::SegmentPart,
+            Msg::SegmentPartFd => MsgKind::SegmentPartFd,
+            Msg::SegmentAck(_) => MsgKind::SegmentAck,
+            Msg::CommandAck(_) => MsgKind::CommandAck,
+            Msg::ConfigValue { .. } => MsgKind::ConfigValue,
+            Msg::Heartbeat(_) => MsgKind::Heartbeat,
+            Msg::HeartbeatExt(_) => MsgKind::HeartbeatExt,
+            Msg::Telemetry(_) => MsgKind::Telemetry,
+            Msg::TelemetryExt(_) => MsgKind::TelemetryExt,
+        }
+    }
+}
+
 /// Every message declaration, in identifier order (fixed and multiplexed).
 pub fn all_messages() -> [&'static MessageDef; 13] {
-    [
-        &Emergency::DEF,
-        &TimeSync::DEF,
-        &Command::DEF,
-        &config::CONFIG_WRITE,
-        &segment::SEGMENT_PART,
-        &segment::SEGMENT_PART_FD,
-        &SegmentAck::DEF,
-        &CommandAck::DEF,
-        &config::CONFIG_VALUE,
-        &Heartbeat::DEF,
-        &HeartbeatExt::DEF,
-        &Telemetry::DEF,
-        &TelemetryExt::DEF,
-    ]
+    MsgKind::ALL.map(MsgKind::def)
 }
 
 /// Decodes a frame into the message and the node number in its identifier
 /// (0 = host or broadcast). Segment parts are returned undecoded: feed their
 /// payload to a [`Reassembler`].
 pub fn decode(frame: &Frame) -> Result<(Msg, u8), DecodeError> {
-    for def in all_messages() {
+    for kind in MsgKind::ALL {
+        let def = kind.def();
         if let Some(node) = def.addr.matches(frame.id) {
             let p = frame.payload();
             if p.len() < def.len {
@@ -162,29 +257,7 @@ pub fn decode(frame: &Frame) -> Result<(Msg, u8), DecodeError> {
                     want: def.len,
                 });
             }
-            let param = || config::decode_param(p).unwrap_or((0, 0.0));
-            let msg = match def.name {
-                "Emergency" => Msg::Emergency(Emergency::decode(p)),
-                "TimeSync" => Msg::TimeSync(TimeSync::decode(p)),
-                "Command" => Msg::Command(Command::decode(p)),
-                "ConfigWrite" => {
-                    let (index, value) = param();
-                    Msg::ConfigWrite { index, value }
-                }
-                "SegmentPart" => Msg::SegmentPart,
-                "SegmentPartFd" => Msg::SegmentPartFd,
-                "SegmentAck" => Msg::SegmentAck(SegmentAck::decode(p)),
-                "CommandAck" => Msg::CommandAck(CommandAck::decode(p)),
-                "ConfigValue" => {
-                    let (index, value) = param();
-                    Msg::ConfigValue { index, value }
-                }
-                "Heartbeat" => Msg::Heartbeat(Heartbeat::decode(p)),
-                "HeartbeatExt" => Msg::HeartbeatExt(HeartbeatExt::decode(p)),
-                "Telemetry" => Msg::Telemetry(Telemetry::decode(p)),
-                _ => Msg::TelemetryExt(TelemetryExt::decode(p)),
-            };
-            return Ok((msg, node));
+            return Ok((kind.decode(p), node));
         }
     }
     Err(DecodeError::UnknownId(frame.id))
@@ -333,6 +406,56 @@ mod tests {
         assert!(matches!(decode(&short), Err(DecodeError::Length { .. })));
         let unknown = Frame::with_payload(0x7FF, &[], false);
         assert_eq!(decode(&unknown), Err(DecodeError::UnknownId(0x7FF)));
+    }
+
+    #[test]
+    fn every_declared_message_has_a_kind() {
+        let all = all_messages();
+        for def in SIMPLE_MESSAGES {
+            assert!(
+                all.iter().any(|d| d.name == def.name),
+                "{} is declared but has no MsgKind (no decoder)",
+                def.name
+            );
+        }
+        for (i, kind) in MsgKind::ALL.iter().enumerate() {
+            assert!(!MsgKind::ALL[..i].contains(kind), "{kind:?} listed twice");
+        }
+    }
+
+    #[test]
+    fn every_kind_decodes_to_itself() {
+        for kind in MsgKind::ALL {
+            let def = kind.def();
+            let node = def.addr.nodes()[def.addr.nodes().len() - 1];
+            let f = Frame::new(def.addr.id(node), def.len, def.fd);
+            let (msg, n) = decode(&f).unwrap();
+            assert_eq!((msg.kind(), n), (kind, node), "{}", def.name);
+        }
+    }
+
+    #[test]
+    fn code_fields_decode_to_their_enums() {
+        let hb = Heartbeat {
+            state: State::Running as u8,
+            fault: 99,
+            ..Default::default()
+        };
+        let Ok((Msg::Heartbeat(got), _)) = decode(&hb.to_frame(1)) else {
+            panic!("not a heartbeat");
+        };
+        assert_eq!(got.state(), Ok(State::Running));
+        assert_eq!(got.fault(), Err(99));
+        let ack = SegmentAck {
+            result: Reject::Discontinuous as u8,
+            ..Default::default()
+        };
+        assert_eq!(ack.result(), Ok(Reject::Discontinuous));
+        let c = Command {
+            command: CommandCode::ClearFault as u8,
+            ..Default::default()
+        };
+        assert_eq!(c.command(), Ok(CommandCode::ClearFault));
     }
 
     #[test]

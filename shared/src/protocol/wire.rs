@@ -276,10 +276,21 @@ macro_rules! messages {
                 pub fn decode(buf: &[u8]) -> Self {
                     Self { $( $field: $crate::protocol::wire::Wire::get(buf, $off), )* }
                 }
+                $( messages!(@code $field $($enum)?); )*
             }
         )*
         /// Every fixed-layout message, in identifier order.
         pub const SIMPLE_MESSAGES: &[&$crate::protocol::wire::MessageDef] = &[ $( &$name::DEF ),* ];
+    };
+    (@code $field:ident) => {};
+    (@code $field:ident $enum:ident) => {
+        /// This code field decoded to its table; `Err(raw)` for a value not in it.
+        pub const fn $field(&self) -> Result<$enum, u8> {
+            match $enum::from_u8(self.$field) {
+                Some(v) => Ok(v),
+                None => Err(self.$field),
+            }
+        }
     };
     (@values) => { None };
     (@values $enum:ident) => { Some($enum::TABLE) };

@@ -13,6 +13,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use heapless::spsc::{Consumer, Producer};
+use triquint_firmware::inbox::offer;
 use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
 
@@ -54,6 +55,7 @@ pub async fn receive(
                 frame,
                 timestamp_us: env.ts.as_micros(),
             }),
+            // Counted by the controller (TEC/REC), which the tick reports.
             Either::First(Err(_bus_error)) => None,
             Either::Second(kept) => Some(kept),
         };
@@ -63,8 +65,24 @@ pub async fn receive(
         };
         let status = critical_section::with(|cs| STATUS.borrow(cs).get());
         if let Some(item) = receiver.on_frame(&frame, status) {
-            // A full queue drops the item: the host's flow control resends.
-            let _ = to_tick.enqueue(item);
+            hand_off(&mut to_tick, item).await;
+        }
+    }
+}
+
+/// Queues an item for the tick. An ordinary item finding only the reserved
+/// slots left is dropped (the host's flow control resends segments); an
+/// urgent one (Stop, QuickStop, ClearFault, Emergency) is never dropped: it
+/// waits for the tick, which frees a slot every 100 µs.
+async fn hand_off(to_tick: &mut Producer<'static, Item>, mut item: Item) {
+    loop {
+        match offer(to_tick, item) {
+            Ok(()) => return,
+            Err(back) if back.is_urgent() => {
+                item = back;
+                embassy_futures::yield_now().await;
+            }
+            Err(_) => return,
         }
     }
 }

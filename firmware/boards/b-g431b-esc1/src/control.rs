@@ -25,6 +25,8 @@ pub struct Tick {
     /// Finished items from the CAN receive task.
     pub inbox: Consumer<'static, Item>,
     pub tx: Producer<'static, Frame>,
+    /// The FDCAN's error counters, into every HeartbeatExt.
+    pub can: embassy_stm32::can::Properties,
 }
 
 /// Handed to the interrupt once, at start-up (a `StaticCell`, never moved);
@@ -60,6 +62,8 @@ fn TIM6_DAC() {
     // Hand-off from the CAN receive task (which drops frames until the axis
     // is homed: the node stays unconfigured, motor off).
     t.drive.take_from(&mut t.inbox);
+    let errors = (t.can.tx_error_count(), t.can.rx_error_count());
+    t.drive.set_error_counters(errors);
     t.drive.tick(now_us(), &mut t.encoder, &mut t.motor);
     let status = t.drive.status();
     critical_section::with(|cs| STATUS.borrow(cs).set(status));

@@ -1,6 +1,7 @@
 //! triquint drive firmware for the ST B-G431B-ESC1: one axis per board.
 //!
-//! Interrupts, highest first: the current loop (TIM1 update, 20 kHz), the
+//! Interrupts, highest first: the current loop (end of the ADC conversions
+//! that TIM1 starts at the PWM centre, 20 kHz), the
 //! control tick (TIM6 update, 10 kHz, owns the node), then the embassy
 //! executor in thread mode (CAN receive / transmit, homing, flash). All motion
 //! logic is the target-independent core (`triquint-firmware`).
@@ -20,7 +21,7 @@ mod storage;
 
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::Spawner;
-use embassy_stm32::adc::{Adc, AdcConfig};
+use embassy_stm32::adc::{Adc, AdcConfig, Exten, SampleTime};
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::flash::Flash;
 use embassy_stm32::gpio::{OutputType, Pull};
@@ -126,17 +127,33 @@ async fn main(spawner: Spawner) {
     ));
     let out_u = op1.standalone_ext(p.PA1, p.PA3, p.PA2);
     let out_v = op2.standalone_ext(p.PA7, p.PA5, p.PA6);
-    let adc1 = Adc::new(p.ADC1, AdcConfig::default());
-    let adc2 = Adc::new(p.ADC2, AdcConfig::default());
+    // Injected conversions started by TIM1 at the PWM centre (TRGO2); the
+    // end of ADC2's raises the current loop's interrupt.
+    let phase_u = Adc::new(p.ADC1, AdcConfig::default()).setup_injected_conversions(
+        [(current::channel(out_u), SampleTime::CYCLES2_5)],
+        embassy_stm32::triggers::TIM1_TRGO2,
+        Exten::RISING_EDGE,
+        false,
+    );
+    let phase_v = Adc::new(p.ADC2, AdcConfig::default()).setup_injected_conversions(
+        [(current::channel(out_v), SampleTime::CYCLES2_5)],
+        embassy_stm32::triggers::TIM1_TRGO2,
+        Exten::RISING_EDGE,
+        true,
+    );
+    current::trigger_at_centre();
     let cur = current::Current {
         pwm,
-        adc1,
-        adc2,
-        phase_u: current::channel(out_u),
-        phase_v: current::channel(out_v),
+        phase_u,
+        phase_v,
     };
     let cur = CURRENT_STATE.init(cur);
     current::CURRENT.store(cur, core::sync::atomic::Ordering::Release);
+
+    // CAN-FD: PA11 RX, PB9 TX. The tick reads the controller's error counters.
+    let mut cfg = fdcan::CanConfigurator::new(p.FDCAN1, p.PA11, p.PB9, Irqs);
+    can::configure(&mut cfg);
+    let (can_tx, can_rx, can_props) = cfg.into_normal_mode().split();
 
     // Queues between the CAN tasks and the tick.
     let (inbox_prod, inbox_cons) = INBOX.init(Queue::new()).split();
@@ -152,27 +169,22 @@ async fn main(spawner: Spawner) {
         },
         inbox: inbox_cons,
         tx: tx_prod,
+        can: can_props,
     };
     let tick = TICK_STATE.init(tick);
     control::TICK.store(tick, core::sync::atomic::Ordering::Release);
-
-    // CAN-FD: PA11 RX, PB9 TX.
-    let mut cfg = fdcan::CanConfigurator::new(p.FDCAN1, p.PA11, p.PB9, Irqs);
-    can::configure(&mut cfg);
-    let (can_tx, can_rx, _) = cfg.into_normal_mode().split();
 
     // Control tick: TIM6 at 10 kHz, below the current loop, above everything else.
     let tim6 = Timer::new(p.TIM6);
     tim6.set_frequency(Hertz(board::TICK_HZ), RoundTo::Faster);
     tim6.enable_update_interrupt(true);
-    interrupt::TIM1_UP_TIM16.set_priority(Priority::P0);
+    interrupt::ADC1_2.set_priority(Priority::P0);
     interrupt::TIM6_DAC.set_priority(Priority::P1);
     // SAFETY: both handlers own their state (moved in above) and share only atomics.
     unsafe {
-        interrupt::TIM1_UP_TIM16.enable();
+        interrupt::ADC1_2.enable();
         interrupt::TIM6_DAC.enable();
     }
-    embassy_stm32::pac::TIM1.dier().modify(|w| w.set_uie(true));
     tim6.start();
     core::mem::forget(tim6);
 

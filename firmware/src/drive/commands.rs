@@ -1,0 +1,187 @@
+//! Commands: the state machine's transitions the host asks for (Arm,
+//! Start, Stop, feed hold, configuration commit, ...), each answered by a
+//! CommandAck, repeats within the repeat window answered again.
+
+use triquint_shared::protocol::contract::REPEAT_WINDOW_US;
+use triquint_shared::protocol::{
+    Command, CommandAck, CommandCode, FaultCode, State, config_value_frame,
+};
+
+use super::{Drive, StopReason};
+use crate::inbox::{CommandData, Prepared};
+use crate::scaling::Phase;
+
+impl<const Q: usize> Drive<Q> {
+    pub(super) fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
+        let a = CommandAck {
+            command: c.command,
+            token: c.token,
+            result: result as u8,
+            state: self.state as u8,
+            value,
+        };
+        self.last_command = Some((*c, a, self.command_rx_us));
+        let f = a.to_frame(self.node_id);
+        self.send(f);
+    }
+
+    // Not inlined into the tick: commands are rare, and the tick's own code
+    // must fit the 10 KB of CCM SRAM on the ESC1 board.
+    #[inline(never)]
+    pub(super) fn on_command(&mut self, c: &Command, local_us: u64, data: &CommandData) {
+        self.command_rx_us = local_us;
+        if let Some((last, ack, at)) = self.last_command
+            && last == *c
+            && local_us.saturating_sub(at) < REPEAT_WINDOW_US
+        {
+            let f = ack.to_frame(self.node_id);
+            self.send(f);
+            return;
+        }
+        let Ok(code) = c.command() else {
+            self.command_ack(c, FaultCode::BadCommand, 0);
+            return;
+        };
+        let r = match code {
+            CommandCode::Arm => self.arm(local_us),
+            CommandCode::Start => self.start(c.arg, local_us),
+            CommandCode::Stop | CommandCode::QuickStop => {
+                let quick = code == CommandCode::QuickStop;
+                match self.state {
+                    State::Running => {
+                        self.begin_stop(StopReason::Commanded, quick, local_us);
+                        FaultCode::None
+                    }
+                    State::Armed => {
+                        self.state = State::Loaded;
+                        self.start_ns = None;
+                        FaultCode::None
+                    }
+                    _ => FaultCode::None,
+                }
+            }
+            CommandCode::ClearFault => {
+                if self.state == State::Fault {
+                    self.flush();
+                    self.state = State::Idle;
+                    self.fault = FaultCode::None;
+                    self.law.integral = 0.0;
+                    FaultCode::None
+                } else {
+                    FaultCode::WrongState
+                }
+            }
+            CommandCode::FeedHold => {
+                if self.state == State::Running && self.scaling.phase != Phase::Rest {
+                    self.begin_stop(StopReason::Hold, false, local_us);
+                    FaultCode::None
+                } else {
+                    FaultCode::WrongState
+                }
+            }
+            CommandCode::Resume => match (self.state, self.active) {
+                (State::Running, Some(a)) if self.stop_reason == Some(StopReason::Hold) => {
+                    let t = self.sync.host_ns(local_us).unwrap_or(0);
+                    self.scaling.at(t);
+                    self.scaling.begin_accel(t, a.stop_ns);
+                    self.stop_reason = None;
+                    FaultCode::None
+                }
+                _ => FaultCode::WrongState,
+            },
+            CommandCode::ConfigCommit => {
+                let (r, crc) = match data {
+                    CommandData::Commit { crc, config } => (self.commit(config), *crc),
+                    _ => (FaultCode::ConfigMismatch, 0),
+                };
+                self.command_ack(c, r, crc);
+                return;
+            }
+            CommandCode::Reset => match self.state {
+                State::Idle | State::Loaded | State::Armed => {
+                    self.flush();
+                    self.state = State::Idle;
+                    FaultCode::None
+                }
+                _ => FaultCode::WrongState,
+            },
+            CommandCode::ReadConfig => {
+                if let CommandData::Values(values) = data {
+                    for (i, v) in values.iter().enumerate() {
+                        let f = config_value_frame(self.node_id, i as u8, *v);
+                        self.send(f);
+                    }
+                }
+                FaultCode::None
+            }
+        };
+        self.command_ack(c, r, 0);
+    }
+
+    /// Runs a configuration the receive side prepared (Idle only).
+    pub(super) fn commit(&mut self, config: &Result<Prepared, FaultCode>) -> FaultCode {
+        if self.state != State::Idle {
+            return FaultCode::WrongState;
+        }
+        let p = match config {
+            Ok(p) => p,
+            Err(code) => return *code,
+        };
+        self.cfg = p.cfg;
+        self.model = p.model;
+        self.active = Some(p.active);
+        FaultCode::None
+    }
+
+    pub(super) fn arm(&mut self, local_us: u64) -> FaultCode {
+        if self.state != State::Loaded {
+            return FaultCode::WrongState;
+        }
+        let Some(a) = self.active else {
+            self.fault_now(FaultCode::NoConfig);
+            return FaultCode::NoConfig;
+        };
+        if !self.sync.is_synced(local_us, a.sync_timeout_us) {
+            self.fault_now(FaultCode::NotSynced);
+            return FaultCode::NotSynced;
+        }
+        let Some(front) = self.queue.front().copied() else {
+            self.fault_now(FaultCode::EmptyQueue);
+            return FaultCode::EmptyQueue;
+        };
+        if !front.first {
+            self.fault_now(FaultCode::EmptyQueue);
+            return FaultCode::EmptyQueue;
+        }
+        let start = front.start_q();
+        let own = start[a.axis.min(2)];
+        match self.last_q {
+            Some(q) if (q - own).abs() <= self.cfg.arm_tolerance => {}
+            _ => {
+                self.fault_now(FaultCode::ArmTooFar);
+                return FaultCode::ArmTooFar;
+            }
+        }
+        self.hold = Some(start);
+        self.hold_own = own;
+        self.state = State::Armed;
+        FaultCode::None
+    }
+
+    pub(super) fn start(&mut self, arg: u32, local_us: u64) -> FaultCode {
+        if self.state != State::Armed {
+            return FaultCode::WrongState;
+        }
+        let Some(now) = self.sync.host_us(local_us) else {
+            self.fault_now(FaultCode::NotSynced);
+            return FaultCode::NotSynced;
+        };
+        let d = arg.wrapping_sub(now as u32) as i32 as i64;
+        if d < 0 {
+            self.fault_now(FaultCode::StartInPast);
+            return FaultCode::StartInPast;
+        }
+        self.start_ns = Some((now + d) * 1000);
+        FaultCode::None
+    }
+}

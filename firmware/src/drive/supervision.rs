@@ -1,0 +1,114 @@
+//! Supervision: what stops the drive besides a command. Emergencies and
+//! peers' heartbeats (a peer faulted, reset, silent or left behind), the
+//! time base, and the motion itself (following error, soft limits); each
+//! check gives the fault it calls for, the tick or the item handler acts.
+
+use triquint_shared::protocol::contract::PEER_SKEW_MARGIN_US;
+use triquint_shared::protocol::{FaultCode, Heartbeat, State};
+
+use super::{Drive, StopReason};
+use crate::active::Active;
+
+impl<const Q: usize> Drive<Q> {
+    pub(super) fn on_emergency(&mut self, code: FaultCode, local_us: u64) {
+        match self.state {
+            State::Running => self.begin_stop(StopReason::Fault(code), false, local_us),
+            State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
+                self.stop_reason = Some(StopReason::Fault(code));
+                self.fault = code;
+            }
+            State::Loaded | State::Armed => self.fault_now(code),
+            State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
+            _ => {}
+        }
+    }
+
+    /// Peer supervision: a peer that reports a fault (its Emergency may have
+    /// been lost) or has lost its configuration (it was reset) stops us too.
+    pub(super) fn on_peer_heartbeat(&mut self, node: u8, h: &Heartbeat, rx_us: u64) {
+        let Some(slot) = (node as usize)
+            .checked_sub(1)
+            .and_then(|i| self.peer_seen_us.get_mut(i))
+        else {
+            return;
+        };
+        *slot = Some(rx_us);
+        if self.state != State::Running {
+            return;
+        }
+        let peer = h.state().ok();
+        if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
+            self.on_emergency(FaultCode::PeerEmergency, rx_us);
+        } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
+            self.on_emergency(FaultCode::PeerLost, rx_us);
+        }
+    }
+
+    /// A peer still Loaded or Armed (it missed the Start) well after we
+    /// started, or Idle before our plan's last segment: it is not moving
+    /// with us. The margins cover the start skew (one tick) and the end skew.
+    pub(super) fn peer_left_behind(&self, peer: Option<State>, local_us: u64) -> bool {
+        const MARGIN_NS: i64 = PEER_SKEW_MARGIN_US as i64 * 1000;
+        let (Some(t), Some(t0)) = (self.sync.host_ns(local_us), self.stats.started_at_ns) else {
+            return false;
+        };
+        match peer {
+            Some(State::Loaded | State::Armed) => t - t0 > MARGIN_NS,
+            Some(State::Idle) => self
+                .queue
+                .back()
+                .is_some_and(|b| !b.last || self.plan_ns + MARGIN_NS < b.end_ns()),
+            _ => false,
+        }
+    }
+
+    /// A peer (seen at least once) whose heartbeat has been missing for the
+    /// sync timeout.
+    pub(super) fn peer_silent(&self, a: &Active, now_us: u64) -> bool {
+        self.peer_seen_us
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| *i + 1 != self.node_id as usize)
+            .any(|(_, t)| t.is_some_and(|t| now_us.saturating_sub(t) > a.sync_timeout_us))
+    }
+
+    /// Supervision of the time base and the peers: the fault it calls for, if any.
+    pub(super) fn time_fault(
+        &self,
+        a: &Active,
+        has_host_time: bool,
+        now_us: u64,
+    ) -> Option<FaultCode> {
+        let lost = self.sync.lost(now_us, a.sync_timeout_us) || !has_host_time;
+        if lost && matches!(self.state, State::Armed | State::Running) {
+            Some(FaultCode::LostSync)
+        } else if self.state == State::Running && self.peer_silent(a, now_us) {
+            Some(FaultCode::PeerLost)
+        } else {
+            None
+        }
+    }
+
+    pub(super) fn on_time_fault(&mut self, code: FaultCode, now_us: u64) {
+        match self.state {
+            State::Armed => self.fault_now(code),
+            // Without a time base, keep stepping on the local clock.
+            _ => self.begin_stop(StopReason::Fault(code), false, now_us),
+        }
+    }
+
+    /// Supervision of the motion (Running): following error beyond its
+    /// bound, or a measured position outside the soft limits (accepted
+    /// segments stay inside them: a runaway axis), stopped along the path.
+    pub(super) fn motion_fault(&self, error: f32, q: f32) -> Option<FaultCode> {
+        if self.state != State::Running {
+            None
+        } else if error.abs() > self.cfg.following_error_max {
+            Some(FaultCode::FollowingError)
+        } else if !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max) {
+            Some(FaultCode::SoftLimit)
+        } else {
+            None
+        }
+    }
+}

@@ -1,0 +1,109 @@
+//! The bounds every drive applies to what it receives, declared once: the
+//! firmware checks segments and commands with these constants, and the
+//! "Acceptance bounds" table of `docs/protocol.md` is generated from
+//! [`BOUNDS`], so the spec cannot promise one number while the drives use another.
+
+pub use super::segment::MAX_DURATION_US;
+
+/// Shortest segment accepted (µs).
+pub const MIN_DURATION_US: u32 = 1;
+/// Relative tolerance on the configured velocity, acceleration and jerk
+/// limits (segment check), and on the jump of q', q'', q''' between
+/// segments as a fraction of those limits: f32 evaluation of an exact plan
+/// stays far inside it.
+pub const LIMIT_TOL: f32 = 0.01;
+/// Largest jump between a segment's start position and the previous
+/// segment's end (m), on every axis.
+pub const CONTINUITY_TOL: f32 = 10e-6;
+/// The limits and soft limits are checked at `LIMIT_CHECK_INTERVALS + 1`
+/// evenly spaced points of a segment (a safety net behind the host's exact
+/// verification, not a replacement for it).
+pub const LIMIT_CHECK_INTERVALS: i64 = 64;
+/// A command repeated (same code, token, argument) within this time is a
+/// duplicate frame, answered again and not executed again (µs): CAN resends
+/// a frame whose ACK slot a receiver missed.
+pub const REPEAT_WINDOW_US: u64 = 100_000;
+/// Sync timeout of a node without a configuration (µs): what its
+/// HeartbeatExt `sync_ok` is judged by.
+pub const UNCONFIGURED_SYNC_TIMEOUT_US: u64 = 500_000;
+/// Heartbeat period of a node without a configuration (µs).
+pub const UNCONFIGURED_HEARTBEAT_US: u64 = 100_000;
+/// Shortest heartbeat period, whatever is configured (µs).
+pub const MIN_HEARTBEAT_US: u64 = 1_000;
+/// A running node stops with `PeerLost` when a peer is still Loaded or
+/// Armed this long after the start, or Idle this long before the end of
+/// the plan (µs): covers the start skew (one tick) and the end skew.
+pub const PEER_SKEW_MARGIN_US: u64 = 20_000;
+
+/// One row of the generated table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    pub name: &'static str,
+    pub value: f64,
+    pub unit: &'static str,
+    pub doc: &'static str,
+}
+
+/// Every bound above, for `docs/protocol.md`.
+pub const BOUNDS: &[Bound] = &[
+    Bound {
+        name: "segment duration",
+        value: MIN_DURATION_US as f64,
+        unit: "µs (min)",
+        doc: "Shorter: `Invalid`.",
+    },
+    Bound {
+        name: "segment duration",
+        value: MAX_DURATION_US as f64,
+        unit: "µs (max)",
+        doc: "Longer: `Invalid`.",
+    },
+    Bound {
+        name: "limit tolerance",
+        value: LIMIT_TOL as f64 * 100.0,
+        unit: "%",
+        doc: "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond).",
+    },
+    Bound {
+        name: "check points",
+        value: (LIMIT_CHECK_INTERVALS + 1) as f64,
+        unit: "per segment",
+        doc: "Evenly spaced points (both ends included) at which limits and soft limits are checked.",
+    },
+    Bound {
+        name: "position continuity",
+        value: CONTINUITY_TOL as f64 * 1e6,
+        unit: "µm",
+        doc: "Largest jump between a segment's start and the previous end, every axis (`Discontinuous` beyond).",
+    },
+    Bound {
+        name: "command repeat window",
+        value: REPEAT_WINDOW_US as f64 / 1000.0,
+        unit: "ms",
+        doc: "The same command, token and argument again within this time is answered again, not executed again.",
+    },
+    Bound {
+        name: "unconfigured sync timeout",
+        value: UNCONFIGURED_SYNC_TIMEOUT_US as f64 / 1000.0,
+        unit: "ms",
+        doc: "`sync_ok` of a node without a configuration (configured: `sync_timeout`).",
+    },
+    Bound {
+        name: "unconfigured heartbeat period",
+        value: UNCONFIGURED_HEARTBEAT_US as f64 / 1000.0,
+        unit: "ms",
+        doc: "Heartbeat period of a node without a configuration (configured: `heartbeat_period`).",
+    },
+    Bound {
+        name: "shortest heartbeat period",
+        value: MIN_HEARTBEAT_US as f64 / 1000.0,
+        unit: "ms",
+        doc: "A shorter configured `heartbeat_period` is raised to this.",
+    },
+    Bound {
+        name: "peer skew margin",
+        value: PEER_SKEW_MARGIN_US as f64 / 1000.0,
+        unit: "ms",
+        doc: "A peer still Loaded/Armed this long after the start, or Idle this long before the plan's end, stops a running node (`PeerLost`).",
+    },
+];
