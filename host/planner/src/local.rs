@@ -475,9 +475,6 @@ impl Problem {
                 }
                 let before = r.amax();
                 r = residual(j, xj, None);
-                if std::env::var_os("TRIQUINT_DEBUG").is_some() {
-                    eprintln!("project j{j}: {before:e} -> {:e}", r.amax());
-                }
                 if r.amax() >= 0.5 * before {
                     break;
                 }
