@@ -261,26 +261,8 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    /// Dense sampling, then a second dense pass around the best sample.
-    fn sampled_max(c: &[f64], t0: f64, t1: f64) -> f64 {
-        let n = 20_000;
-        let step = (t1 - t0) / n as f64;
-        let mut best = (t0, eval(c, t0).abs());
-        for i in 0..=n {
-            let t = t0 + step * i as f64;
-            let v = eval(c, t).abs();
-            if v > best.1 {
-                best = (t, v);
-            }
-        }
-        let (lo, hi) = ((best.0 - step).max(t0), (best.0 + step).min(t1));
-        for i in 0..=4000 {
-            let t = lo + (hi - lo) * i as f64 / 4000.0;
-            best.1 = best.1.max(eval(c, t).abs());
-        }
-        best.1
-    }
+    // One dense-sampling reference for both root finders' tests.
+    use crate::sturm::tests::sampled_max;
 
     fn from_roots(roots: &[f64], scale: f64) -> Vec<f64> {
         let mut c = vec![scale];

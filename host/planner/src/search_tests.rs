@@ -86,19 +86,6 @@ fn paper_intervals_reoptimised_exactly() {
     }
 }
 
-#[test]
-fn deterministic_byte_for_byte() {
-    let job = example("paper-case1.toml");
-    let mut a = plan(&job, &opts(3)).unwrap();
-    let mut b = plan(&job, &opts(3)).unwrap();
-    a.solver.seconds = 0.0;
-    b.solver.seconds = 0.0;
-    assert_eq!(
-        serde_json::to_string(&a).unwrap(),
-        serde_json::to_string(&b).unwrap()
-    );
-}
-
 /// Local optimality: moving time between any two segments never helps.
 #[test]
 fn perturbing_the_intervals_never_improves() {
