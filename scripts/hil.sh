@@ -30,6 +30,9 @@ if ! "$PY" -c 'import can, cantools, pytest, virtme_ng' 2>/dev/null; then
     "$PY" -m pip install -q "${pkgs[@]}" 2>/dev/null \
         || "$PY" -m pip install -q --break-system-packages "${pkgs[@]}"
 fi
+# vng runs virtme-run by name: pip's script folder on PATH (a pyenv shim
+# exists only after a rehash, which an earlier install may not have had).
+export PATH="$(dirname "$PY"):$PATH"
 VNG=$(command -v vng || echo "$(dirname "$PY")/vng")
 
 step "release binaries"
