@@ -261,21 +261,9 @@ mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-    // One dense-sampling reference for both root finders' tests.
-    use crate::sturm::tests::sampled_max;
-
-    fn from_roots(roots: &[f64], scale: f64) -> Vec<f64> {
-        let mut c = vec![scale];
-        for &r in roots {
-            let mut next = vec![0.0; c.len() + 1];
-            for (k, &ck) in c.iter().enumerate() {
-                next[k + 1] += ck;
-                next[k] -= r * ck;
-            }
-            c = next;
-        }
-        c
-    }
+    // One dense-sampling reference and one root-to-coefficient helper for
+    // both root finders' tests.
+    use crate::sturm::tests::{from_roots, sampled_max};
 
     #[test]
     fn random_polynomials_match_dense_sampling() {
