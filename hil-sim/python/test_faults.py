@@ -164,7 +164,16 @@ def test_host_killed_mid_upload_ends_in_the_along_path_stop(make_sim, bus, bus_b
     # detection, jerk within max(limit, plan's jerk + limit / 2).
     assert run_["stopped_within_buffer"]
     tick = 1.0 / float(report["rate_hz"])
-    assert run_["stop_s"] is not None and run_["stop_s"] <= run_["stop_ramp_s"] + 2 * tick, run_
+    # Each node ramps within T_s + 2 ticks of its own detection. A peer's
+    # detection waits for the Emergency frame, which in the emulated guest can
+    # take several ticks (late ticks run back to back while vcan delivers at
+    # wall time): the spread of the detections is measured and added, and
+    # bounded on its own.
+    detected = [f["t_s"] for f in run_["faults"]]
+    spread = max(detected) - min(detected)
+    brief = {k: run_[k] for k in ("stop_s", "stop_ramp_s", "max_stop_jerk", "faults")}
+    assert spread <= 0.05, brief
+    assert run_["stop_s"] is not None and run_["stop_s"] <= run_["stop_ramp_s"] + 2 * tick + spread, brief
     with open(plan_path(CASE)) as f:
         plan = json.load(f)
     lim = plan["limits"]["jerk"]
