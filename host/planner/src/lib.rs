@@ -35,6 +35,7 @@
 //! found by bisection on the total time; intervals are rounded to whole
 //! microseconds (what the drives run) and repaired until every limit holds.
 
+mod banded;
 mod check;
 mod error;
 pub mod evolution;

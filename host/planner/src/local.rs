@@ -18,7 +18,7 @@
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::quintic::eval_poly;
 use triquint_shared::{Limits, Model, dynamics};
@@ -434,48 +434,46 @@ impl Problem {
         Some((t0, grad))
     }
 
-    /// Projects each joint's x onto the C3 / end-jerk equalities exactly (least change).
+    /// Projects each joint's x onto the C3 / end-jerk equalities exactly
+    /// (least change), with the conditions in knot order so that the
+    /// normal matrix is banded ([`banded`](crate::banded)).
     fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
-        let nv = self.nv();
-        let conds = self.jerk_conditions();
-        // Jerk conditions of joint j at xj: residuals and (x-independent) rows.
-        let residual = |j: usize, xj: &[f64], e: Option<&mut DMatrix<f64>>| {
-            let mut r = DVector::<f64>::zeros(conds.len());
-            let mut e = e;
-            for (row, (a, b)) in conds.iter().enumerate() {
-                for (scale, (k, u)) in [(1.0, *a), (-1.0, b.unwrap_or((0, f64::NAN)))] {
-                    if u.is_nan() {
-                        continue;
-                    }
-                    let f = self.knots.functional(xj, j, k, u, 3, h[k]);
-                    r[row] += scale * f.value;
-                    if let Some(e) = e.as_deref_mut() {
-                        for &(v, c) in f.dx() {
-                            e[(row, v)] += scale * c;
-                        }
+        let mut conds = self.jerk_conditions();
+        // The knot each condition sits at: the ends, or the knot between its two sides.
+        let knot = |c: &(KnotSide, Option<KnotSide>)| match c {
+            ((k, u), None) => k + usize::from(*u > 0.5),
+            (_, Some((k, _))) => *k,
+        };
+        conds.sort_by_key(knot);
+        // Jerk conditions of joint j at xj: residuals, and the (x-independent) rows.
+        let condition = |j: usize, xj: &[f64], c: &(KnotSide, Option<KnotSide>)| {
+            let mut value = 0.0;
+            let mut row: Vec<(usize, f64)> = Vec::with_capacity(8);
+            for (scale, side) in [(1.0, Some(c.0)), (-1.0, c.1)] {
+                let Some((k, u)) = side else { continue };
+                let f = self.knots.functional(xj, j, k, u, 3, h[k]);
+                value += scale * f.value;
+                for &(v, a) in f.dx() {
+                    match row.iter_mut().find(|e| e.0 == v) {
+                        Some(e) => e.1 += scale * a,
+                        None => row.push((v, scale * a)),
                     }
                 }
             }
-            r
+            (value, row)
         };
         for (j, xj) in x.iter_mut().enumerate() {
-            let mut e = DMatrix::<f64>::zeros(conds.len(), nv);
-            let mut r = residual(j, xj, Some(&mut e));
-            // Least change: Δ = Eᵀ(EEᵀ)⁻¹r, through the QR factors of Eᵀ
-            // (the normal equations would square E's condition number).
-            let qr = e.transpose().qr();
-            let (q, rt) = (qr.q(), qr.r().transpose());
+            let (mut r, rows): (Vec<f64>, Vec<_>) =
+                conds.iter().map(|c| condition(j, xj, c)).unzip();
+            let Some(e) = crate::banded::Rows::new(rows) else {
+                continue;
+            };
+            // Refined: the residual is recomputed from the corrected x.
             for _ in 0..3 {
-                let Some(y) = rt.solve_lower_triangular(&r) else {
-                    break;
-                };
-                let corr = &q * y;
-                for (v, dv) in xj.iter_mut().zip(corr.iter()) {
-                    *v -= dv;
-                }
-                let before = r.amax();
-                r = residual(j, xj, None);
-                if r.amax() >= 0.5 * before {
+                let before = r.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
+                e.subtract_correction(&r, xj);
+                r = conds.iter().map(|c| condition(j, xj, c).0).collect();
+                if r.iter().fold(0.0, |m: f64, v| m.max(v.abs())) >= 0.5 * before {
                     break;
                 }
             }

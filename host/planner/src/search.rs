@@ -96,6 +96,8 @@ pub(crate) fn parallel<T: Sync, R: Send>(
 
 /// Refined starts: the best few coarse results are driven to convergence.
 const REFINE: usize = 3;
+/// Relative distance below which two coarse results are the same point.
+const AGREE: f64 = 1e-4;
 
 /// Multistart global search for min-max jerk at the problem's total time.
 ///
@@ -156,7 +158,30 @@ fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<Search
         );
         ma.total_cmp(&mb).then(a.cmp(&b))
     });
-    let chosen: Vec<usize> = order.iter().copied().take(REFINE).collect();
+    // Starts that reached the same point (same intervals, same merit) are
+    // one basin: only the first of them is refined.
+    let same = |a: &Solution, b: &Solution| {
+        (merit(a) - merit(b)).abs() <= AGREE * merit(a).abs()
+            && a.h
+                .iter()
+                .zip(&b.h)
+                .all(|(x, y)| (x - y).abs() <= AGREE * x.abs())
+    };
+    let mut chosen: Vec<usize> = Vec::with_capacity(REFINE);
+    for &i in &order {
+        let Some(s) = coarse[i].as_ref() else {
+            continue;
+        };
+        if chosen.len() == REFINE {
+            break;
+        }
+        if !chosen
+            .iter()
+            .any(|&c| coarse[c].as_ref().is_some_and(|t| same(s, t)))
+        {
+            chosen.push(i);
+        }
+    }
     let refined: Vec<Solution> = parallel(&chosen, opts.threads, |&i| {
         coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10))
     })

@@ -4,8 +4,8 @@
 use std::time::Duration;
 
 use triquint_planner::{
-    CancelReason, Control, Job, Limit, Objective, Options, PlanError, PointKind, Progress, check,
-    parse_plan, plan, plan_with,
+    CancelReason, Control, Job, Limit, MAX_POINTS, Objective, Options, PlanError, PointKind,
+    Progress, check, parse_plan, plan, plan_with,
 };
 
 fn case2() -> Job {
@@ -129,6 +129,30 @@ fn bad_points_are_data() {
         ),
         "{e:?}"
     );
+}
+
+#[test]
+fn a_path_longer_than_the_planner_takes_is_refused_at_once() {
+    // 10 000 points on a small circle: each reachable, too many together.
+    let pts: Vec<[f64; 3]> = (0..10_000)
+        .map(|i| {
+            let t = i as f64 * 1e-3;
+            [50.0 * t.cos(), 50.0 * t.sin(), 600.0]
+        })
+        .collect();
+    let e = Job::builder().points_mm(pts).build().unwrap_err();
+    match &e {
+        PlanError::InvalidJob { field, reason } => {
+            assert_eq!(field, "path.points");
+            assert!(reason.contains(&MAX_POINTS.to_string()), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The limit itself is accepted.
+    let ok: Vec<[f64; 3]> = (0..MAX_POINTS)
+        .map(|i| [0.0, 0.0, 550.0 + 100.0 * i as f64 / MAX_POINTS as f64])
+        .collect();
+    assert!(Job::builder().points_mm(ok).build().is_ok());
 }
 
 #[test]
