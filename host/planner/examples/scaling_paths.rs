@@ -1,0 +1,60 @@
+//! Writes the scaling jobs of the planner's speed figures (README, "Planner
+//! speed"): the closed curve x = 90 sin t, y = 70 sin 2t,
+//! z = 600 + 60 sin(3t + 0.3) mm, t = 2πi/(n − 1), i = 0…n−1, as a
+//! min-max-jerk job of `n` via-points with the default limits.
+//!
+//! `cargo run --release -p triquint-planner --example scaling_paths -- DIR SECONDS_PER_SEGMENT N...`
+//! writes DIR/curve-N.toml for each N (total time = seconds per segment × (N − 1)).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+fn curve(n: usize) -> Vec<[f64; 3]> {
+    (0..n)
+        .map(|i| {
+            let t = 2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64;
+            [
+                90.0 * t.sin(),
+                70.0 * (2.0 * t).sin(),
+                600.0 + 60.0 * (3.0 * t + 0.3).sin(),
+            ]
+        })
+        .collect()
+}
+
+fn job_toml(points: &[[f64; 3]], total_time: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Closed curve of {} via-points (host/planner/examples/scaling_paths.rs).",
+        points.len()
+    );
+    s.push_str("objective = \"min-max-jerk\"\n\n[limits]\n");
+    s.push_str("velocity = 0.5\nacceleration = 1.2\njerk = 5.0\ntorque = 10.0\n");
+    let _ = writeln!(s, "total_time = {total_time}\n\n[path]\nunits = \"mm\"\npoints = [");
+    for p in points {
+        let _ = writeln!(s, "    [{:.6}, {:.6}, {:.6}],", p[0], p[1], p[2]);
+    }
+    s.push_str("]\n");
+    s
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [dir, per_segment, ns @ ..] = args.as_slice() else {
+        return Err("usage: scaling_paths DIR SECONDS_PER_SEGMENT N...".into());
+    };
+    let dir = PathBuf::from(dir);
+    let per_segment: f64 = per_segment.parse()?;
+    std::fs::create_dir_all(&dir)?;
+    for n in ns {
+        let n: usize = n.parse()?;
+        if n < 3 {
+            return Err(format!("a closed curve needs at least 3 points, got {n}").into());
+        }
+        let path = dir.join(format!("curve-{n}.toml"));
+        std::fs::write(&path, job_toml(&curve(n), per_segment * (n - 1) as f64))?;
+        println!("{}", path.display());
+    }
+    Ok(())
+}
