@@ -13,7 +13,6 @@ pub mod plant;
 pub mod proxy;
 pub mod realtime;
 pub mod report;
-pub mod robot_file;
 pub mod sim;
 pub mod socketcan_port;
 pub mod testplan;

@@ -16,7 +16,7 @@ use triquint_sim::socketcan_port::SocketCanPort;
 
 use crate::cli::finite;
 use crate::cli::upload::{BusArgs, report, run_plan};
-use crate::exit::{CliError, CliResult};
+use crate::exit::{CliError, CliResult, plan_error};
 use crate::upload::{Session, SessionOptions};
 
 #[derive(Args, Debug)]
@@ -151,12 +151,13 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
         .robot(robot.clone())
         .limits(limits)
         .points_m([start.r.into(), target.into()])
-        .build()?;
+        .build()
+        .map_err(plan_error)?;
     let opts = Options {
         starts: 3,
         ..Options::default()
     };
-    let p = plan(&job, &opts)?;
+    let p = plan(&job, &opts).map_err(plan_error)?;
     eprintln!(
         "planned {} segments, {:.3} s",
         p.segments.len(),

@@ -19,7 +19,7 @@ pub struct SimulateArgs {
     /// Drives run feedback only (same gains).
     #[arg(long)]
     pub no_feedforward: bool,
-    /// Control tick rate of the drives (Hz), 1000 to 10000.
+    /// Control tick rate of the drives (Hz), 1000 to 10000 (`triquint_cli_common::parse::RATE_HZ`).
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     pub rate: f64,
     /// Print the result as JSON.
@@ -44,12 +44,7 @@ fn to_cli(e: SimulateError) -> CliError {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult {
-    if !(1000.0..=10000.0).contains(&args.rate) {
-        return Err(CliError::bad_input(format!(
-            "--rate {}: must be 1000 to 10000 Hz",
-            args.rate
-        )));
-    }
+    triquint_cli_common::parse::check_rate("--rate", args.rate)?;
     let plan = crate::cli::load_plan(&args.plan)?;
     let opts = SimulateOptions {
         fd: args.fd,

@@ -90,12 +90,7 @@ fn check_bus_args(b: &BusArgs) -> CliResult {
             b.nodes
         )));
     }
-    if !(1000.0..=10000.0).contains(&b.rate) {
-        return Err(CliError::bad_input(format!(
-            "--rate {}: must be 1000 to 10000 Hz",
-            b.rate
-        )));
-    }
+    triquint_cli_common::parse::check_rate("--rate", b.rate)?;
     if !(b.timeout.is_finite() && b.timeout > 0.0) {
         return Err(CliError::bad_input(format!(
             "--timeout {}: must be a positive number of seconds",
