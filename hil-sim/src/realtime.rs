@@ -23,9 +23,10 @@ use triquint_shared::protocol::{
 };
 
 use crate::metrics::{Tracking, segment_from_wire, tracking_segments};
+use crate::node_port::NodePort;
 use crate::plant::{Plant, PlantConfig};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode};
-use crate::socketcan_port::{NodePort, SocketCanError, SocketCanPort};
+use triquint_link::socketcan::{SocketCanError, SocketCanPort};
 
 /// What runs, where.
 #[derive(Clone, Debug)]

@@ -7,7 +7,7 @@ use triquint_shared::plan::Plan;
 use triquint_sim::report::{JsonFault, RunJson};
 
 use crate::exit::{CliError, CliResult, write_atomic};
-use crate::upload::sim_port::{SimReport, SimulateError, SimulateOptions, simulate};
+use crate::inprocess::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -34,11 +34,12 @@ pub struct SimulateArgs {
 fn to_cli(e: SimulateError) -> CliError {
     match e {
         SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
-        SimulateError::Upload(u @ crate::upload::UploadError::Segment { .. }) => {
+        SimulateError::Upload(u @ triquint_link::UploadError::Segment { .. }) => {
             CliError::bad_input(u)
         }
         SimulateError::Upload(u) if u.is_motion_fault() => CliError::motion_fault(u),
         SimulateError::Plan(m) => CliError::bad_input(m),
+        e @ SimulateError::Config(_) => CliError::bad_input(e),
         other => CliError::device(other),
     }
 }

@@ -8,7 +8,7 @@ use triquint_shared::plan::Plan;
 use triquint_sim::metrics::plan_position;
 
 use super::ReportError;
-use crate::upload::sim_port::{SimReport, SimulateOptions};
+use crate::inprocess::simulate::{SimReport, SimulateOptions};
 
 const TIME: &str = "time since start (s)";
 
@@ -207,7 +207,7 @@ pub fn sim_plots(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::upload::sim_port::simulate;
+    use crate::inprocess::simulate::simulate;
 
     fn case1() -> Plan {
         let text = include_str!("../../../testdata/protocol/plans/case1-spline.json");

@@ -1,44 +1,16 @@
-//! The session over the in-process virtual hardware, and the simulation run
-//! behind `triquint simulate`.
+//! The simulation run behind `triquint simulate`: the host's upload session
+//! over the in-process bus to three simulated drives and the plant.
 
 use nalgebra::Vector3;
+use triquint_link::configs::ConfigError;
+use triquint_link::{DriveConfigs, FaultReport, Outcome, Session, SessionOptions, UploadError};
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::{DriveSettings, stop_time};
+use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
-use triquint_shared::protocol::{DriveConfig, Frame};
+use triquint_sim::host_port::SimPort;
 use triquint_sim::metrics::{self, Tracking};
 use triquint_sim::sim::{Sample, SimError};
-use triquint_sim::{Sim, SimConfig, testplan};
-
-use super::session::{FaultReport, Outcome, Session, SessionOptions, UploadError};
-use super::{CanPort, PortError, Received};
-
-/// The host's station on the in-process bus.
-pub struct SimPort<'a> {
-    pub sim: &'a mut Sim,
-    /// Host transmit queue length (like a SocketCAN txqueuelen).
-    pub tx_queue: usize,
-}
-
-impl CanPort for SimPort<'_> {
-    fn now_us(&mut self) -> u64 {
-        self.sim.now_ns() / 1000
-    }
-    fn send(&mut self, frame: &Frame) -> Result<bool, PortError> {
-        if self.sim.host_pending() >= self.tx_queue {
-            return Ok(false);
-        }
-        self.sim.host_send(*frame);
-        Ok(true)
-    }
-    fn recv(&mut self) -> Result<Option<Received>, PortError> {
-        Ok(self.sim.host_receive().map(|d| Received {
-            frame: d.frame,
-            t_us: d.t_ns / 1000,
-            own: d.own,
-        }))
-    }
-}
+use triquint_sim::{Sim, SimConfig};
 
 /// Options of a simulation run.
 #[derive(Clone, Debug)]
@@ -82,6 +54,8 @@ pub enum SimulateError {
     Sim(#[from] SimError),
     #[error("plan: {0}")]
     Plan(String),
+    #[error("plan: {0}")]
+    Config(#[from] ConfigError),
     #[error("the simulation did not finish within {0:.1} s of simulated time")]
     Timeout(f64),
 }
@@ -114,27 +88,15 @@ pub struct SimReport {
     pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
 }
 
-/// Per-node configurations for a plan: gains from the settings' bandwidth,
-/// stop times from the plan's own maxima (sampled, not trusted from the file).
-pub fn configs_for(
-    plan: &Plan,
-    settings: &DriveSettings,
-) -> Result<([DriveConfig; 3], f64), SimulateError> {
-    let m = testplan::sampled_max_abs(plan).map_err(|e| SimulateError::Plan(e.to_string()))?;
-    let mx = |a: [f64; 3]| a.iter().fold(0.0f64, |x, y| x.max(*y));
-    let (v, a, j) = (mx(m.velocity), mx(m.acceleration), mx(m.jerk));
-    let ts = stop_time(v, a, j, plan.limits.jerk);
-    let tq = stop_time(v, a, 0.0, 3.0 * plan.limits.jerk);
-    let cfgs = [0, 1, 2].map(|i| DriveConfig::new(&plan.robot, &plan.limits, i, settings, ts, tq));
-    Ok((cfgs, ts))
-}
-
 /// Uploads `plan` through the host session to three simulated drives and runs it.
 pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, SimulateError> {
     let mut settings = opts.settings.clone();
     settings.control_rate = opts.rate_hz;
     settings.feedforward = opts.feedforward;
-    let (configs, ts) = configs_for(plan, &settings)?;
+    let DriveConfigs {
+        nodes: configs,
+        stop_time_s: ts,
+    } = DriveConfigs::for_plan(plan, &settings)?;
     let mut sim_cfg = opts.sim.clone();
     sim_cfg.fd = opts.fd;
     sim_cfg.rate_hz = opts.rate_hz;

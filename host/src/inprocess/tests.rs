@@ -8,8 +8,10 @@ use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{Command, CommandCode, FaultCode, config_write_frame};
 use triquint_sim::{Sim, SimConfig, testplan};
 
-use super::session::{Session, SessionOptions, UploadError};
-use super::sim_port::{SimPort, SimReport, SimulateError, SimulateOptions, configs_for, simulate};
+use triquint_link::{DriveConfigs, Session, SessionOptions, UploadError};
+use triquint_sim::host_port::SimPort;
+
+use super::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 
 fn run(plan: &Plan, f: impl FnOnce(&mut SimulateOptions)) -> Result<SimReport, SimulateError> {
     let mut o = SimulateOptions::default();
@@ -194,7 +196,7 @@ fn arm_is_refused_away_from_the_plan_start() {
 fn a_node_with_another_configuration_is_named() {
     let plan = testplan::paper_case1().unwrap();
     let settings = DriveSettings::default();
-    let (configs, _) = configs_for(&plan, &settings).unwrap();
+    let configs = DriveConfigs::for_plan(&plan, &settings).unwrap().nodes;
     let q0 = plan.segments[0].quintic().eval(0.0).q;
     let mut sim = Sim::new(&Robot::default(), q0, SimConfig::default());
     // Node 3 was configured elsewhere with a different gain.

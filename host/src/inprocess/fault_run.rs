@@ -4,14 +4,14 @@
 //! the fault, when every axis was at rest, the jerk of the stop, and the
 //! fault codes in the Emergency frames and heartbeats on the bus.
 
+use triquint_link::{DriveConfigs, Session, SessionOptions};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
 use triquint_sim::faults::FaultStats;
+use triquint_sim::host_port::SimPort;
+use triquint_sim::testplan::sampled_max_abs;
 use triquint_sim::{FaultWindow, Sim, SimConfig};
-
-use super::session::{Session, SessionOptions};
-use super::sim_port::{SimPort, configs_for};
 
 /// A segment made bad on purpose before the upload.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,6 +116,11 @@ fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
             }
         }
     }
+    // The maxima of the plan as spoiled, as if the planner had written it
+    // (the drives' stop ramps are sized from them).
+    if let Ok(m) = sampled_max_abs(&p) {
+        p.max_abs = m;
+    }
     p
 }
 
@@ -128,7 +133,10 @@ pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
         None => plan.clone(),
     };
     let settings = DriveSettings::default();
-    let (configs, stop_ramp_s) = configs_for(&plan, &settings).expect("plan maxima");
+    let DriveConfigs {
+        nodes: configs,
+        stop_time_s: stop_ramp_s,
+    } = DriveConfigs::for_plan(&plan, &settings).expect("plan maxima");
     let mut cfg = SimConfig {
         fd: sc.fd,
         record_every: 1,
@@ -371,7 +379,7 @@ fn measure(
             State::Running | State::Stopping | State::Armed
         )
     });
-    let plan_jerk = triquint_sim::testplan::sampled_max_abs(plan)
+    let plan_jerk = sampled_max_abs(plan)
         .map(|m| m.jerk.iter().fold(0.0f64, |a, b| a.max(*b)))
         .unwrap_or(f64::INFINITY);
     let lim = plan.limits.jerk;
