@@ -21,8 +21,8 @@ use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
 use triquint_cli_common::robot_file::load_robot;
 use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
 use triquint_shared::kinematics::Pose;
-use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport, RunReport};
-use triquint_sim::report::{JsonFault, RunJson};
+use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
+use triquint_sim::report::RunReport;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -76,29 +76,10 @@ struct Args {
 }
 
 #[derive(Serialize)]
-struct JsonRun {
-    #[serde(flatten)]
-    run: RunJson,
-    segment_bus_load: f64,
-    segment_frames: u64,
-    segments: usize,
-    plan_time_s: f64,
-    duration_s: f64,
-    start_skew_us: f64,
-    tracking_samples: usize,
-    /// Per node, the (sequence, body CRC-32) of every segment it executed.
-    executed: Vec<Vec<(u16, u32)>>,
-    stop_s: Option<f64>,
-    stopped_within_buffer: bool,
-    max_stop_jerk: [f64; 3],
-    stop_ramp_s: f64,
-}
-
-#[derive(Serialize)]
 struct JsonReport {
     #[serde(flatten)]
-    last: JsonRun,
-    runs: Vec<JsonRun>,
+    last: RunReport,
+    runs: Vec<RunReport>,
     iface: String,
     fd: bool,
     rate_hz: f64,
@@ -112,44 +93,6 @@ struct JsonReport {
     foreign_frames: u64,
 }
 
-fn json_run(r: &RunReport) -> JsonRun {
-    JsonRun {
-        run: RunJson {
-            rms_error_m: r.tracking.rms_error_m,
-            max_error_m: r.tracking.max_error_m,
-            peak_torque_nm: r.peak_torque_nm,
-            bus_load: r.bus_load,
-            frames: r.frames,
-            faults: r
-                .faults
-                .iter()
-                .map(|(f, t_s)| JsonFault::new(f, *t_s))
-                .collect(),
-            completed: r.completed,
-        },
-        segment_bus_load: r.segment_bus_load,
-        segment_frames: r.segment_frames,
-        segments: r.segments,
-        plan_time_s: r.plan_time_s,
-        duration_s: r.duration_s,
-        start_skew_us: r.start_skew_ns as f64 * 1e-3,
-        tracking_samples: r.tracking.samples,
-        executed: (1..=3)
-            .map(|node| {
-                r.executed
-                    .iter()
-                    .filter(|e| e.0 == node)
-                    .map(|e| (e.1, e.2))
-                    .collect()
-            })
-            .collect(),
-        stop_s: r.stop_s,
-        stopped_within_buffer: r.stopped_within_buffer,
-        max_stop_jerk: r.max_stop_jerk,
-        stop_ramp_s: r.stop_ramp_s,
-    }
-}
-
 /// A flag set by SIGINT or SIGTERM.
 fn stop_on_signals() -> CliResult<Arc<AtomicBool>> {
     let stop = Arc::new(AtomicBool::new(false));
@@ -161,11 +104,9 @@ fn stop_on_signals() -> CliResult<Arc<AtomicBool>> {
 }
 
 fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
-    let runs: Vec<JsonRun> = r.runs.iter().map(json_run).collect();
-    let last = json_run(r.runs.last().unwrap_or(&RunReport::default()));
     let j = JsonReport {
-        last,
-        runs,
+        last: r.runs.last().cloned().unwrap_or_default(),
+        runs: r.runs.clone(),
         iface: iface.to_string(),
         fd: args.fd,
         rate_hz: args.rate,

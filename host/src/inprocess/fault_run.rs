@@ -266,40 +266,7 @@ fn measure(
     let faults = sim.faults();
     let first_fault_ns = faults.first().map(|f| f.t_ns);
     let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
-    // Rest: the first tick in Fault after the first fault, for every node
-    // that was running (the reset node has no motor to stop).
-    let mut rest_ns: Option<u64> = Some(0);
-    let mut within = true;
-    for (i, n) in sim.nodes.iter().enumerate() {
-        if Some(i) == reset || n.started_ns.is_none() {
-            continue;
-        }
-        let at = first_fault_ns.and_then(|f| {
-            n.states
-                .iter()
-                .find(|(t, s)| *t >= f && *s == State::Fault)
-                .map(|x| x.0)
-        });
-        let finished = n.node.state() == State::Idle && n.executed.len() == wire.len();
-        rest_ns = match (rest_ns, at) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (Some(a), None) if finished => Some(a),
-            _ => None,
-        };
-        // Past the buffered end is allowed only when the buffer ended with
-        // the plan's last segment: the plan ends at rest, so the path does too.
-        let had_last = n.executed.iter().any(|e| e.1 as usize + 1 == wire.len());
-        if n.node.state() == State::Fault
-            && n.node.plan_ns() > n.node.buffered_end_ns()
-            && !had_last
-        {
-            within = false;
-        }
-    }
-    let stop_time_ns = match (first_fault_ns, rest_ns) {
-        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
-        _ => None,
-    };
+    let (stop_time_ns, within) = stop_figures(sim, wire.len(), reset);
     // Emergency arrival → first stopping tick, for nodes still running then.
     let mut e2s: Option<f64> = None;
     for n in &sim.nodes {
@@ -422,4 +389,48 @@ fn measure(
         stop_ramp_ns: 0,
         sync_timeout_ns: 0,
     }
+}
+
+/// From the first fault on any node (true ns) to every axis that was
+/// running at rest, and whether each stopped node came to rest inside the
+/// plan time it had buffered. `reset`: a node power-cycled during the run
+/// (it has no motor to stop).
+pub fn stop_figures(sim: &Sim, n_segments: usize, reset: Option<usize>) -> (Option<u64>, bool) {
+    let first_fault_ns = sim.faults().first().map(|f| f.t_ns);
+    let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
+    // Rest: the first tick in Fault after the first fault, for every node
+    // that was running (the reset node has no motor to stop).
+    let mut rest_ns: Option<u64> = Some(0);
+    let mut within = true;
+    for (i, n) in sim.nodes.iter().enumerate() {
+        if Some(i) == reset || n.started_ns.is_none() {
+            continue;
+        }
+        let at = first_fault_ns.and_then(|f| {
+            n.states
+                .iter()
+                .find(|(t, s)| *t >= f && *s == State::Fault)
+                .map(|x| x.0)
+        });
+        let finished = n.node.state() == State::Idle && n.executed.len() == n_segments;
+        rest_ns = match (rest_ns, at) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (Some(a), None) if finished => Some(a),
+            _ => None,
+        };
+        // Past the buffered end is allowed only when the buffer ended with
+        // the plan's last segment: the plan ends at rest, so the path does too.
+        let had_last = n.executed.iter().any(|e| e.1 as usize + 1 == n_segments);
+        if n.node.state() == State::Fault
+            && n.node.plan_ns() > n.node.buffered_end_ns()
+            && !had_last
+        {
+            within = false;
+        }
+    }
+    let stop_time_ns = match (first_fault_ns, rest_ns) {
+        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
+        _ => None,
+    };
+    (stop_time_ns, within)
 }

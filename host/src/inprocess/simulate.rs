@@ -8,7 +8,8 @@ use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
 use triquint_sim::host_port::SimPort;
-use triquint_sim::metrics::{self, Tracking};
+use triquint_sim::metrics;
+use triquint_sim::report::{JsonFault, RunReport};
 use triquint_sim::sim::{Sample, SimError};
 use triquint_sim::{Sim, SimConfig};
 
@@ -60,32 +61,26 @@ pub enum SimulateError {
     Timeout(f64),
 }
 
-/// What a run measured.
+/// What a run measured: the run report every simulated run writes (the
+/// JSON of `simulate --json`), and what only the in-process run has.
 #[derive(Clone, Debug)]
 pub struct SimReport {
-    pub completed: bool,
+    pub run: RunReport,
+    /// Faults as the host's session saw them.
     pub faults: Vec<FaultReport>,
-    pub tracking: Tracking,
-    pub peak_torque_nm: [f64; 3],
-    /// Busy fraction of the bus over the whole run.
-    pub bus_load: f64,
-    /// Share of the bus taken by segment parts over the whole run.
-    pub segment_bus_load: f64,
-    pub frames: u64,
-    pub segment_frames: u64,
+    /// Faults as the nodes raised them (true time).
+    pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
     pub frames_per_segment: usize,
     pub retransmits: u64,
-    /// True-time spread of the nodes' first Running tick (ns).
+    /// True-time spread of the nodes' first Running tick (ns; `u64::MAX`
+    /// when not every node started).
     pub start_skew_ns: u64,
     pub tick_ns: u64,
     pub f32_eval_error_m: f64,
+    /// Host time (µs) of the start.
     pub start_us: u64,
     pub sim_time_s: f64,
-    pub stop_time_s: f64,
-    /// Largest joint jerk of any node's reference while stopping (m/s³).
-    pub max_stop_jerk: f64,
     pub samples: Vec<Sample>,
-    pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
 }
 
 /// Uploads `plan` through the host session to three simulated drives and runs it.
@@ -152,15 +147,44 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         _ => u64::MAX,
     };
     let now = sim.now_ns().max(1);
-    Ok(SimReport {
-        completed: outcome.completed,
-        faults: outcome.faults.clone(),
-        tracking,
+    let faults_on_nodes = sim.faults();
+    let start_s = outcome.start_us as f64 * 1e-6;
+    let (stop_ns, stopped_within_buffer) =
+        super::fault_run::stop_figures(&sim, plan.segments.len(), None);
+    let mut run = RunReport {
         peak_torque_nm: [0, 1, 2].map(|i| sim.nodes[i].peak_torque as f64),
         bus_load: sim.bus.busy_ns() as f64 / now as f64,
-        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
         frames: sim.bus.frames(),
+        faults: faults_on_nodes
+            .iter()
+            .map(|f| JsonFault::new(f, f.t_ns as f64 * 1e-9 - start_s))
+            .collect(),
+        completed: outcome.completed,
+        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
         segment_frames: outcome.segment_frames_sent,
+        segments: plan.segments.len(),
+        plan_time_s: plan.total_time_s,
+        duration_s: now as f64 * 1e-9,
+        start_skew_us: match (started.iter().min(), started.iter().max()) {
+            (Some(a), Some(b)) => (b - a) as f64 * 1e-3,
+            _ => 0.0,
+        },
+        executed: sim
+            .nodes
+            .iter()
+            .map(|n| n.executed.iter().map(|e| (e.1, e.2)).collect())
+            .collect(),
+        stop_s: stop_ns.map(|t| t as f64 * 1e-9),
+        stopped_within_buffer,
+        max_stop_jerk: [0, 1, 2].map(|i| sim.nodes[i].max_stop_jerk as f64),
+        stop_ramp_s: ts,
+        ..RunReport::default()
+    };
+    run.set_tracking(&tracking);
+    Ok(SimReport {
+        run,
+        faults: outcome.faults.clone(),
+        faults_on_nodes,
         frames_per_segment: parts_per_segment(opts.fd),
         retransmits: outcome.retransmits,
         start_skew_ns: skew,
@@ -168,13 +192,6 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         f32_eval_error_m: metrics::f32_eval_error(plan, 1000),
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
-        stop_time_s: ts,
-        max_stop_jerk: sim
-            .nodes
-            .iter()
-            .map(|n| n.max_stop_jerk as f64)
-            .fold(0.0, f64::max),
-        faults_on_nodes: sim.faults(),
         samples: std::mem::take(&mut sim.samples),
     })
 }
