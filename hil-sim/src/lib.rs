@@ -2,20 +2,22 @@
 //! core, an in-process CAN bus that carries the exact protocol frames with
 //! arbitration and a bit-time model, a plant built from an independent
 //! (Lagrangian) formulation with deliberately different parameters, and the
-//! same machine in real time on a SocketCAN interface.
+//! same machine in real time on a SocketCAN interface (through
+//! `triquint-link`, the host's side of the bus, which it also uses as the
+//! host's station on the in-process bus: [`host_port`]).
 #![allow(clippy::needless_range_loop)]
 
 pub mod bus;
 pub mod confinement;
 pub mod faults;
+pub mod host_port;
 pub mod metrics;
+pub mod node_port;
 pub mod plant;
 pub mod proxy;
 pub mod realtime;
 pub mod report;
-pub mod robot_file;
 pub mod sim;
-pub mod socketcan_port;
 pub mod testplan;
 
 pub use bus::{Bus, BusConfig, Delivery};

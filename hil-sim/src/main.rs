@@ -10,18 +10,19 @@
 
 mod cli;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use clap::{Parser, Subcommand};
-use nalgebra::Vector3;
 use serde::Serialize;
+use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
+use triquint_cli_common::robot_file::load_robot;
+use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
 use triquint_shared::kinematics::Pose;
-use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport, RunReport};
-use triquint_sim::report::{JsonFault, RunJson};
-use triquint_sim::robot_file::read_robot;
+use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
+use triquint_sim::report::RunReport;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -55,7 +56,7 @@ struct Args {
     /// CAN-FD sockets (the interface needs MTU 72).
     #[arg(long)]
     fd: bool,
-    /// Control tick rate (Hz); must match the rate the host configures.
+    /// Control tick rate (Hz), 1000 to 10000; must match the rate the host configures.
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     rate: f64,
     /// Machine parameters overriding the paper's Table 1 (TOML, SI units).
@@ -75,29 +76,10 @@ struct Args {
 }
 
 #[derive(Serialize)]
-struct JsonRun {
-    #[serde(flatten)]
-    run: RunJson,
-    segment_bus_load: f64,
-    segment_frames: u64,
-    segments: usize,
-    plan_time_s: f64,
-    duration_s: f64,
-    start_skew_us: f64,
-    tracking_samples: usize,
-    /// Per node, the (sequence, body CRC-32) of every segment it executed.
-    executed: Vec<Vec<(u16, u32)>>,
-    stop_s: Option<f64>,
-    stopped_within_buffer: bool,
-    max_stop_jerk: [f64; 3],
-    stop_ramp_s: f64,
-}
-
-#[derive(Serialize)]
 struct JsonReport {
     #[serde(flatten)]
-    last: JsonRun,
-    runs: Vec<JsonRun>,
+    last: RunReport,
+    runs: Vec<RunReport>,
     iface: String,
     fd: bool,
     rate_hz: f64,
@@ -111,108 +93,20 @@ struct JsonReport {
     foreign_frames: u64,
 }
 
-fn json_run(r: &RunReport) -> JsonRun {
-    JsonRun {
-        run: RunJson {
-            rms_error_m: r.tracking.rms_error_m,
-            max_error_m: r.tracking.max_error_m,
-            peak_torque_nm: r.peak_torque_nm,
-            bus_load: r.bus_load,
-            frames: r.frames,
-            faults: r
-                .faults
-                .iter()
-                .map(|(f, t_s)| JsonFault::new(f, *t_s))
-                .collect(),
-            completed: r.completed,
-        },
-        segment_bus_load: r.segment_bus_load,
-        segment_frames: r.segment_frames,
-        segments: r.segments,
-        plan_time_s: r.plan_time_s,
-        duration_s: r.duration_s,
-        start_skew_us: r.start_skew_ns as f64 * 1e-3,
-        tracking_samples: r.tracking.samples,
-        executed: (1..=3)
-            .map(|node| {
-                r.executed
-                    .iter()
-                    .filter(|e| e.0 == node)
-                    .map(|e| (e.1, e.2))
-                    .collect()
-            })
-            .collect(),
-        stop_s: r.stop_s,
-        stopped_within_buffer: r.stopped_within_buffer,
-        max_stop_jerk: r.max_stop_jerk,
-        stop_ramp_s: r.stop_ramp_s,
-    }
-}
-
-/// Exit status and the one-line message.
-struct Failure(u8, String);
-
-fn bad(msg: impl std::fmt::Display) -> Failure {
-    Failure(2, msg.to_string())
-}
-
-fn parse_nodes(text: &str) -> Result<Vec<u8>, Failure> {
-    let mut nodes = Vec::new();
-    for p in text.split(',').map(str::trim) {
-        match p.parse::<u8>() {
-            Ok(n @ 1..=3) if !nodes.contains(&n) => nodes.push(n),
-            _ => {
-                return Err(bad(format!(
-                    "--nodes: `{p}` in `{text}` is not a distinct node 1, 2 or 3"
-                )));
-            }
-        }
-    }
-    nodes.sort_unstable();
-    Ok(nodes)
-}
-
-fn parse_start(text: &str) -> Result<Vector3<f64>, Failure> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad(format!("--start: `{text}` is not three numbers X,Y,Z (mm)")))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vector3::new(*x, *y, *z) * 1e-3),
-        _ => Err(bad(format!(
-            "--start: `{text}` is not three finite numbers X,Y,Z (mm)"
-        ))),
-    }
-}
-
-/// Writes through a temporary file and a rename: never a partial report.
-fn write_report(path: &Path, text: &str) -> Result<(), Failure> {
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, text)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            bad(format!("{}: {e}", path.display()))
-        })
-}
-
 /// A flag set by SIGINT or SIGTERM.
-fn stop_on_signals() -> Result<Arc<AtomicBool>, Failure> {
+fn stop_on_signals() -> CliResult<Arc<AtomicBool>> {
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(sig, Arc::clone(&stop))
-            .map_err(|e| Failure(4, format!("cannot install the signal handler: {e}")))?;
+            .map_err(|e| CliError::device(format!("cannot install the signal handler: {e}")))?;
     }
     Ok(stop)
 }
 
 fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
-    let runs: Vec<JsonRun> = r.runs.iter().map(json_run).collect();
-    let last = json_run(r.runs.last().unwrap_or(&RunReport::default()));
     let j = JsonReport {
-        last,
-        runs,
+        last: r.runs.last().cloned().unwrap_or_default(),
+        runs: r.runs.clone(),
         iface: iface.to_string(),
         fd: args.fd,
         rate_hz: args.rate,
@@ -228,25 +122,20 @@ fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
     serde_json::to_string_pretty(&j).unwrap_or_default()
 }
 
-fn run(args: &Args) -> Result<(), Failure> {
-    if !(100.0..=10000.0).contains(&args.rate) {
-        return Err(bad(format!(
-            "--rate {}: must be 100 to 10000 Hz",
-            args.rate
-        )));
-    }
-    let nodes = parse_nodes(&args.nodes)?;
-    let robot = read_robot(args.robot.as_deref()).map_err(bad)?;
-    let r0 = parse_start(&args.start)?;
+fn run(args: &Args) -> CliResult {
+    check_rate("--rate", args.rate)?;
+    let nodes = parse_nodes("--nodes", &args.nodes)?;
+    let robot = load_robot(args.robot.as_deref())?;
+    let r0 = parse_triple("--start", &args.start)? * 1e-3;
     let pose = Pose::from_cartesian(&robot.model::<f64>(), r0)
-        .map_err(|e| bad(format!("--start {}: {e}", args.start)))?;
+        .map_err(|e| CliError::bad_input(format!("--start {}: {e}", args.start)))?;
     let iface = args.iface.as_deref().unwrap_or_default();
     let mut cfg = RealtimeConfig::new(iface, robot, pose.q);
     cfg.nodes = nodes;
     cfg.fd = args.fd;
     cfg.rate_hz = args.rate;
     let stop = stop_on_signals()?;
-    let port = realtime::open(&cfg).map_err(|e| Failure(4, e.to_string()))?;
+    let port = realtime::open(&cfg).map_err(CliError::device)?;
     eprintln!(
         "triquint-sim: nodes {:?} on {} ({}), {} Hz; SIGINT/SIGTERM to stop",
         cfg.nodes,
@@ -257,8 +146,8 @@ fn run(args: &Args) -> Result<(), Failure> {
     let mut r = RealtimeReport::default();
     let failure = match realtime::run(port, &cfg, &stop, &mut r) {
         Ok(()) => None,
-        Err(e @ RealtimeError::Bus(_)) => Some(Failure(4, e.to_string())),
-        Err(e @ RealtimeError::Machine(_)) => Some(Failure(5, e.to_string())),
+        Err(e @ RealtimeError::Bus(_)) => Some(CliError::device(e)),
+        Err(e @ RealtimeError::Machine(_)) => Some(CliError::motion_fault(e)),
     };
     eprintln!(
         "triquint-sim: {} runs, {} ticks, {} missed deadlines ({} skipped, max late {:.0} µs), {} frames",
@@ -270,7 +159,7 @@ fn run(args: &Args) -> Result<(), Failure> {
         r.frames
     );
     if let Some(path) = &args.report {
-        write_report(path, &report_json(args, iface, &r))?;
+        write_atomic(path, report_json(args, iface, &r).as_bytes())?;
     }
     match failure {
         Some(f) => Err(f),
@@ -284,11 +173,5 @@ fn main() -> ExitCode {
         Some(Command::Proxy(p)) => cli::proxy::run(p),
         None => run(&cli.machine),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(Failure(code, msg)) => {
-            eprintln!("triquint-sim: error: {msg}");
-            ExitCode::from(code)
-        }
-    }
+    main_exit("triquint-sim", result)
 }

@@ -24,7 +24,7 @@ use triquint_shared::protocol::{Frame, PartEvent, Reassembler, TimeSync};
 
 use crate::bus::Delivery;
 use crate::faults::{FaultInjector, FaultStats, FaultWindow};
-use crate::socketcan_port::{SocketCanError, SocketCanPort};
+use triquint_link::socketcan::{SocketCanError, SocketCanPort};
 
 /// Station number of side A in the fault model (its frames go to [`B`]).
 pub const A: usize = 0;

@@ -23,9 +23,11 @@ use triquint_shared::protocol::{
 };
 
 use crate::metrics::{Tracking, segment_from_wire, tracking_segments};
+use crate::node_port::NodePort;
 use crate::plant::{Plant, PlantConfig};
+use crate::report::{JsonFault, RunReport};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode};
-use crate::socketcan_port::{NodePort, SocketCanError, SocketCanPort};
+use triquint_link::socketcan::{SocketCanError, SocketCanPort};
 
 /// What runs, where.
 #[derive(Clone, Debug)]
@@ -72,38 +74,6 @@ pub enum RealtimeError {
     Bus(#[from] SocketCanError),
     #[error(transparent)]
     Machine(#[from] SimError),
-}
-
-/// One plan run, from the host's first frame to every drive back at rest.
-#[derive(Clone, Debug, Default)]
-pub struct RunReport {
-    pub completed: bool,
-    /// Faults with their time since the start (s).
-    pub faults: Vec<(FaultEvent, f64)>,
-    pub tracking: Tracking,
-    pub peak_torque_nm: [f64; 3],
-    pub bus_load: f64,
-    pub segment_bus_load: f64,
-    pub frames: u64,
-    pub segment_frames: u64,
-    pub segments: usize,
-    pub plan_time_s: f64,
-    /// From the host's first frame to the end of the run (s).
-    pub duration_s: f64,
-    /// Spread of the drives' first Running tick (ns).
-    pub start_skew_ns: u64,
-    /// Segments each drive took its reference from: (node, sequence, CRC-32
-    /// of the body it received), in order.
-    pub executed: Vec<(u8, u16, u32)>,
-    /// From the first fault to the last running axis at rest (s).
-    pub stop_s: Option<f64>,
-    /// Every faulted axis stopped inside the plan time it had buffered (or
-    /// on the plan's own end, which is at rest).
-    pub stopped_within_buffer: bool,
-    /// Largest |joint jerk| of each drive's reference while stopping (m/s³).
-    pub max_stop_jerk: [f64; 3],
-    /// The stop ramp T_s the drives were configured with (s).
-    pub stop_ramp_s: f64,
 }
 
 /// Everything the machine measured.
@@ -408,18 +378,23 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
     for n in nodes {
         peak[n.node.node_id() as usize - 1] = n.peak_torque as f64;
     }
-    let mut faults: Vec<(FaultEvent, f64)> = nodes
+    let mut faults: Vec<FaultEvent> = nodes
         .iter()
         .flat_map(|n| n.faults.iter())
-        .map(|f| (*f, (f.t_ns as f64 - t0 as f64) * 1e-9))
+        .copied()
         .collect();
-    faults.sort_by_key(|f| f.0.t_ns);
-    let no_fault = faults.iter().all(|f| f.0.code == FaultCode::None);
+    faults.sort_by_key(|f| f.t_ns);
+    let no_fault = faults.iter().all(|f| f.code == FaultCode::None);
     let (stop_s, stopped_within_buffer) = stop_figures(watch, nodes);
     RunReport {
         completed: completed && no_fault && started.len() == nodes.len(),
-        faults,
-        tracking,
+        faults: faults
+            .iter()
+            .map(|f| JsonFault::new(f, (f.t_ns as f64 - t0 as f64) * 1e-9))
+            .collect(),
+        rms_error_m: tracking.rms_error_m,
+        max_error_m: tracking.max_error_m,
+        tracking_samples: tracking.samples,
         peak_torque_nm: peak,
         bus_load: watch.busy_ns as f64 / window,
         segment_bus_load: watch.segment_busy_ns as f64 / window,
@@ -428,11 +403,12 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
         segments: watch.segments.len(),
         plan_time_s,
         duration_s: window * 1e-9,
-        start_skew_ns: skew,
-        executed: nodes
-            .iter()
-            .flat_map(|n| n.executed.iter().map(|e| (n.node.node_id(), e.1, e.2)))
-            .collect(),
+        start_skew_us: skew as f64 * 1e-3,
+        executed: RunReport::executed_by_node(
+            nodes
+                .iter()
+                .flat_map(|n| n.executed.iter().map(|e| (n.node.node_id(), e.1, e.2))),
+        ),
         stop_s,
         stopped_within_buffer,
         stop_ramp_s: nodes

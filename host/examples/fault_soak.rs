@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_host::upload::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
+use triquint_host::inprocess::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
 use triquint_shared::plan::Plan;
 use triquint_sim::{Fault, FaultWindow, testplan};
 

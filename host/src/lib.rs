@@ -1,9 +1,10 @@
 //! Host side of triquint: the `triquint` command's subcommands, plan
-//! reports, and the host side of the CAN session. Planning itself is the
-//! `triquint-planner` library.
+//! reports, and runs on the in-process virtual hardware. Planning itself is
+//! the `triquint-planner` library, the host's side of the bus (SocketCAN,
+//! the upload session) is `triquint-link`.
 
 pub mod cli;
 pub mod exit;
+pub mod inprocess;
 pub mod report;
 pub mod robot_file;
-pub mod upload;

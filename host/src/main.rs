@@ -66,11 +66,5 @@ fn run(cli: Cli) -> CliResult {
 }
 
 fn main() -> ExitCode {
-    match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("triquint: error: {e}");
-            ExitCode::from(e.status as u8)
-        }
-    }
+    triquint_cli_common::main_exit("triquint", run(Cli::parse()))
 }

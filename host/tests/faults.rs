@@ -2,7 +2,7 @@
 //! the expected outcome and checking it. These are the evidence for the
 //! "Guarantees" section of docs/protocol.md. Seeded: every run is reproducible.
 
-use triquint_host::upload::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
+use triquint_host::inprocess::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::{FaultCode, Reject};
 use triquint_sim::{Fault, FaultWindow, testplan};

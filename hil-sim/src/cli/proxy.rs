@@ -10,7 +10,9 @@ use clap::{Args, ValueEnum};
 use triquint_sim::faults::{Fault, FaultWindow};
 use triquint_sim::proxy::{self, A, B, Bridge};
 
-use crate::{Failure, bad, stop_on_signals, write_report};
+use triquint_cli_common::{CliError, CliResult, write_atomic};
+
+use crate::stop_on_signals;
 
 /// A side of the bridge.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -77,9 +79,9 @@ fn parse_id(text: &str) -> Option<u16> {
     (v <= 0x7FF).then_some(v)
 }
 
-fn parse_ids(text: &str) -> Result<core::ops::RangeInclusive<u16>, Failure> {
+fn parse_ids(text: &str) -> CliResult<core::ops::RangeInclusive<u16>> {
     let err = || {
-        bad(format!(
+        CliError::bad_input(format!(
             "--ids {text}: not LO-HI with 11-bit identifiers, LO ≤ HI (e.g. 0x100-0x110)"
         ))
     };
@@ -90,15 +92,17 @@ fn parse_ids(text: &str) -> Result<core::ops::RangeInclusive<u16>, Failure> {
     }
 }
 
-fn ms_to_ns(flag: &str, ms: f64) -> Result<u64, Failure> {
+fn ms_to_ns(flag: &str, ms: f64) -> CliResult<u64> {
     if !(ms.is_finite() && ms >= 0.0) {
-        return Err(bad(format!("{flag} {ms}: must be a time ≥ 0 ms")));
+        return Err(CliError::bad_input(format!(
+            "{flag} {ms}: must be a time ≥ 0 ms"
+        )));
     }
     Ok((ms * 1e6).round() as u64)
 }
 
 /// The fault schedule the options describe.
-fn schedule(args: &ProxyArgs) -> Result<Vec<FaultWindow>, Failure> {
+fn schedule(args: &ProxyArgs) -> CliResult<Vec<FaultWindow>> {
     for (flag, p) in [
         ("--loss", args.loss),
         ("--corrupt", args.corrupt),
@@ -106,7 +110,9 @@ fn schedule(args: &ProxyArgs) -> Result<Vec<FaultWindow>, Failure> {
         ("--reorder", args.reorder),
     ] {
         if !(0.0..=1.0).contains(&p) {
-            return Err(bad(format!("{flag} {p}: must be a probability in 0..1")));
+            return Err(CliError::bad_input(format!(
+                "{flag} {p}: must be a probability in 0..1"
+            )));
         }
     }
     let from = ms_to_ns("--from-ms", args.from_ms)?;
@@ -115,7 +121,7 @@ fn schedule(args: &ProxyArgs) -> Result<Vec<FaultWindow>, Failure> {
         None => u64::MAX,
     };
     if until <= from {
-        return Err(bad(format!(
+        return Err(CliError::bad_input(format!(
             "--until-ms {}: must be after --from-ms {}",
             args.until_ms.unwrap_or_default(),
             args.from_ms
@@ -156,10 +162,10 @@ fn schedule(args: &ProxyArgs) -> Result<Vec<FaultWindow>, Failure> {
         .collect())
 }
 
-pub fn run(args: &ProxyArgs) -> Result<(), Failure> {
+pub fn run(args: &ProxyArgs) -> CliResult {
     let windows = schedule(args)?;
     let stop = stop_on_signals()?;
-    let ports = proxy::open(&args.a, &args.b, args.fd).map_err(|e| Failure(4, e.to_string()))?;
+    let ports = proxy::open(&args.a, &args.b, args.fd).map_err(CliError::device)?;
     eprintln!(
         "triquint-sim proxy: {} <-> {} ({}), seed {}, {} fault windows; SIGINT/SIGTERM to stop",
         args.a,
@@ -177,9 +183,9 @@ pub fn run(args: &ProxyArgs) -> Result<(), Failure> {
     );
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(r).unwrap_or_default();
-        write_report(path, &text)?;
+        write_atomic(path, text.as_bytes())?;
     }
-    result.map_err(|e| Failure(4, e.to_string()))
+    result.map_err(CliError::device)
 }
 
 #[cfg(test)]
@@ -196,7 +202,7 @@ mod tests {
     fn sched(extra: &[&str]) -> Result<Vec<FaultWindow>, String> {
         let mut argv = vec!["x", "--a", "vcan0", "--b", "vcan1"];
         argv.extend_from_slice(extra);
-        schedule(&T::parse_from(argv).p).map_err(|f| f.1)
+        schedule(&T::parse_from(argv).p).map_err(|e| e.message)
     }
 
     #[test]

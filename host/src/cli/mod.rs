@@ -13,36 +13,9 @@ pub mod upload;
 
 use nalgebra::Vector3;
 
+pub use triquint_cli_common::parse::{finite, parse_triple};
+
 use crate::exit::{CliError, CliResult};
-
-/// Parses "a,b,c" into three finite numbers, naming the option on error.
-pub fn parse_triple(option: &str, text: &str) -> CliResult<Vector3<f64>> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    if parts.len() != 3 {
-        return Err(CliError::bad_input(format!(
-            "{option}: expected three comma-separated numbers, got {} in `{text}`",
-            parts.len()
-        )));
-    }
-    let mut v = Vector3::zeros();
-    for (i, p) in parts.iter().enumerate() {
-        v[i] = finite(&format!("{option} value {}", i + 1), p)?;
-    }
-    Ok(v)
-}
-
-/// Parses one finite number, naming what it is on error.
-pub fn finite(what: &str, text: &str) -> CliResult<f64> {
-    match text.parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        Ok(x) => Err(CliError::bad_input(format!(
-            "{what}: `{text}` is {x}, not a finite number"
-        ))),
-        Err(_) => Err(CliError::bad_input(format!(
-            "{what}: `{text}` is not a number"
-        ))),
-    }
-}
 
 /// Prints three values with labels and a unit, for people.
 pub fn fmt_triple(labels: [&str; 3], v: &Vector3<f64>, decimals: usize) -> String {

@@ -10,9 +10,9 @@ use std::time::{Duration, Instant, SystemTime};
 
 use clap::Args;
 use serde_json::{Map, Value as Json, json};
+use triquint_link::SocketCanPort;
 use triquint_shared::protocol::describe::{Described, Value, describe};
 use triquint_shared::protocol::{Frame, PartEvent, Reassembler};
-use triquint_sim::socketcan_port::SocketCanPort;
 
 use crate::exit::{CliError, CliResult};
 

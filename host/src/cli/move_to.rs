@@ -7,17 +7,16 @@ use std::time::{Duration, Instant, SystemTime};
 
 use clap::Args;
 use nalgebra::Vector3;
+use triquint_link::{DriveConfigs, Session, SessionOptions, SocketCanPort, open_host};
 use triquint_planner::{Job, Objective, Options, plan};
 use triquint_shared::kinematics::Pose;
-use triquint_shared::protocol::config::{DriveSettings, stop_time};
-use triquint_shared::protocol::{DriveConfig, Msg, decode};
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::{Msg, decode};
 use triquint_shared::{Limits, Robot};
-use triquint_sim::socketcan_port::SocketCanPort;
 
 use crate::cli::finite;
 use crate::cli::upload::{BusArgs, report, run_plan};
-use crate::exit::{CliError, CliResult};
-use crate::upload::{Session, SessionOptions};
+use crate::exit::{CliError, CliResult, plan_error};
 
 #[derive(Args, Debug)]
 pub struct MoveToArgs {
@@ -61,22 +60,14 @@ fn configure(robot: &Robot, limits: &Limits, bus: &BusArgs) -> CliResult {
         control_rate: bus.rate,
         ..DriveSettings::default()
     };
-    let ts = stop_time(
-        limits.velocity,
-        limits.acceleration,
-        limits.jerk,
-        limits.jerk,
-    );
-    let tq = stop_time(limits.velocity, limits.acceleration, 0.0, 3.0 * limits.jerk);
-    let configs = [0, 1, 2].map(|i| DriveConfig::new(robot, limits, i, &settings, ts, tq));
+    let configs = DriveConfigs::for_limits(robot, limits, &settings).nodes;
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout * 1e6) as u64,
         ..SessionOptions::default()
     };
     let mut session = Session::configure(configs, opts);
-    let mut port =
-        crate::upload::socket_port::open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
+    let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
     loop {
         match session.poll(&mut port) {
             Ok(Some(_)) => return Ok(()),
@@ -151,12 +142,13 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
         .robot(robot.clone())
         .limits(limits)
         .points_m([start.r.into(), target.into()])
-        .build()?;
+        .build()
+        .map_err(plan_error)?;
     let opts = Options {
         starts: 3,
         ..Options::default()
     };
-    let p = plan(&job, &opts)?;
+    let p = plan(&job, &opts).map_err(plan_error)?;
     eprintln!(
         "planned {} segments, {:.3} s",
         p.segments.len(),

@@ -8,7 +8,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
 
-use crate::exit::{CliError, CliResult, write_atomic};
+use crate::exit::{CliError, CliResult, plan_error, write_atomic};
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
@@ -78,7 +78,7 @@ impl Watcher {
 }
 
 pub fn run(args: &PlanArgs) -> CliResult {
-    let job = Job::load(&args.job)?;
+    let job = Job::load(&args.job).map_err(plan_error)?;
     let opts = Options {
         starts: args.starts.max(1),
         seed: args.seed,
@@ -87,7 +87,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
     let watcher = Watcher::new(!args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()));
     let result = plan_with(&job, &opts, &mut |p: &Progress| watcher.progress(p));
     watcher.bar.finish_and_clear();
-    let plan = result?;
+    let plan = result.map_err(plan_error)?;
     let json = serde_json::to_string_pretty(&plan)
         .map_err(|e| CliError::bad_input(format!("cannot encode plan: {e}")))?;
     if let Some(dir) = &args.plot {

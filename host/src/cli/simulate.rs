@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use triquint_shared::plan::Plan;
-use triquint_sim::report::{JsonFault, RunJson};
+use triquint_sim::report::JsonFault;
 
 use crate::exit::{CliError, CliResult, write_atomic};
-use crate::upload::sim_port::{SimReport, SimulateError, SimulateOptions, simulate};
+use crate::inprocess::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -19,7 +19,7 @@ pub struct SimulateArgs {
     /// Drives run feedback only (same gains).
     #[arg(long)]
     pub no_feedforward: bool,
-    /// Control tick rate of the drives (Hz), 1000 to 10000.
+    /// Control tick rate of the drives (Hz), 1000 to 10000 (`triquint_cli_common::parse::RATE_HZ`).
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     pub rate: f64,
     /// Print the result as JSON.
@@ -34,22 +34,18 @@ pub struct SimulateArgs {
 fn to_cli(e: SimulateError) -> CliError {
     match e {
         SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
-        SimulateError::Upload(u @ crate::upload::UploadError::Segment { .. }) => {
+        SimulateError::Upload(u @ triquint_link::UploadError::Segment { .. }) => {
             CliError::bad_input(u)
         }
         SimulateError::Upload(u) if u.is_motion_fault() => CliError::motion_fault(u),
         SimulateError::Plan(m) => CliError::bad_input(m),
+        e @ SimulateError::Config(_) => CliError::bad_input(e),
         other => CliError::device(other),
     }
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult {
-    if !(1000.0..=10000.0).contains(&args.rate) {
-        return Err(CliError::bad_input(format!(
-            "--rate {}: must be 1000 to 10000 Hz",
-            args.rate
-        )));
-    }
+    triquint_cli_common::parse::check_rate("--rate", args.rate)?;
     let plan = crate::cli::load_plan(&args.plan)?;
     let opts = SimulateOptions {
         fd: args.fd,
@@ -62,29 +58,15 @@ pub fn run(args: &SimulateArgs) -> CliResult {
         write_plots(dir, &plan, &opts, &report)?;
     }
     let start_s = report.start_us as f64 * 1e-6;
-    let faults: Vec<JsonFault> = report
-        .faults_on_nodes
-        .iter()
-        .map(|f| JsonFault::new(f, f.t_ns as f64 * 1e-9 - start_s))
-        .collect();
     if args.json {
-        let j = RunJson {
-            rms_error_m: report.tracking.rms_error_m,
-            max_error_m: report.tracking.max_error_m,
-            peak_torque_nm: report.peak_torque_nm,
-            bus_load: report.bus_load,
-            frames: report.frames,
-            faults,
-            completed: report.completed,
-        };
         println!(
             "{}",
-            serde_json::to_string(&j).map_err(|e| CliError::device(e.to_string()))?
+            serde_json::to_string(&report.run).map_err(|e| CliError::device(e.to_string()))?
         );
     } else {
-        print_human(&plan, &opts, &report, &faults);
+        print_human(&plan, &opts, &report, &report.run.faults);
     }
-    if report.completed && report.faults_on_nodes.is_empty() {
+    if report.run.completed && report.faults_on_nodes.is_empty() {
         Ok(())
     } else {
         let first = report.faults_on_nodes.first();
@@ -119,18 +101,18 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
         println!(
             "q{}     {:>14.3}   {:>14.3}   {:>17.4}",
             j + 1,
-            r.tracking.rms_error_m[j] * 1e6,
-            r.tracking.max_error_m[j] * 1e6,
-            r.peak_torque_nm[j]
+            r.run.rms_error_m[j] * 1e6,
+            r.run.max_error_m[j] * 1e6,
+            r.run.peak_torque_nm[j]
         );
     }
     println!(
         "bus load {:.2} % over {:.3} s (segments {:.2} %); {} frames ({} segment frames, {} per segment, {} retransmissions)",
-        r.bus_load * 100.0,
+        r.run.bus_load * 100.0,
         r.sim_time_s,
-        r.segment_bus_load * 100.0,
-        r.frames,
-        r.segment_frames,
+        r.run.segment_bus_load * 100.0,
+        r.run.frames,
+        r.run.segment_frames,
         r.frames_per_segment,
         r.retransmits
     );
@@ -138,11 +120,11 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
         "start skew {:.1} µs (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
         r.start_skew_ns as f64 * 1e-3,
         r.tick_ns as f64 * 1e-3,
-        r.stop_time_s,
+        r.run.stop_ramp_s,
         r.f32_eval_error_m
     );
     if faults.is_empty() {
-        println!("completed: {}, no faults", r.completed);
+        println!("completed: {}, no faults", r.run.completed);
     } else {
         for f in faults {
             println!(

@@ -13,11 +13,10 @@ use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, State};
 
+use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, UploadError, open_host};
+
 use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult};
-use crate::upload::sim_port::configs_for;
-use crate::upload::socket_port::open_host;
-use crate::upload::{Outcome, Session, SessionOptions, UploadError};
 
 #[derive(Args, Debug)]
 pub struct UploadArgs {
@@ -39,10 +38,7 @@ pub struct BusArgs {
     /// CAN-FD: 64-byte segment frames (the interface needs MTU 72).
     #[arg(long)]
     pub fd: bool,
-    /// The drive nodes of axes 1, 2, 3 (all three must answer).
-    #[arg(long, default_value = "1,2,3", value_name = "1,2,3")]
-    pub nodes: String,
-    /// Control tick rate the drives are configured for (Hz).
+    /// Control tick rate the drives are configured for (Hz), 1000 to 10000.
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     pub rate: f64,
     /// How long a node may stay silent before the upload fails (s).
@@ -82,20 +78,7 @@ pub struct FaultSummary {
 }
 
 fn check_bus_args(b: &BusArgs) -> CliResult {
-    let mut nodes: Vec<&str> = b.nodes.split(',').map(str::trim).collect();
-    nodes.sort_unstable();
-    if nodes != ["1", "2", "3"] {
-        return Err(CliError::bad_input(format!(
-            "--nodes {}: the robot has three axes driven by nodes 1, 2 and 3; list all three",
-            b.nodes
-        )));
-    }
-    if !(1000.0..=10000.0).contains(&b.rate) {
-        return Err(CliError::bad_input(format!(
-            "--rate {}: must be 1000 to 10000 Hz",
-            b.rate
-        )));
-    }
+    triquint_cli_common::parse::check_rate("--rate", b.rate)?;
     if !(b.timeout.is_finite() && b.timeout > 0.0) {
         return Err(CliError::bad_input(format!(
             "--timeout {}: must be a positive number of seconds",
@@ -124,7 +107,9 @@ pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
         control_rate: bus.rate,
         ..DriveSettings::default()
     };
-    let (configs, _) = configs_for(plan, &settings).map_err(CliError::bad_input)?;
+    let configs = DriveConfigs::for_plan(plan, &settings)
+        .map_err(CliError::bad_input)?
+        .nodes;
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout * 1e6) as u64,

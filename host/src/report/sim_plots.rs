@@ -8,7 +8,7 @@ use triquint_shared::plan::Plan;
 use triquint_sim::metrics::plan_position;
 
 use super::ReportError;
-use crate::upload::sim_port::{SimReport, SimulateOptions};
+use crate::inprocess::simulate::{SimReport, SimulateOptions};
 
 const TIME: &str = "time since start (s)";
 
@@ -103,12 +103,12 @@ pub fn sim_plots(
         .x_range(lo, hi)
         .note(format!(
             "RMS: joint 1 {:.2}, joint 2 {:.2}, joint 3 {:.2} µm; max |e|: {:.2}, {:.2}, {:.2} µm",
-            r.tracking.rms_error_m[0] * 1e6,
-            r.tracking.rms_error_m[1] * 1e6,
-            r.tracking.rms_error_m[2] * 1e6,
-            r.tracking.max_error_m[0] * 1e6,
-            r.tracking.max_error_m[1] * 1e6,
-            r.tracking.max_error_m[2] * 1e6,
+            r.run.rms_error_m[0] * 1e6,
+            r.run.rms_error_m[1] * 1e6,
+            r.run.rms_error_m[2] * 1e6,
+            r.run.max_error_m[0] * 1e6,
+            r.run.max_error_m[1] * 1e6,
+            r.run.max_error_m[2] * 1e6,
         ));
     for j in 0..3 {
         let pts = r
@@ -130,7 +130,10 @@ pub fn sim_plots(
         .x_range(lo, hi)
         .note(format!(
             "peak |τ|: joint 1 {:.4}, joint 2 {:.4}, joint 3 {:.4} N·m (limit ±{} N·m)",
-            r.peak_torque_nm[0], r.peak_torque_nm[1], r.peak_torque_nm[2], plan.limits.torque
+            r.run.peak_torque_nm[0],
+            r.run.peak_torque_nm[1],
+            r.run.peak_torque_nm[2],
+            plan.limits.torque
         ));
     for j in 0..3 {
         let pts = r
@@ -184,8 +187,8 @@ pub fn sim_plots(
             "Simulation: feedforward {}, {} Hz control, RMS error ≤ {:.2} µm, peak |τ| {:.3} N·m",
             if opts.feedforward { "on" } else { "off" },
             opts.rate_hz,
-            r.tracking.rms_error_m.iter().copied().fold(0.0, f64::max) * 1e6,
-            r.peak_torque_nm.iter().copied().fold(0.0, f64::max),
+            r.run.rms_error_m.iter().copied().fold(0.0, f64::max) * 1e6,
+            r.run.peak_torque_nm.iter().copied().fold(0.0, f64::max),
         ),
         2,
         (900, 520),
@@ -207,7 +210,7 @@ pub fn sim_plots(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::upload::sim_port::simulate;
+    use crate::inprocess::simulate::simulate;
 
     fn case1() -> Plan {
         let text = include_str!("../../../testdata/protocol/plans/case1-spline.json");

@@ -4,14 +4,14 @@
 //! the fault, when every axis was at rest, the jerk of the stop, and the
 //! fault codes in the Emergency frames and heartbeats on the bus.
 
+use triquint_link::{DriveConfigs, Session, SessionOptions};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
 use triquint_sim::faults::FaultStats;
+use triquint_sim::host_port::SimPort;
+use triquint_sim::testplan::sampled_max_abs;
 use triquint_sim::{FaultWindow, Sim, SimConfig};
-
-use super::session::{Session, SessionOptions};
-use super::sim_port::{SimPort, configs_for};
 
 /// A segment made bad on purpose before the upload.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,6 +116,11 @@ fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
             }
         }
     }
+    // The maxima of the plan as spoiled, as if the planner had written it
+    // (the drives' stop ramps are sized from them).
+    if let Ok(m) = sampled_max_abs(&p) {
+        p.max_abs = m;
+    }
     p
 }
 
@@ -128,7 +133,10 @@ pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
         None => plan.clone(),
     };
     let settings = DriveSettings::default();
-    let (configs, stop_ramp_s) = configs_for(&plan, &settings).expect("plan maxima");
+    let DriveConfigs {
+        nodes: configs,
+        stop_time_s: stop_ramp_s,
+    } = DriveConfigs::for_plan(&plan, &settings).expect("plan maxima");
     let mut cfg = SimConfig {
         fd: sc.fd,
         record_every: 1,
@@ -258,40 +266,7 @@ fn measure(
     let faults = sim.faults();
     let first_fault_ns = faults.first().map(|f| f.t_ns);
     let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
-    // Rest: the first tick in Fault after the first fault, for every node
-    // that was running (the reset node has no motor to stop).
-    let mut rest_ns: Option<u64> = Some(0);
-    let mut within = true;
-    for (i, n) in sim.nodes.iter().enumerate() {
-        if Some(i) == reset || n.started_ns.is_none() {
-            continue;
-        }
-        let at = first_fault_ns.and_then(|f| {
-            n.states
-                .iter()
-                .find(|(t, s)| *t >= f && *s == State::Fault)
-                .map(|x| x.0)
-        });
-        let finished = n.node.state() == State::Idle && n.executed.len() == wire.len();
-        rest_ns = match (rest_ns, at) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (Some(a), None) if finished => Some(a),
-            _ => None,
-        };
-        // Past the buffered end is allowed only when the buffer ended with
-        // the plan's last segment: the plan ends at rest, so the path does too.
-        let had_last = n.executed.iter().any(|e| e.1 as usize + 1 == wire.len());
-        if n.node.state() == State::Fault
-            && n.node.plan_ns() > n.node.buffered_end_ns()
-            && !had_last
-        {
-            within = false;
-        }
-    }
-    let stop_time_ns = match (first_fault_ns, rest_ns) {
-        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
-        _ => None,
-    };
+    let (stop_time_ns, within) = stop_figures(sim, wire.len(), reset);
     // Emergency arrival → first stopping tick, for nodes still running then.
     let mut e2s: Option<f64> = None;
     for n in &sim.nodes {
@@ -371,7 +346,7 @@ fn measure(
             State::Running | State::Stopping | State::Armed
         )
     });
-    let plan_jerk = triquint_sim::testplan::sampled_max_abs(plan)
+    let plan_jerk = sampled_max_abs(plan)
         .map(|m| m.jerk.iter().fold(0.0f64, |a, b| a.max(*b)))
         .unwrap_or(f64::INFINITY);
     let lim = plan.limits.jerk;
@@ -414,4 +389,48 @@ fn measure(
         stop_ramp_ns: 0,
         sync_timeout_ns: 0,
     }
+}
+
+/// From the first fault on any node (true ns) to every axis that was
+/// running at rest, and whether each stopped node came to rest inside the
+/// plan time it had buffered. `reset`: a node power-cycled during the run
+/// (it has no motor to stop).
+pub fn stop_figures(sim: &Sim, n_segments: usize, reset: Option<usize>) -> (Option<u64>, bool) {
+    let first_fault_ns = sim.faults().first().map(|f| f.t_ns);
+    let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
+    // Rest: the first tick in Fault after the first fault, for every node
+    // that was running (the reset node has no motor to stop).
+    let mut rest_ns: Option<u64> = Some(0);
+    let mut within = true;
+    for (i, n) in sim.nodes.iter().enumerate() {
+        if Some(i) == reset || n.started_ns.is_none() {
+            continue;
+        }
+        let at = first_fault_ns.and_then(|f| {
+            n.states
+                .iter()
+                .find(|(t, s)| *t >= f && *s == State::Fault)
+                .map(|x| x.0)
+        });
+        let finished = n.node.state() == State::Idle && n.executed.len() == n_segments;
+        rest_ns = match (rest_ns, at) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (Some(a), None) if finished => Some(a),
+            _ => None,
+        };
+        // Past the buffered end is allowed only when the buffer ended with
+        // the plan's last segment: the plan ends at rest, so the path does too.
+        let had_last = n.executed.iter().any(|e| e.1 as usize + 1 == n_segments);
+        if n.node.state() == State::Fault
+            && n.node.plan_ns() > n.node.buffered_end_ns()
+            && !had_last
+        {
+            within = false;
+        }
+    }
+    let stop_time_ns = match (first_fault_ns, rest_ns) {
+        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
+        _ => None,
+    };
+    (stop_time_ns, within)
 }

@@ -5,6 +5,8 @@ use std::path::Path;
 
 use triquint_shared::Robot;
 
+use crate::exit::{CliError, CliResult};
+
 /// Reads a TOML file that sets any of [`Robot`]'s fields (unknown keys rejected
 /// with line and column); without a file, the paper's Table 1. The error is
 /// one line naming the file.
@@ -20,6 +22,11 @@ pub fn read_robot(path: Option<&Path>) -> Result<Robot, String> {
     };
     robot.validate().map_err(|e| e.to_string())?;
     Ok(robot)
+}
+
+/// [`read_robot`] with the error as bad input (exit 2).
+pub fn load_robot(path: Option<&Path>) -> CliResult<Robot> {
+    read_robot(path).map_err(CliError::bad_input)
 }
 
 /// Folds a multi-line parser message (toml prints a source excerpt) into one line.

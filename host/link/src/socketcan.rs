@@ -1,8 +1,9 @@
 //! A Linux SocketCAN interface as a CAN port (the `socketcan` crate):
 //! classic `CanSocket`, or `CanFdSocket` for CAN-FD, non-blocking, with the
-//! kernel's receive timestamps (`SO_TIMESTAMPNS`). Used by the virtual drives
-//! of `triquint-sim --iface` (through [`NodePort`], the firmware's `CanPort`)
-//! and by the host's `triquint upload/monitor --iface`.
+//! kernel's receive timestamps (`SO_TIMESTAMPNS`). The one SocketCAN access
+//! of the project: the host's `triquint upload/move-to/monitor --iface`
+//! ([`open_host`], the session's [`CanPort`]), and `triquint-sim`'s virtual
+//! drives and fault proxy.
 
 use std::collections::VecDeque;
 use std::io;
@@ -13,10 +14,9 @@ use socketcan::{
     CanAnyFrame, CanDataFrame, CanFdFrame, CanFdSocket, CanFrame, CanSocket, EmbeddedFrame, Id,
     ShouldRetry, Socket, SocketOptions, StandardId,
 };
-use triquint_firmware::{CanPort, RxFrame};
 use triquint_shared::protocol::Frame;
 
-use crate::sim::LocalClock;
+use crate::{CanPort, PortError, Received};
 
 /// A SocketCAN failure, naming the interface and what was being done.
 #[derive(Debug, thiserror::Error)]
@@ -245,36 +245,28 @@ pub fn to_frame(any: &CanAnyFrame) -> Option<Frame> {
     }
 }
 
-/// The firmware's view of the bus for one drive: the frames received this
-/// pass (timestamps on the drive's own offset, drifting clock) and the shared
-/// socket for transmission, so `firmware::hal::service` runs unchanged.
-pub struct NodePort<'a> {
-    pub port: &'a mut SocketCanPort,
-    pub rx: &'a [SocketRx],
-    pub next: usize,
-    pub clock: LocalClock,
-    /// The first transport error, kept for the caller (the firmware's
-    /// `CanPort` has no error path: a real controller just stops).
-    pub error: Option<SocketCanError>,
+/// Opens `iface` for the host (classic CAN, or CAN-FD with `fd`), with
+/// transmit confirmations, so the time sync carries the kernel's timestamp
+/// of each sync frame.
+pub fn open_host(iface: &str, fd: bool) -> Result<SocketCanPort, SocketCanError> {
+    SocketCanPort::open(iface, fd, true, SystemTime::now())
 }
 
-impl CanPort for NodePort<'_> {
-    fn transmit(&mut self, frame: &Frame) -> bool {
-        match self.port.send(frame) {
-            Ok(sent) => sent,
-            Err(e) => {
-                self.error.get_or_insert(e);
-                false
-            }
-        }
+impl CanPort for SocketCanPort {
+    fn now_us(&mut self) -> u64 {
+        self.now_ns() / 1000
     }
-    fn receive(&mut self) -> Option<RxFrame> {
-        let r = self.rx.get(self.next)?;
-        self.next += 1;
-        Some(RxFrame {
-            frame: r.frame,
-            timestamp_us: self.clock.local_us(r.t_ns),
-        })
+    fn send(&mut self, frame: &Frame) -> Result<bool, PortError> {
+        SocketCanPort::send(self, frame).map_err(|e| PortError(e.to_string()))
+    }
+    fn recv(&mut self) -> Result<Option<Received>, PortError> {
+        Ok(SocketCanPort::recv(self)
+            .map_err(|e| PortError(e.to_string()))?
+            .map(|r| Received {
+                frame: r.frame,
+                t_us: r.t_ns / 1000,
+                own: r.own,
+            }))
     }
 }
 

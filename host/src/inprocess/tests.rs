@@ -8,8 +8,10 @@ use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{Command, CommandCode, FaultCode, config_write_frame};
 use triquint_sim::{Sim, SimConfig, testplan};
 
-use super::session::{Session, SessionOptions, UploadError};
-use super::sim_port::{SimPort, SimReport, SimulateError, SimulateOptions, configs_for, simulate};
+use triquint_link::{DriveConfigs, Session, SessionOptions, UploadError};
+use triquint_sim::host_port::SimPort;
+
+use super::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 
 fn run(plan: &Plan, f: impl FnOnce(&mut SimulateOptions)) -> Result<SimReport, SimulateError> {
     let mut o = SimulateOptions::default();
@@ -19,7 +21,7 @@ fn run(plan: &Plan, f: impl FnOnce(&mut SimulateOptions)) -> Result<SimReport, S
 
 fn assert_clean(r: &SimReport, what: &str) {
     assert!(
-        r.completed,
+        r.run.completed,
         "{what}: not completed, faults {:?}",
         r.faults_on_nodes
     );
@@ -49,22 +51,26 @@ fn paper_cases_complete_on_classic_and_fd() {
             let per = if fd { 2 } else { 20 };
             assert_eq!(r.frames_per_segment, per);
             assert_eq!(
-                r.segment_frames,
+                r.run.segment_frames,
                 (plan.segments.len() as u64 + r.retransmits) * per as u64,
                 "{what}"
             );
             for j in 0..3 {
-                assert!(r.tracking.rms_error_m[j] < 5e-6, "{what}: {:?}", r.tracking);
                 assert!(
-                    r.tracking.max_error_m[j] < 50e-6,
+                    r.run.rms_error_m[j] < 5e-6,
                     "{what}: {:?}",
-                    r.tracking
+                    r.run.tracking()
+                );
+                assert!(
+                    r.run.max_error_m[j] < 50e-6,
+                    "{what}: {:?}",
+                    r.run.tracking()
                 );
             }
             assert!(
-                r.bus_load > 0.0 && r.bus_load < 0.2,
+                r.run.bus_load > 0.0 && r.run.bus_load < 0.2,
                 "{what}: load {}",
-                r.bus_load
+                r.run.bus_load
             );
         }
     }
@@ -78,12 +84,12 @@ fn feedforward_cuts_case2_tracking_error_at_least_threefold() {
     assert_clean(&ff, "ff");
     assert_clean(&fb, "no ff");
     for j in 0..3 {
-        let ratio = fb.tracking.rms_error_m[j] / ff.tracking.rms_error_m[j];
+        let ratio = fb.run.rms_error_m[j] / ff.run.rms_error_m[j];
         eprintln!(
             "axis {}: RMS {:.3} µm with FF, {:.3} µm without, ratio {ratio:.1}",
             j + 1,
-            ff.tracking.rms_error_m[j] * 1e6,
-            fb.tracking.rms_error_m[j] * 1e6
+            ff.run.rms_error_m[j] * 1e6,
+            fb.run.rms_error_m[j] * 1e6
         );
         assert!(ratio >= 3.0, "axis {}: ratio {ratio}", j + 1);
     }
@@ -103,9 +109,9 @@ fn stress_spiral_completes_on_classic_can_with_flow_control() {
     eprintln!(
         "spiral: {} segments, bus load {:.4} (segments {:.4}), {} frames, {} retransmissions",
         plan.segments.len(),
-        r.bus_load,
-        r.segment_bus_load,
-        r.frames,
+        r.run.bus_load,
+        r.run.segment_bus_load,
+        r.run.frames,
         r.retransmits
     );
 }
@@ -126,7 +132,7 @@ fn lost_frames_are_retransmitted() {
 fn stalled_host_underruns_and_every_node_stops_on_the_path() {
     let plan = testplan::paper_case2().unwrap();
     let r = run(&plan, |o| o.session.stall_after = Some(4)).unwrap();
-    assert!(!r.completed);
+    assert!(!r.run.completed);
     let first = r.faults_on_nodes.first().expect("a fault");
     assert_eq!(first.code, FaultCode::Underrun);
     // Every node detected the underrun itself (same buffered path).
@@ -144,12 +150,13 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
         .iter()
         .fold(0.0f64, |a, b| a.max(*b));
     let lim = plan.limits.jerk;
+    let stop_jerk = r.run.max_stop_jerk.iter().copied().fold(0.0, f64::max);
     eprintln!(
-        "underrun stop: plan jerk {plan_jerk:.3}, stop time {:.3} s, max jerk while stopping {:.3} m/s³",
-        r.stop_time_s, r.max_stop_jerk
+        "underrun stop: plan jerk {plan_jerk:.3}, stop time {:.3} s, max jerk while stopping {stop_jerk:.3} m/s³",
+        r.run.stop_ramp_s
     );
-    assert!(r.max_stop_jerk > 0.0);
-    assert!(r.max_stop_jerk <= lim.max(plan_jerk + 0.5 * lim) * 1.001);
+    assert!(stop_jerk > 0.0);
+    assert!(stop_jerk <= lim.max(plan_jerk + 0.5 * lim) * 1.001);
     // At the end the machine is at rest, close to the path.
     let last = r.samples.last().unwrap();
     let prev = &r.samples[r.samples.len() - 20];
@@ -179,7 +186,7 @@ fn arm_is_refused_away_from_the_plan_start() {
     }
     // Not strict (the CLI): a report with the fault, nothing completed.
     let r = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap();
-    assert!(!r.completed);
+    assert!(!r.run.completed);
     let first = r.faults_on_nodes.first().expect("fault");
     assert_eq!((first.node, first.code), (2, FaultCode::ArmTooFar));
     // The other nodes were armed and faulted on node 2's emergency.
@@ -194,7 +201,7 @@ fn arm_is_refused_away_from_the_plan_start() {
 fn a_node_with_another_configuration_is_named() {
     let plan = testplan::paper_case1().unwrap();
     let settings = DriveSettings::default();
-    let (configs, _) = configs_for(&plan, &settings).unwrap();
+    let configs = DriveConfigs::for_plan(&plan, &settings).unwrap().nodes;
     let q0 = plan.segments[0].quintic().eval(0.0).q;
     let mut sim = Sim::new(&Robot::default(), q0, SimConfig::default());
     // Node 3 was configured elsewhere with a different gain.
@@ -253,6 +260,6 @@ fn case2_at_10_khz_tracks_as_well_as_at_1_khz() {
     assert_clean(&fast, "10 kHz");
     assert!(fast.start_skew_ns <= 100_000);
     for j in 0..3 {
-        assert!(fast.tracking.max_error_m[j] < 10e-6, "{:?}", fast.tracking);
+        assert!(fast.run.max_error_m[j] < 10e-6, "{:?}", fast.run.tracking());
     }
 }

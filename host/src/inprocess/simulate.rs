@@ -1,44 +1,17 @@
-//! The session over the in-process virtual hardware, and the simulation run
-//! behind `triquint simulate`.
+//! The simulation run behind `triquint simulate`: the host's upload session
+//! over the in-process bus to three simulated drives and the plant.
 
 use nalgebra::Vector3;
+use triquint_link::configs::ConfigError;
+use triquint_link::{DriveConfigs, FaultReport, Outcome, Session, SessionOptions, UploadError};
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::{DriveSettings, stop_time};
+use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
-use triquint_shared::protocol::{DriveConfig, Frame};
-use triquint_sim::metrics::{self, Tracking};
+use triquint_sim::host_port::SimPort;
+use triquint_sim::metrics;
+use triquint_sim::report::{JsonFault, RunReport};
 use triquint_sim::sim::{Sample, SimError};
-use triquint_sim::{Sim, SimConfig, testplan};
-
-use super::session::{FaultReport, Outcome, Session, SessionOptions, UploadError};
-use super::{CanPort, PortError, Received};
-
-/// The host's station on the in-process bus.
-pub struct SimPort<'a> {
-    pub sim: &'a mut Sim,
-    /// Host transmit queue length (like a SocketCAN txqueuelen).
-    pub tx_queue: usize,
-}
-
-impl CanPort for SimPort<'_> {
-    fn now_us(&mut self) -> u64 {
-        self.sim.now_ns() / 1000
-    }
-    fn send(&mut self, frame: &Frame) -> Result<bool, PortError> {
-        if self.sim.host_pending() >= self.tx_queue {
-            return Ok(false);
-        }
-        self.sim.host_send(*frame);
-        Ok(true)
-    }
-    fn recv(&mut self) -> Result<Option<Received>, PortError> {
-        Ok(self.sim.host_receive().map(|d| Received {
-            frame: d.frame,
-            t_us: d.t_ns / 1000,
-            own: d.own,
-        }))
-    }
-}
+use triquint_sim::{Sim, SimConfig};
 
 /// Options of a simulation run.
 #[derive(Clone, Debug)]
@@ -82,51 +55,32 @@ pub enum SimulateError {
     Sim(#[from] SimError),
     #[error("plan: {0}")]
     Plan(String),
+    #[error("plan: {0}")]
+    Config(#[from] ConfigError),
     #[error("the simulation did not finish within {0:.1} s of simulated time")]
     Timeout(f64),
 }
 
-/// What a run measured.
+/// What a run measured: the run report every simulated run writes (the
+/// JSON of `simulate --json`), and what only the in-process run has.
 #[derive(Clone, Debug)]
 pub struct SimReport {
-    pub completed: bool,
+    pub run: RunReport,
+    /// Faults as the host's session saw them.
     pub faults: Vec<FaultReport>,
-    pub tracking: Tracking,
-    pub peak_torque_nm: [f64; 3],
-    /// Busy fraction of the bus over the whole run.
-    pub bus_load: f64,
-    /// Share of the bus taken by segment parts over the whole run.
-    pub segment_bus_load: f64,
-    pub frames: u64,
-    pub segment_frames: u64,
+    /// Faults as the nodes raised them (true time).
+    pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
     pub frames_per_segment: usize,
     pub retransmits: u64,
-    /// True-time spread of the nodes' first Running tick (ns).
+    /// True-time spread of the nodes' first Running tick (ns; `u64::MAX`
+    /// when not every node started).
     pub start_skew_ns: u64,
     pub tick_ns: u64,
     pub f32_eval_error_m: f64,
+    /// Host time (µs) of the start.
     pub start_us: u64,
     pub sim_time_s: f64,
-    pub stop_time_s: f64,
-    /// Largest joint jerk of any node's reference while stopping (m/s³).
-    pub max_stop_jerk: f64,
     pub samples: Vec<Sample>,
-    pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
-}
-
-/// Per-node configurations for a plan: gains from the settings' bandwidth,
-/// stop times from the plan's own maxima (sampled, not trusted from the file).
-pub fn configs_for(
-    plan: &Plan,
-    settings: &DriveSettings,
-) -> Result<([DriveConfig; 3], f64), SimulateError> {
-    let m = testplan::sampled_max_abs(plan).map_err(|e| SimulateError::Plan(e.to_string()))?;
-    let mx = |a: [f64; 3]| a.iter().fold(0.0f64, |x, y| x.max(*y));
-    let (v, a, j) = (mx(m.velocity), mx(m.acceleration), mx(m.jerk));
-    let ts = stop_time(v, a, j, plan.limits.jerk);
-    let tq = stop_time(v, a, 0.0, 3.0 * plan.limits.jerk);
-    let cfgs = [0, 1, 2].map(|i| DriveConfig::new(&plan.robot, &plan.limits, i, settings, ts, tq));
-    Ok((cfgs, ts))
 }
 
 /// Uploads `plan` through the host session to three simulated drives and runs it.
@@ -134,7 +88,10 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
     let mut settings = opts.settings.clone();
     settings.control_rate = opts.rate_hz;
     settings.feedforward = opts.feedforward;
-    let (configs, ts) = configs_for(plan, &settings)?;
+    let DriveConfigs {
+        nodes: configs,
+        stop_time_s: ts,
+    } = DriveConfigs::for_plan(plan, &settings)?;
     let mut sim_cfg = opts.sim.clone();
     sim_cfg.fd = opts.fd;
     sim_cfg.rate_hz = opts.rate_hz;
@@ -190,15 +147,44 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         _ => u64::MAX,
     };
     let now = sim.now_ns().max(1);
-    Ok(SimReport {
-        completed: outcome.completed,
-        faults: outcome.faults.clone(),
-        tracking,
+    let faults_on_nodes = sim.faults();
+    let start_s = outcome.start_us as f64 * 1e-6;
+    let (stop_ns, stopped_within_buffer) =
+        super::fault_run::stop_figures(&sim, plan.segments.len(), None);
+    let mut run = RunReport {
         peak_torque_nm: [0, 1, 2].map(|i| sim.nodes[i].peak_torque as f64),
         bus_load: sim.bus.busy_ns() as f64 / now as f64,
-        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
         frames: sim.bus.frames(),
+        faults: faults_on_nodes
+            .iter()
+            .map(|f| JsonFault::new(f, f.t_ns as f64 * 1e-9 - start_s))
+            .collect(),
+        completed: outcome.completed,
+        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
         segment_frames: outcome.segment_frames_sent,
+        segments: plan.segments.len(),
+        plan_time_s: plan.total_time_s,
+        duration_s: now as f64 * 1e-9,
+        start_skew_us: match (started.iter().min(), started.iter().max()) {
+            (Some(a), Some(b)) => (b - a) as f64 * 1e-3,
+            _ => 0.0,
+        },
+        executed: sim
+            .nodes
+            .iter()
+            .map(|n| n.executed.iter().map(|e| (e.1, e.2)).collect())
+            .collect(),
+        stop_s: stop_ns.map(|t| t as f64 * 1e-9),
+        stopped_within_buffer,
+        max_stop_jerk: [0, 1, 2].map(|i| sim.nodes[i].max_stop_jerk as f64),
+        stop_ramp_s: ts,
+        ..RunReport::default()
+    };
+    run.set_tracking(&tracking);
+    Ok(SimReport {
+        run,
+        faults: outcome.faults.clone(),
+        faults_on_nodes,
         frames_per_segment: parts_per_segment(opts.fd),
         retransmits: outcome.retransmits,
         start_skew_ns: skew,
@@ -206,13 +192,6 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         f32_eval_error_m: metrics::f32_eval_error(plan, 1000),
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
-        stop_time_s: ts,
-        max_stop_jerk: sim
-            .nodes
-            .iter()
-            .map(|n| n.max_stop_jerk as f64)
-            .fold(0.0, f64::max),
-        faults_on_nodes: sim.faults(),
         samples: std::mem::take(&mut sim.samples),
     })
 }

@@ -1,0 +1,140 @@
+//! The project's exit-status table, shared by every `triquint` and
+//! `triquint-sim` command (README, "Exit status"), and how a command ends:
+//! one line on stderr, the status from the table.
+
+use std::fmt;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// Exit statuses. Keep in step with the README table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// A check found a violation.
+    Violation = 1,
+    /// Bad input: unparsable file, unknown key, NaN, unit error, unreachable point, limits ≤ 0.
+    BadInput = 2,
+    /// Valid input, but no plan meets the limits.
+    Infeasible = 3,
+    /// Device, bus or timeout.
+    Device = 4,
+    /// Motion fault: a node stopped with a fault code.
+    MotionFault = 5,
+    /// The planner's numerical solver failed on a valid job (worth a report).
+    SolverFailure = 6,
+    /// Planning was cancelled (Ctrl-C) before it finished.
+    Cancelled = 7,
+}
+
+/// An error that ends a command with a status from the table and a one-line message.
+#[derive(Debug)]
+pub struct CliError {
+    pub status: Status,
+    pub message: String,
+}
+
+impl CliError {
+    pub fn new(status: Status, message: impl fmt::Display) -> Self {
+        Self {
+            status,
+            message: message.to_string(),
+        }
+    }
+    pub fn bad_input(message: impl fmt::Display) -> Self {
+        Self::new(Status::BadInput, message)
+    }
+    pub fn infeasible(message: impl fmt::Display) -> Self {
+        Self::new(Status::Infeasible, message)
+    }
+    pub fn violation(message: impl fmt::Display) -> Self {
+        Self::new(Status::Violation, message)
+    }
+    pub fn device(message: impl fmt::Display) -> Self {
+        Self::new(Status::Device, message)
+    }
+    pub fn motion_fault(message: impl fmt::Display) -> Self {
+        Self::new(Status::MotionFault, message)
+    }
+}
+
+impl fmt::Display for CliError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for CliError {}
+
+pub type CliResult<T = ()> = Result<T, CliError>;
+
+/// Ends a command: success, or `NAME: error: MESSAGE` on one stderr line
+/// (a multi-line message is folded) and the error's status.
+pub fn main_exit(name: &str, result: CliResult) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            let msg: Vec<&str> = e.message.lines().map(str::trim).collect();
+            eprintln!("{name}: error: {}", msg.join(" "));
+            ExitCode::from(e.status as u8)
+        }
+    }
+}
+
+/// Writes `contents` to `path` atomically (temporary file in the same
+/// folder, then rename), so a failing command never leaves a partial output
+/// file. Creates the folder; any failure is bad input naming the path.
+pub fn write_atomic(path: &Path, contents: &[u8]) -> CliResult {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = dir {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::bad_input(format!("{}: {e}", dir.display())))?;
+    }
+    let name = path
+        .file_name()
+        .ok_or_else(|| CliError::bad_input(format!("{}: not a file path", path.display())))?;
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, contents)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            CliError::bad_input(format!("{}: {e}", path.display()))
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn statuses_are_the_readme_table() {
+        let table = [
+            (Status::Violation, 1),
+            (Status::BadInput, 2),
+            (Status::Infeasible, 3),
+            (Status::Device, 4),
+            (Status::MotionFault, 5),
+            (Status::SolverFailure, 6),
+            (Status::Cancelled, 7),
+        ];
+        for (s, n) in table {
+            assert_eq!(s as u8, n);
+        }
+    }
+
+    #[test]
+    fn atomic_write_leaves_the_file_or_nothing() {
+        let dir = std::env::temp_dir().join(format!("triquint-cli-common-{}", std::process::id()));
+        let path = dir.join("sub").join("out.json");
+        write_atomic(&path, b"{}").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"{}");
+        // A folder where the file should be: bad input, no temporary left.
+        let e = write_atomic(&dir.join("sub"), b"x").unwrap_err();
+        assert_eq!(e.status, Status::BadInput);
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

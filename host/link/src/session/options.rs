@@ -1,0 +1,52 @@
+//! Timing and policy of a session.
+
+/// Timing and policy of a session.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SessionOptions {
+    pub fd: bool,
+    /// Write the configuration before checking it (else only check).
+    pub configure: bool,
+    /// Most segments unacknowledged at once.
+    pub window: usize,
+    pub retransmit_timeout_us: u64,
+    pub max_retransmits: u32,
+    pub sync_period_us: u64,
+    /// Sync period until every node reports a valid sync.
+    pub fast_sync_period_us: u64,
+    /// Start time ahead of the Start command.
+    pub start_lead_us: u64,
+    /// Waiting for nodes (heartbeats, acknowledgements).
+    pub response_timeout_us: u64,
+    /// A set-up command (configuration, Arm) not answered within this is
+    /// sent again: a configuration refused or unanswered at most
+    /// `setup_resends` times, Arm at most twice (see [`ARM_RESENDS`]).
+    pub setup_retry_us: u64,
+    pub setup_resends: u32,
+    /// After the plan's end, how long nodes may take to report Idle.
+    pub finish_grace_us: u64,
+    /// Test hook: stop streaming after this many segments (provokes underrun).
+    pub stall_after: Option<usize>,
+    /// Only configure the nodes (and check the configuration), no motion.
+    pub configure_only: bool,
+}
+
+impl Default for SessionOptions {
+    fn default() -> Self {
+        Self {
+            fd: false,
+            configure: true,
+            window: 4,
+            retransmit_timeout_us: 50_000,
+            max_retransmits: 5,
+            sync_period_us: 100_000,
+            fast_sync_period_us: 10_000,
+            start_lead_us: 50_000,
+            response_timeout_us: 2_000_000,
+            setup_retry_us: 30_000,
+            setup_resends: 4,
+            finish_grace_us: 5_000_000,
+            stall_after: None,
+            configure_only: false,
+        }
+    }
+}

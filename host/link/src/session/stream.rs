@@ -1,0 +1,174 @@
+//! Flow-controlled streaming: at most `window` segments unacknowledged, and
+//! never more than every node's queue takes (its credit); a segment not
+//! acknowledged by every node within `retransmit_timeout_us` is sent again
+//! (at most `max_retransmits` times), and one a node rejected as corrupt,
+//! out of order or incomplete is resent at once without using up a try.
+
+use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
+
+use super::nodes::{NODES, Nodes, node_id};
+use super::outbox::Outbox;
+use super::{SessionOptions, UploadError};
+
+/// A segment is resent on a rejection only if its last transmission is older
+/// than this: a full window of classic segments takes about 11 ms on the wire.
+const RESEND_GUARD_US: u64 = 15_000;
+
+/// The transmit queue is not filled beyond this many frames.
+const OUTBOX_LIMIT: usize = 64;
+
+/// A segment sent and not yet acknowledged by every node.
+#[derive(Clone, Debug)]
+struct InFlight {
+    seq: usize,
+    sent_at: u64,
+    tries: u32,
+    acked: [bool; NODES],
+    /// Resend requested by a rejection (not counted as a try).
+    early: bool,
+}
+
+#[derive(Debug)]
+pub(crate) struct Stream {
+    pub segments: Vec<WireSegment>,
+    fd: bool,
+    next_to_send: usize,
+    in_flight: Vec<InFlight>,
+    /// Segment frames queued, retransmissions, rejections seen.
+    pub segment_frames: u64,
+    pub retransmits: u64,
+    pub rejects_seen: u64,
+}
+
+impl Stream {
+    pub fn new(segments: Vec<WireSegment>, fd: bool) -> Self {
+        Self {
+            segments,
+            fd,
+            next_to_send: 0,
+            in_flight: Vec::new(),
+            segment_frames: 0,
+            retransmits: 0,
+            rejects_seen: 0,
+        }
+    }
+
+    /// Plan duration (µs).
+    pub fn plan_end_us(&self) -> u64 {
+        self.segments.iter().map(|s| s.duration_us as u64).sum()
+    }
+
+    /// Segments every node has acknowledged.
+    pub fn acked(&self) -> usize {
+        self.next_to_send.saturating_sub(self.in_flight.len())
+    }
+
+    /// Every node acknowledged segments `0..n`.
+    pub fn all_acked_through(&self, n: usize) -> bool {
+        self.next_to_send >= n && self.in_flight.iter().all(|f| f.seq >= n)
+    }
+
+    /// A SegmentAck from node index `i` (its view already updated), received at `t_us`.
+    pub fn acknowledged(&mut self, i: usize, a: &SegmentAck, t_us: u64) -> Result<(), UploadError> {
+        match Reject::from_u8(a.result) {
+            Some(Reject::Accepted) | Some(Reject::Duplicate) => {
+                if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == a.seq as usize) {
+                    f.acked[i] = true;
+                }
+            }
+            Some(Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete) => {
+                self.rejects_seen += 1;
+                // Resend at once the segment this node needs next (the
+                // rejected one may only be queued behind a lost one),
+                // unless it went out moments ago and may be on its way.
+                // A resend on a rejection is not a timeout: it does not
+                // use up the segment's tries.
+                let need = a.next_seq as usize;
+                if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == need)
+                    && !f.acked[i]
+                    && t_us.saturating_sub(f.sent_at) > RESEND_GUARD_US
+                {
+                    f.sent_at = 0;
+                    f.early = true;
+                }
+            }
+            Some(Reject::QueueFull) => {
+                self.rejects_seen += 1;
+            }
+            other => {
+                return Err(UploadError::Rejected {
+                    node: node_id(i),
+                    seq: a.seq,
+                    reason: other.map_or("unknown reason", |r| r.name()),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn queue(&mut self, seq: usize, out: &mut Outbox) {
+        if let Some(s) = self.segments.get(seq) {
+            for f in s.frames(self.fd) {
+                out.push_back(f);
+                self.segment_frames += 1;
+            }
+        }
+    }
+
+    /// Retransmits what timed out, then sends what the window and every
+    /// node's credit allow (up to `stall_after` segments).
+    pub fn poll(
+        &mut self,
+        now: u64,
+        nodes: &Nodes,
+        opts: &SessionOptions,
+        out: &mut Outbox,
+    ) -> Result<(), UploadError> {
+        self.in_flight.retain(|f| !f.acked.iter().all(|a| *a));
+        for k in 0..self.in_flight.len() {
+            let f = &self.in_flight[k];
+            if now.saturating_sub(f.sent_at) > opts.retransmit_timeout_us
+                && out.len() < OUTBOX_LIMIT
+            {
+                if f.tries > opts.max_retransmits {
+                    let node = (0..NODES).find(|&i| !f.acked[i]).map_or(1, node_id);
+                    return Err(UploadError::Retransmits {
+                        node,
+                        seq: f.seq,
+                        tries: f.tries,
+                    });
+                }
+                let seq = f.seq;
+                let f = &mut self.in_flight[k];
+                if !f.early {
+                    f.tries += 1;
+                }
+                f.early = false;
+                f.sent_at = now;
+                self.retransmits += 1;
+                self.queue(seq, out);
+            }
+        }
+        let limit = opts
+            .stall_after
+            .unwrap_or(usize::MAX)
+            .min(self.segments.len());
+        while self.next_to_send < limit
+            && self.in_flight.len() < opts.window
+            && self.next_to_send < nodes.credit()
+            && out.len() < OUTBOX_LIMIT
+        {
+            let seq = self.next_to_send;
+            self.queue(seq, out);
+            self.in_flight.push(InFlight {
+                seq,
+                sent_at: now,
+                tries: 1,
+                acked: [false; NODES],
+                early: false,
+            });
+            self.next_to_send += 1;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,9 @@
+//! Plans run through the host's upload session (`triquint-link`) on the
+//! in-process virtual hardware of `triquint-sim`: `triquint simulate`
+//! ([`simulate`]), and the seeded fault runs of the fault tests and the
+//! soak ([`fault_run`]).
+
+pub mod fault_run;
+pub mod simulate;
+#[cfg(test)]
+mod tests;
