@@ -31,7 +31,10 @@ fn job_toml(points: &[[f64; 3]], total_time: f64) -> String {
     );
     s.push_str("objective = \"min-max-jerk\"\n\n[limits]\n");
     s.push_str("velocity = 0.5\nacceleration = 1.2\njerk = 5.0\ntorque = 10.0\n");
-    let _ = writeln!(s, "total_time = {total_time}\n\n[path]\nunits = \"mm\"\npoints = [");
+    let _ = writeln!(
+        s,
+        "total_time = {total_time}\n\n[path]\nunits = \"mm\"\npoints = ["
+    );
     for p in points {
         let _ = writeln!(s, "    [{:.6}, {:.6}, {:.6}],", p[0], p[1], p[2]);
     }

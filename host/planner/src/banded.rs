@@ -5,6 +5,9 @@
 //! involves the knots i − 1, i, i + 1), where a dense QR of Eᵀ grew as n³
 //! in time and n² in memory.
 
+// Index loops over the band mirror the factorisation's formulas.
+#![allow(clippy::needless_range_loop)]
+
 /// Rows of E, each a few (column, value) entries; rows more than `BAND`
 /// apart share no column.
 pub(crate) struct Rows {
@@ -68,7 +71,8 @@ impl Rows {
                     .filter(|&b| i > b)
                     .map(|b| l[i][b] * l[i][b] * d[i - 1 - b])
                     .sum::<f64>();
-            if !(s > 1e-14) {
+            // Rows are normalised, so a pivot this small is a dependent row.
+            if s.is_nan() || s <= 1e-14 {
                 return None;
             }
             d[i] = s;
