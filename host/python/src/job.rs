@@ -250,7 +250,7 @@ impl From<&Progress> for PyProgress {
     }
 }
 
-/// plan(points, *, units='mm', objective='min-max-jerk', total_time=5.0, velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, starts=8, seed=1, progress=None) -> Plan
+/// plan(points, *, ...) -> Plan
 ///
 /// Plans a globally min-max-jerk (or minimum-time) C3 piecewise-quintic
 /// joint trajectory through Cartesian via-points under joint velocity
