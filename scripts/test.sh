@@ -27,6 +27,20 @@ step "fault soak (release)"
 ./scripts/soak.sh
 ./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
 
+step "Python package: abi3 wheel in a fresh venv (pip install ./host/python), pytest"
+# The README's install command; the wheel reuses target/ (absolute: pip runs
+# cargo from host/python). matplotlib for the figures example's test.
+cargo build --release --locked -p triquint-host
+target_dir="$(realpath "${CARGO_TARGET_DIR:-target}")"
+venv="$target_dir/py-venv"
+rm -rf "$venv"
+python3 -m venv "$venv"
+"$venv/bin/pip" install --quiet --disable-pip-version-check pytest matplotlib
+py_start=$(date +%s)
+CARGO_TARGET_DIR="$target_dir" nice "$venv/bin/pip" install --quiet --disable-pip-version-check ./host/python
+echo "wheel built and installed in $(( $(date +%s) - py_start )) s"
+TRIQUINT_BIN="$target_dir/release/triquint" "$venv/bin/python" -m pytest -q host/python/tests
+
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
 

@@ -1,0 +1,390 @@
+//! `triquint.Job`: what to plan (via-points, objective, limits, robot),
+//! validated when it is made; and `triquint.plan`.
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyType};
+use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
+use triquint_shared::Limits;
+use triquint_shared::plan::Objective;
+
+use crate::arrays::{floats, rows_array, shape_text};
+use crate::errors::{guard, internal_error, invalid_job, plan_error};
+use crate::plan::PyPlan;
+use crate::robot::{PyRobot, robot_or_default};
+use crate::units::Units;
+
+/// A planning job: via-points, objective, limits and robot, validated when
+/// it is made (the errors name the field or the point). `points` is any
+/// (n, 3) array-like of Cartesian platform positions, in millimetres unless
+/// `units="m"`; limits are SI and joint-space: velocity (m/s), acceleration
+/// (m/s²), jerk (m/s³), torque (N·m), total_time (s, an upper bound; the
+/// plan's duration for min-max-jerk). `objective` is 'min-max-jerk' (the
+/// smallest maximum |jerk| within total_time) or 'min-time' (the shortest
+/// time that meets every limit). Defaults: the paper's Table 3 limits and
+/// Table 1 robot.
+///
+/// `Job.from_toml(path)` reads a job file of `triquint plan`.
+#[pyclass(name = "Job", module = "triquint", frozen)]
+pub struct PyJob {
+    pub job: Job,
+    pub units: Units,
+}
+
+pub fn parse_objective(py: Python<'_>, s: &str) -> PyResult<Objective> {
+    match s {
+        "min-max-jerk" => Ok(Objective::MinMaxJerk),
+        "min-time" => Ok(Objective::MinTime),
+        _ => Err(invalid_job(
+            py,
+            "objective",
+            &format!("must be \"min-max-jerk\" or \"min-time\", got {s:?}"),
+        )),
+    }
+}
+
+/// The keywords of a job, as `plan()` and `Job()` take them.
+pub struct JobArgs<'a, 'py> {
+    pub units: Option<&'a str>,
+    pub objective: Option<&'a str>,
+    pub total_time: Option<f64>,
+    pub velocity: Option<f64>,
+    pub acceleration: Option<f64>,
+    pub jerk: Option<f64>,
+    pub torque: Option<f64>,
+    pub robot: Option<&'a Bound<'py, PyRobot>>,
+}
+
+impl JobArgs<'_, '_> {
+    /// The keywords given (not None), by name.
+    pub fn given(&self) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        let mut add = |name, set: bool| {
+            if set {
+                v.push(name)
+            }
+        };
+        add("units", self.units.is_some());
+        add("objective", self.objective.is_some());
+        add("total_time", self.total_time.is_some());
+        add("velocity", self.velocity.is_some());
+        add("acceleration", self.acceleration.is_some());
+        add("jerk", self.jerk.is_some());
+        add("torque", self.torque.is_some());
+        add("robot", self.robot.is_some());
+        v
+    }
+}
+
+/// A job from points and keywords (defaults for keywords not given).
+pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> PyResult<PyJob> {
+    let units = Units::parse(args.units.unwrap_or("mm"))?;
+    let objective = parse_objective(py, args.objective.unwrap_or("min-max-jerk"))?;
+    let d = Limits::default();
+    let limits = Limits {
+        velocity: args.velocity.unwrap_or(d.velocity),
+        acceleration: args.acceleration.unwrap_or(d.acceleration),
+        jerk: args.jerk.unwrap_or(d.jerk),
+        torque: args.torque.unwrap_or(d.torque),
+        total_time: args.total_time.unwrap_or(d.total_time),
+    };
+    let pts = floats(points, "points")?;
+    match pts.shape.as_slice() {
+        [_, 3] => {}
+        s => {
+            return Err(invalid_job(
+                py,
+                "path.points",
+                &format!("points must have shape (n, 3), got {}", shape_text(s)),
+            ));
+        }
+    }
+    let scale = units.scale();
+    let rows: Vec<[f64; 3]> = pts.rows3().iter().map(|p| p.map(|x| x * scale)).collect();
+    let robot = robot_or_default(args.robot);
+    let job = guard(py, || {
+        Job::builder()
+            .objective(objective)
+            .robot(robot)
+            .limits(limits)
+            .points_m(rows)
+            .build()
+            .map_err(|e| plan_error(py, e, units))
+    })?;
+    Ok(PyJob { job, units })
+}
+
+#[pymethods]
+impl PyJob {
+    #[new]
+    #[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
+        velocity = None, acceleration = None, jerk = None, torque = None, robot = None),
+        text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
+            velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None)")]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        units: Option<&str>,
+        objective: Option<&str>,
+        total_time: Option<f64>,
+        velocity: Option<f64>,
+        acceleration: Option<f64>,
+        jerk: Option<f64>,
+        torque: Option<f64>,
+        robot: Option<Bound<'_, PyRobot>>,
+    ) -> PyResult<Self> {
+        let args = JobArgs {
+            units,
+            objective,
+            total_time,
+            velocity,
+            acceleration,
+            jerk,
+            torque,
+            robot: robot.as_ref(),
+        };
+        make_job(py, points, &args)
+    }
+
+    /// from_toml(path) -> Job
+    ///
+    /// Reads a job file of `triquint plan` (TOML: objective, [robot],
+    /// [limits], [path] with units and points or a points file relative to
+    /// the job file). Errors of the file raise JobFileError with its path and
+    /// line; errors of its contents InvalidJobError or OutsideWorkspaceError
+    /// (points in millimetres).
+    #[classmethod]
+    fn from_toml(_cls: &Bound<'_, PyType>, py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let job = guard(py, || {
+            Job::load(&path).map_err(|e| plan_error(py, e, Units::Millimetres))
+        })?;
+        Ok(Self {
+            job,
+            units: Units::Millimetres,
+        })
+    }
+
+    /// 'min-max-jerk' or 'min-time'.
+    #[getter]
+    fn objective(&self) -> &'static str {
+        crate::objective_name(self.job.objective())
+    }
+
+    /// Via-points (n, 3), metres.
+    #[getter]
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        rows_array(py, self.job.points_m(), true)
+    }
+
+    /// The knots the planner interpolates (metres): the via-points, with
+    /// points on the straight lines between them when there are fewer than five.
+    #[getter]
+    fn knots<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        rows_array(py, &self.job.knots_m(), true)
+    }
+
+    /// velocity, acceleration, jerk, torque, total_time (SI).
+    #[getter]
+    fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        crate::limits_dict(py, self.job.limits())
+    }
+
+    #[getter]
+    fn robot(&self) -> PyRobot {
+        PyRobot::from(self.job.robot())
+    }
+
+    fn __repr__(&self) -> String {
+        let l = self.job.limits();
+        format!(
+            "Job({}, {} via-points, velocity={}, acceleration={}, jerk={}, torque={}, total_time={})",
+            crate::objective_name(self.job.objective()),
+            self.job.points_m().len(),
+            l.velocity,
+            l.acceleration,
+            l.jerk,
+            l.torque,
+            l.total_time
+        )
+    }
+}
+
+/// A snapshot of a running search, given to `plan(..., progress=f)`:
+/// `elapsed` (s), `stage` ('searching', 'limits-bind', 'min-time',
+/// 'finishing'), `lp_solves` (linear programs so far) and `best_max_jerk`
+/// (m/s³, the best of any start so far, or None).
+#[pyclass(name = "Progress", module = "triquint", frozen, get_all)]
+pub struct PyProgress {
+    pub elapsed: f64,
+    pub stage: &'static str,
+    pub lp_solves: u64,
+    pub best_max_jerk: Option<f64>,
+}
+
+#[pymethods]
+impl PyProgress {
+    fn __repr__(&self) -> String {
+        format!(
+            "Progress(elapsed={:.3}, stage={:?}, lp_solves={}, best_max_jerk={:?})",
+            self.elapsed, self.stage, self.lp_solves, self.best_max_jerk
+        )
+    }
+}
+
+impl From<&Progress> for PyProgress {
+    fn from(p: &Progress) -> Self {
+        Self {
+            elapsed: p.elapsed.as_secs_f64(),
+            stage: match p.stage {
+                Stage::Searching => "searching",
+                Stage::LimitsBind => "limits-bind",
+                Stage::MinTime => "min-time",
+                _ => "finishing",
+            },
+            lp_solves: p.lp_solves,
+            best_max_jerk: p.best_max_jerk,
+        }
+    }
+}
+
+/// plan(points, *, ...) -> Plan
+///
+/// Plans a globally min-max-jerk (or minimum-time) C3 piecewise-quintic
+/// joint trajectory through Cartesian via-points under joint velocity
+/// (m/s), acceleration (m/s²), jerk (m/s³), motor torque (N·m) and total
+/// time (s) limits, every limit verified in continuous time.
+///
+/// `points` is an (n, 3) array-like of platform positions in millimetres
+/// (`units="m"` for metres), or a `Job`; with a Job only `starts`, `seed`
+/// and `progress` may be given (TypeError otherwise). `robot` is a
+/// `Robot` (default: the paper's Table 1). `starts` starting interval sets
+/// of the global search, random ones seeded by `seed`: the same job, starts
+/// and seed give the same plan. `progress`, if given, is called about every
+/// 25 ms with a `Progress`; returning False cancels (CancelledError), and
+/// an exception it raises cancels and propagates.
+///
+/// The GIL is released while planning; Ctrl-C raises KeyboardInterrupt
+/// within a second. Errors: InvalidJobError (field), OutsideWorkspaceError
+/// (index, point), InfeasibleError (limit, reached, shortest_total_time),
+/// SolverError.
+#[pyfunction]
+#[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
+    velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
+    starts = 8, seed = 1, progress = None),
+    text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
+        velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, starts=8, \
+        seed=1, progress=None)")]
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    py: Python<'_>,
+    points: &Bound<'_, PyAny>,
+    units: Option<&str>,
+    objective: Option<&str>,
+    total_time: Option<f64>,
+    velocity: Option<f64>,
+    acceleration: Option<f64>,
+    jerk: Option<f64>,
+    torque: Option<f64>,
+    robot: Option<Bound<'_, PyRobot>>,
+    starts: usize,
+    seed: u64,
+    progress: Option<Bound<'_, PyAny>>,
+) -> PyResult<PyPlan> {
+    let args = JobArgs {
+        units,
+        objective,
+        total_time,
+        velocity,
+        acceleration,
+        jerk,
+        torque,
+        robot: robot.as_ref(),
+    };
+    if starts == 0 {
+        return Err(PyValueError::new_err("starts must be at least 1"));
+    }
+    if let Some(p) = &progress
+        && !p.is_callable()
+    {
+        return Err(PyTypeError::new_err("progress must be a callable or None"));
+    }
+    let made;
+    let job: &PyJob = match points.cast::<PyJob>() {
+        Ok(j) => {
+            let given = args.given();
+            if !given.is_empty() {
+                return Err(PyTypeError::new_err(format!(
+                    "plan() with a Job takes only starts, seed and progress; got {} \
+                     (set it in the Job)",
+                    given.join(", ")
+                )));
+            }
+            j.get()
+        }
+        Err(_) => {
+            made = make_job(py, points, &args)?;
+            &made
+        }
+    };
+    let opts = Options {
+        starts,
+        seed,
+        ..Options::default()
+    };
+    run_plan(py, job, &opts, progress.map(Bound::unbind))
+}
+
+/// Plans with the GIL released; the observer re-attaches every 25 ms to
+/// run Python's signal handlers (Ctrl-C) and the progress callable.
+fn run_plan(
+    py: Python<'_>,
+    job: &PyJob,
+    opts: &Options,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyPlan> {
+    let mut pending: Option<PyErr> = None;
+    let mut cancelled = false;
+    let inner = &job.job;
+    let result = py.detach(|| {
+        let mut observer = |p: &Progress| -> Control {
+            if pending.is_some() || cancelled {
+                return Control::Cancel;
+            }
+            Python::attach(|py| {
+                if let Err(e) = py.check_signals() {
+                    pending = Some(e);
+                    return Control::Cancel;
+                }
+                if let Some(cb) = &progress {
+                    match cb.call1(py, (PyProgress::from(p),)) {
+                        Err(e) => {
+                            pending = Some(e);
+                            return Control::Cancel;
+                        }
+                        Ok(v) => {
+                            if v.bind(py).is(pyo3::types::PyBool::new(py, false)) {
+                                cancelled = true;
+                                return Control::Cancel;
+                            }
+                        }
+                    }
+                }
+                Control::Continue
+            })
+        };
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            plan_with(inner, opts, &mut observer)
+        }))
+    });
+    if let Some(e) = pending {
+        return Err(e);
+    }
+    match result {
+        Err(payload) => Err(internal_error(py, payload.as_ref())),
+        Ok(Ok(plan)) => Ok(PyPlan { plan }),
+        Ok(Err(e)) => Err(plan_error(py, e, job.units)),
+    }
+}
