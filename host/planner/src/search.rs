@@ -247,7 +247,8 @@ pub struct MinTimeFailure {
 /// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
 /// to the jerk limit, is the shortest time when nothing else binds.
 /// Velocity, acceleration and torque are handled by walking up from there
-/// and bisecting, each time from that shape, optimised locally until
+/// and bisecting, each trial from the shortest feasible plan so far (the
+/// jerk-only shape for the walk-up), optimised locally until
 /// feasible; then the multistart search at slightly less time checks that
 /// no other basin does better (and continues from there if one does).
 pub fn min_time(
@@ -308,11 +309,13 @@ pub fn min_time(
             best: last.map(Box::new),
         });
     };
-    let mut shape = s.clone();
     for round in 0..=GLOBAL_CHECKS {
         while hi > lo && hi - lo > BISECTION_TOL * hi {
             let mid = 0.5 * (lo + hi);
-            match try_at(mid, &shape) {
+            // From the shortest feasible plan so far: scaled down by a
+            // little, it is the nearest start there is.
+            let from = best.clone();
+            match try_at(mid, &from) {
                 Some(sol) => {
                     hi = mid;
                     best = sol;
@@ -332,7 +335,6 @@ pub fn min_time(
         match global(&p, opts) {
             Some(r) if feasible(&p, &r.best) => {
                 hi = t;
-                shape = r.best.clone();
                 best = r.best;
             }
             _ => break,
@@ -345,7 +347,7 @@ pub fn min_time(
 /// Trust-region steps of one bisection trial: a trial that has not found a
 /// feasible point by then counts as infeasible (the multistart checks below
 /// catch what that misses).
-const TRIAL_STEPS: usize = 60;
+const TRIAL_STEPS: usize = 20;
 /// Relative accuracy of the shortest time.
 const BISECTION_TOL: f64 = 1e-4;
 /// Multistart checks below the bisection's answer, and how far below.
