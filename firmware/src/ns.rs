@@ -27,6 +27,8 @@ pub fn to_i64(x: f32) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::{to_f32, to_i64};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn same_integer_as_the_plain_conversion() {
@@ -38,11 +40,9 @@ mod tests {
 
     #[test]
     fn same_bits_as_the_plain_conversion() {
-        let mut x: i64 = 1;
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
         for k in 0..20_000i64 {
-            x = x
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
+            let x: i64 = rng.random();
             for v in [
                 x,
                 x >> (k % 63),

@@ -26,6 +26,8 @@
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use triquint_firmware::inbox::Inbox;
 use triquint_firmware::{Drive, Encoder, MotorOutput, QUEUE_CAPACITY, Receiver, RxFrame};
 use triquint_shared::dynamics;
@@ -227,8 +229,8 @@ struct Recorder {
     now: u64,
     sync_seq: u8,
     next_sync: u64,
-    /// Deterministic encoder noise (LCG).
-    noise: u32,
+    /// Seeded encoder noise.
+    noise: ChaCha8Rng,
     cpm: f64,
     ticks: u64,
     /// States visited, in order.
@@ -284,11 +286,7 @@ impl Recorder {
             self.next_sync = self.now + 20_000;
         }
         // The axis follows last tick's reference, with ±3 counts of noise.
-        self.noise = self
-            .noise
-            .wrapping_mul(1_664_525)
-            .wrapping_add(1_013_904_223);
-        let jitter = (self.noise >> 29) as i64 - 3;
+        let jitter: i64 = self.noise.random_range(-3..=3);
         let q = self.node.stats.reference.q[1] as f64;
         let counts = (q * self.cpm).round() as i64 + jitter;
         self.node.take_from(&mut self.inbox);
@@ -356,7 +354,7 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         now: 1_000_000,
         sync_seq: 0,
         next_sync: 1_000_000,
-        noise: 12345,
+        noise: ChaCha8Rng::seed_from_u64(12345),
         cpm: cfg.counts_per_metre as f64,
         ticks: 0,
         states: Vec::new(),

@@ -1,6 +1,7 @@
 // Shared by the stable-Rust corpus tests (via include!): the files of a
-// corpus or regression folder of `fuzz/`, and a dependency-free seeded
-// generator for mutations.
+// corpus or regression folder of `fuzz/`, and the seeded generator for
+// mutations (rand_chacha, the one generator of the tests and the simulator;
+// the including crates have it as a dev-dependency).
 
 /// The contents of every file in `fuzz/<dir>` (dot files skipped).
 fn inputs(dir: &str) -> Vec<Vec<u8>> {
@@ -21,12 +22,9 @@ fn inputs(dir: &str) -> Vec<Vec<u8>> {
     out
 }
 
-/// xorshift64: reproducible, no dependency.
-fn xorshift(mut x: u64) -> impl FnMut() -> u64 {
-    move || {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        x
-    }
+/// A seeded stream of random `u64`s (ChaCha8): reproducible.
+fn seeded(seed: u64) -> impl FnMut() -> u64 {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    move || rng.next_u64()
 }

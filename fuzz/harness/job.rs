@@ -1,4 +1,4 @@
-// Shared by the `job` fuzz target and host/tests/fuzz_corpus.rs (via
+// Shared by the `job` fuzz target and host/planner/tests/fuzz_corpus.rs (via
 // include!): any bytes as a job file are either refused with a one-line
 // error or give a job whose via-points are finite and at least two.
 

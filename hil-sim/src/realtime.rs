@@ -422,6 +422,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
                 .find(|n| n.node.node_id() as usize == a + 1)
                 .map_or(0.0, |n| n.max_stop_jerk as f64)
         }),
+        fault_run: None,
     }
 }
 

@@ -11,8 +11,9 @@ use std::time::Instant;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_host::inprocess::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
+use triquint_host::inprocess::fault_run::{BadSegment, Scenario, run};
 use triquint_shared::plan::Plan;
+use triquint_sim::report::{Ending, RunReport};
 use triquint_sim::{Fault, FaultWindow, testplan};
 
 const MS: u64 = 1_000_000;
@@ -145,7 +146,7 @@ fn main() {
     let started = Instant::now();
     // Hide the panic messages of caught panics from the table.
     std::panic::set_hook(Box::new(|_| {}));
-    let results: Vec<(usize, Option<FaultRun>)> = std::thread::scope(|s| {
+    let results: Vec<(usize, Option<RunReport>)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|th| {
                 let plans = &plans;
@@ -159,8 +160,8 @@ fn main() {
                         let sc = schedule(k, &mut rng);
                         let plan = &plans[(i / KINDS.len()) % 2];
                         let r = catch_unwind(AssertUnwindSafe(|| run(plan, &sc))).ok();
-                        match &r {
-                            Some(x) if x.ending != Ending::Unsafe => {}
+                        match r.as_ref().and_then(|x| x.fault_run.as_ref()) {
+                            Some(f) if f.ending != Ending::Unsafe => {}
                             _ => eprintln!("schedule {i} ({}): {sc:?}\n  -> {r:?}", KINDS[k].0),
                         }
                         out.push((k, r));
@@ -179,14 +180,15 @@ fn main() {
     for (k, r) in &results {
         let row = &mut rows[*k];
         row.trials += 1;
-        let Some(r) = r else {
+        let Some((report, r)) = r.as_ref().and_then(|x| Some((x, x.fault_run.as_ref()?))) else {
             row.panics += 1;
             continue;
         };
         *row.endings.entry(r.ending).or_default() += 1;
         row.corrupted += r.corrupted_executions;
         if r.ending == Ending::Stopped {
-            row.worst_stop_ns = row.worst_stop_ns.max(r.stop_time_ns.unwrap_or(0));
+            let stop_ns = report.stop_s.map_or(0, |t| (t * 1e9).round() as u64);
+            row.worst_stop_ns = row.worst_stop_ns.max(stop_ns);
         }
         if let Some(t) = r.emergency_to_stop_ticks {
             row.worst_e2s_ticks = row.worst_e2s_ticks.max(t);

@@ -2,9 +2,10 @@
 //! the expected outcome and checking it. These are the evidence for the
 //! "Guarantees" section of docs/protocol.md. Seeded: every run is reproducible.
 
-use triquint_host::inprocess::fault_run::{BadSegment, Ending, FaultRun, Scenario, run};
+use triquint_host::inprocess::fault_run::{self, BadSegment, Scenario};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::{FaultCode, Reject};
+use triquint_sim::report::{Ending, FaultRunFigures, RunReport};
 use triquint_sim::{Fault, FaultWindow, testplan};
 
 const MS: u64 = 1_000_000;
@@ -30,23 +31,62 @@ fn spiral() -> Plan {
     .unwrap()
 }
 
-fn report(what: &str, r: &FaultRun) {
+/// A fault run: its report, and the fault run's own figures in it.
+struct Run {
+    report: RunReport,
+}
+
+impl std::ops::Deref for Run {
+    type Target = FaultRunFigures;
+    fn deref(&self) -> &FaultRunFigures {
+        self.report
+            .fault_run
+            .as_ref()
+            .expect("a fault run's figures")
+    }
+}
+
+impl std::fmt::Debug for Run {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        self.report.fmt(f)
+    }
+}
+
+impl Run {
+    /// The stop time (from the first fault to every running axis at rest) in ns.
+    fn stop_time_ns(&self) -> Option<u64> {
+        self.report.stop_s.map(|t| (t * 1e9).round() as u64)
+    }
+
+    /// The stop ramp T_s the drives were configured with, in whole ns.
+    fn stop_ramp_ns(&self) -> u64 {
+        (self.report.stop_ramp_s * 1e9) as u64
+    }
+}
+
+fn run(plan: &Plan, sc: &Scenario) -> Run {
+    Run {
+        report: fault_run::run(plan, sc),
+    }
+}
+
+fn report(what: &str, r: &Run) {
     eprintln!(
         "{what}: start {:?} ms, {:?}, codes {:?}, stop {:?} ms (ramp {} ms), jerk {:.3}/{:.3}, \
          emergency→stop {:?} ticks, retx {}, rejects {:?}, injected {:?}, host {:?}, track {:.2} µm",
         r.start_ns.map(|t| t as f64 * 1e-6),
         r.ending,
         r.codes,
-        r.stop_time_ns.map(|t| t as f64 * 1e-6),
-        r.stop_ramp_ns / MS,
-        r.max_stop_jerk,
+        r.stop_time_ns().map(|t| t as f64 * 1e-6),
+        r.stop_ramp_ns() / MS,
+        r.report.worst_stop_jerk(),
         r.stop_jerk_bound,
         r.emergency_to_stop_ticks,
         r.retransmits,
         r.rejects,
         r.injected,
         r.host_error,
-        r.max_tracking_error_m * 1e6,
+        r.report.worst_error_m() * 1e6,
     );
 }
 
@@ -61,19 +101,17 @@ fn scenario(windows: Vec<FaultWindow>, seed: u64) -> Scenario {
 /// Recovered: every node executed every segment bit for bit in order and
 /// ended Idle with no fault; tracking within `track_m` (the fault-free runs
 /// of the simulation tests stay within 50 µm).
-fn assert_recovered_within(what: &str, r: &FaultRun, track_m: f64) {
+fn assert_recovered_within(what: &str, r: &Run, track_m: f64) {
     report(what, r);
     assert_eq!(r.corrupted_executions, 0, "{what}");
     assert_eq!(r.ending, Ending::Completed, "{what}");
+    assert!(r.report.completed, "{what}");
     assert!(r.executed_whole_plan, "{what}");
-    assert!(
-        r.max_tracking_error_m < track_m,
-        "{what}: {}",
-        r.max_tracking_error_m
-    );
+    let track = r.report.worst_error_m();
+    assert!(track < track_m, "{what}: {track}");
 }
 
-fn assert_recovered(what: &str, r: &FaultRun) {
+fn assert_recovered(what: &str, r: &Run) {
     assert_recovered_within(what, r, 50e-6);
 }
 
@@ -81,15 +119,14 @@ fn assert_recovered(what: &str, r: &FaultRun) {
 /// within the jerk budget, with a code from `codes` on every node, at least
 /// one node with a code from `primary` (the detecting node), and the codes on
 /// the bus in Emergency frames and heartbeats.
-fn assert_stopped(what: &str, r: &FaultRun, primary: &[FaultCode], codes: &[FaultCode]) {
+fn assert_stopped(what: &str, r: &Run, primary: &[FaultCode], codes: &[FaultCode]) {
     report(what, r);
     assert_eq!(r.corrupted_executions, 0, "{what}");
     assert_eq!(r.ending, Ending::Stopped, "{what}");
-    assert!(r.stopped_within_buffer, "{what}");
-    assert!(
-        r.max_stop_jerk > 0.0 && r.max_stop_jerk <= r.stop_jerk_bound,
-        "{what}"
-    );
+    assert!(!r.report.completed, "{what}");
+    assert!(r.report.stopped_within_buffer, "{what}");
+    let jerk = r.report.worst_stop_jerk();
+    assert!(jerk > 0.0 && jerk <= r.stop_jerk_bound, "{what}");
     assert!(
         r.codes.iter().any(|c| primary.contains(c)),
         "{what}: {:?}",
@@ -242,7 +279,7 @@ fn a_long_babble_stops_every_axis_on_lost_sync() {
         ],
     );
     // Detected within the sync timeout of the last sync; at rest one ramp later.
-    assert!(r.stop_time_ns.unwrap() <= r.stop_ramp_ns + 2 * r.tick_ns + SYNC_PERIOD_NS);
+    assert!(r.stop_time_ns().unwrap() <= r.stop_ramp_ns() + 2 * r.tick_ns + SYNC_PERIOD_NS);
 }
 
 #[test]
@@ -302,7 +339,7 @@ fn a_host_killed_mid_upload_ends_in_the_along_path_stop() {
     );
     // Every axis came to rest inside what it had buffered (checked above),
     // one ramp after the detection.
-    assert!(r.stop_time_ns.unwrap() <= r.stop_ramp_ns + 2 * r.tick_ns);
+    assert!(r.stop_time_ns().unwrap() <= r.stop_ramp_ns() + 2 * r.tick_ns);
 }
 
 #[test]
@@ -322,7 +359,7 @@ fn a_node_reset_mid_trajectory_stops_the_others() {
     // The reset node's first heartbeat arrives within a tick or two.
     let first = r.first_fault_ns.unwrap();
     assert!(first - 2 * S <= 3 * r.tick_ns, "{}", first - 2 * S);
-    assert!(r.stop_time_ns.unwrap() <= r.stop_ramp_ns + 2 * r.tick_ns);
+    assert!(r.stop_time_ns().unwrap() <= r.stop_ramp_ns() + 2 * r.tick_ns);
 }
 
 #[test]
@@ -342,7 +379,7 @@ fn lost_time_sync_is_detected_within_three_sync_periods() {
         detect as f64 * 1e-6
     );
     assert!(detect <= 3 * SYNC_PERIOD_NS, "{detect}");
-    assert!(r.stop_time_ns.unwrap() <= r.stop_ramp_ns + 2 * r.tick_ns);
+    assert!(r.stop_time_ns().unwrap() <= r.stop_ramp_ns() + 2 * r.tick_ns);
 }
 
 #[test]

@@ -2,16 +2,20 @@
 //! everything the fault tests and the soak check: what each node executed
 //! (sequence and body CRC, against the host's segments), when it detected
 //! the fault, when every axis was at rest, the jerk of the stop, and the
-//! fault codes in the Emergency frames and heartbeats on the bus.
+//! fault codes in the Emergency frames and heartbeats on the bus. Reported
+//! as every simulated run is, a [`RunReport`], with the fault run's own
+//! figures in its `fault_run`.
 
 use triquint_link::{DriveConfigs, Session, SessionOptions};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
-use triquint_sim::faults::FaultStats;
 use triquint_sim::host_port::SimPort;
+use triquint_sim::report::{Ending, FaultRunFigures, RunReport};
 use triquint_sim::testplan::sampled_max_abs;
 use triquint_sim::{FaultWindow, Sim, SimConfig};
+
+use super::measure::run_report;
 
 /// A segment made bad on purpose before the upload.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,65 +41,6 @@ pub struct Scenario {
     /// once, ignoring flow control (more than a node's queue holds).
     pub burst_ns: Option<u64>,
     pub bad_segment: Option<BadSegment>,
-}
-
-/// How a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Ending {
-    /// Every node executed every segment, bit for bit, in order, and is Idle.
-    Completed,
-    /// Every running axis came to rest along the path with a fault code.
-    Stopped,
-    /// Nothing moved: refused or faulted before the start.
-    NotStarted,
-    /// Anything else (a test failure).
-    Unsafe,
-}
-
-/// What one run measured.
-#[derive(Clone, Debug)]
-pub struct FaultRun {
-    pub ending: Ending,
-    /// Final fault code of each node (None = no fault).
-    pub codes: [FaultCode; 3],
-    /// Executions of a segment whose (sequence, CRC) is not the host's
-    /// segment of that sequence number, or of the deliberately bad segment.
-    pub corrupted_executions: usize,
-    /// Every node executed segments 0..n in order with the host's CRCs.
-    pub executed_whole_plan: bool,
-    /// First fault on any node (true ns).
-    pub first_fault_ns: Option<u64>,
-    /// From the first fault until every running axis is at rest (ns).
-    pub stop_time_ns: Option<u64>,
-    /// Largest joint jerk of any node's reference while stopping (m/s³).
-    pub max_stop_jerk: f64,
-    /// The stop's jerk budget (m/s³): max(limit, plan's jerk + limit/2).
-    pub stop_jerk_bound: f64,
-    /// Largest delay from an Emergency frame reaching a running node to its
-    /// first stopping control tick, in ticks.
-    pub emergency_to_stop_ticks: Option<f64>,
-    /// Each stopped node came to rest inside the plan time it had buffered.
-    pub stopped_within_buffer: bool,
-    /// Fault codes carried by Emergency frames and heartbeats on the bus
-    /// (sending node, code).
-    pub emergency_codes: Vec<(u8, FaultCode)>,
-    pub heartbeat_codes: Vec<(u8, FaultCode)>,
-    /// The last TimeSync on the bus (true ns) and the first LostSync fault.
-    pub last_sync_ns: Option<u64>,
-    pub lost_sync_ns: Option<u64>,
-    pub host_error: Option<String>,
-    pub retransmits: u64,
-    /// Segment rejections counted by the nodes, by reason index.
-    pub rejects: [u32; triquint_shared::protocol::Reject::TABLE.len()],
-    pub injected: FaultStats,
-    pub tick_ns: u64,
-    pub max_tracking_error_m: f64,
-    /// True time (ns) of the first Running tick of any node.
-    pub start_ns: Option<u64>,
-    /// The stop ramp T_s the drives were configured with (ns): at rest after it.
-    pub stop_ramp_ns: u64,
-    /// The drives' sync (and peer heartbeat) timeout (ns).
-    pub sync_timeout_ns: u64,
 }
 
 fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
@@ -127,7 +72,7 @@ fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
 const EMERGENCY_IDS: core::ops::RangeInclusive<u16> = 0x010..=0x013;
 
 /// Runs `plan` under `sc` at 1 kHz and measures it.
-pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
+pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     let plan = match sc.bad_segment {
         Some(b) => spoil(plan, b),
         None => plan.clone(),
@@ -226,39 +171,50 @@ pub fn run(plan: &Plan, sc: &Scenario) -> FaultRun {
             break;
         }
     }
-    let retransmits = session.retransmits();
-    let mut r = measure(&plan, &sim, sc, &wire, host_error, retransmits);
-    r.stop_ramp_ns = (stop_ramp_s * 1e9) as u64;
-    r.sync_timeout_ns = (settings.sync_timeout * 1e9) as u64;
-    r
+    // Tracking and fault times from the first Running tick of any node.
+    let first_start = sim.nodes.iter().filter_map(|n| n.started_ns).min();
+    let mut report = run_report(
+        &plan,
+        &sim,
+        first_start.unwrap_or(0),
+        outcome.map_or(0, |o| o.segment_frames_sent),
+        stop_ramp_s,
+        sc.node_reset.map(|r| r.0),
+    );
+    let mut figures = fault_figures(&plan, &sim, sc, &wire, &report);
+    figures.host_error = host_error;
+    figures.retransmits = session.retransmits();
+    figures.sync_timeout_ns = (settings.sync_timeout * 1e9) as u64;
+    report.completed = figures.ending == Ending::Completed;
+    report.fault_run = Some(figures);
+    report
 }
 
-fn measure(
+/// The fault run's own figures; `run` is the common report of the same run.
+fn fault_figures(
     plan: &Plan,
     sim: &Sim,
     sc: &Scenario,
     wire: &[WireSegment],
-    host_error: Option<String>,
-    retransmits: u64,
-) -> FaultRun {
+    run: &RunReport,
+) -> FaultRunFigures {
     let tick_ns = (1e9 / sim.cfg.rate_hz) as u64;
     let bad = sc.bad_segment.map(|b| match b {
         BadSegment::Limits(k) | BadSegment::Kink(k) => k,
     });
     let reset = sc.node_reset.map(|r| r.0);
     let crc: Vec<u32> = wire.iter().map(WireSegment::body_crc).collect();
+    let want: Vec<(u16, u32)> = (0..wire.len()).map(|k| (k as u16, crc[k])).collect();
     let mut corrupted = 0;
     let mut whole = true;
-    for (i, n) in sim.nodes.iter().enumerate() {
-        for &(_, seq, c) in &n.executed {
+    for (i, seqs) in run.executed.iter().enumerate() {
+        for &(seq, c) in seqs {
             let good = crc.get(seq as usize) == Some(&c);
             if !good || Some(seq as usize) == bad {
                 corrupted += 1;
             }
         }
-        let seqs: Vec<(u16, u32)> = n.executed.iter().map(|e| (e.1, e.2)).collect();
-        let want: Vec<(u16, u32)> = (0..wire.len()).map(|k| (k as u16, crc[k])).collect();
-        if seqs != want || Some(i) == reset {
+        if *seqs != want || Some(i) == reset {
             whole = false;
         }
     }
@@ -266,7 +222,6 @@ fn measure(
     let faults = sim.faults();
     let first_fault_ns = faults.first().map(|f| f.t_ns);
     let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
-    let (stop_time_ns, within) = stop_figures(sim, wire.len(), reset);
     // Emergency arrival → first stopping tick, for nodes still running then.
     let mut e2s: Option<f64> = None;
     for n in &sim.nodes {
@@ -331,13 +286,7 @@ fn measure(
             *r += n.node.stats.reason_counts[k] as u32;
         }
     }
-    let first_start = sim.nodes.iter().filter_map(|n| n.started_ns).min();
-    let tracking = triquint_sim::metrics::tracking(plan, first_start.unwrap_or(0), &sim.samples);
-    let max_stop_jerk = sim
-        .nodes
-        .iter()
-        .map(|n| n.max_stop_jerk as f64)
-        .fold(0.0, f64::max);
+    let max_stop_jerk = run.worst_stop_jerk();
     let any_fault = codes.iter().any(|c| *c != FaultCode::None) || !faults.is_empty();
     let all_idle = sim.nodes.iter().all(|n| n.node.state() == State::Idle);
     let running_left = sim.nodes.iter().any(|n| {
@@ -359,78 +308,29 @@ fn measure(
         Ending::Completed
     } else if !started {
         Ending::NotStarted
-    } else if stop_time_ns.is_some() && within {
+    } else if run.stop_s.is_some() && run.stopped_within_buffer {
         Ending::Stopped
     } else {
         Ending::Unsafe
     };
-    FaultRun {
+    FaultRunFigures {
         ending,
         codes,
         corrupted_executions: corrupted,
         executed_whole_plan: whole,
         first_fault_ns,
-        stop_time_ns,
-        max_stop_jerk,
         stop_jerk_bound,
         emergency_to_stop_ticks: e2s,
-        stopped_within_buffer: within,
         emergency_codes,
         heartbeat_codes,
         last_sync_ns,
         lost_sync_ns,
-        host_error,
-        retransmits,
+        host_error: None,
+        retransmits: 0,
         rejects,
         injected: sim.faults.as_ref().map(|f| f.stats).unwrap_or_default(),
         tick_ns,
-        max_tracking_error_m: tracking.max_error_m.iter().fold(0.0, |a, b| a.max(*b)),
-        start_ns: first_start,
-        stop_ramp_ns: 0,
+        start_ns: sim.nodes.iter().filter_map(|n| n.started_ns).min(),
         sync_timeout_ns: 0,
     }
-}
-
-/// From the first fault on any node (true ns) to every axis that was
-/// running at rest, and whether each stopped node came to rest inside the
-/// plan time it had buffered. `reset`: a node power-cycled during the run
-/// (it has no motor to stop).
-pub fn stop_figures(sim: &Sim, n_segments: usize, reset: Option<usize>) -> (Option<u64>, bool) {
-    let first_fault_ns = sim.faults().first().map(|f| f.t_ns);
-    let started = sim.nodes.iter().any(|n| n.started_ns.is_some());
-    // Rest: the first tick in Fault after the first fault, for every node
-    // that was running (the reset node has no motor to stop).
-    let mut rest_ns: Option<u64> = Some(0);
-    let mut within = true;
-    for (i, n) in sim.nodes.iter().enumerate() {
-        if Some(i) == reset || n.started_ns.is_none() {
-            continue;
-        }
-        let at = first_fault_ns.and_then(|f| {
-            n.states
-                .iter()
-                .find(|(t, s)| *t >= f && *s == State::Fault)
-                .map(|x| x.0)
-        });
-        let finished = n.node.state() == State::Idle && n.executed.len() == n_segments;
-        rest_ns = match (rest_ns, at) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (Some(a), None) if finished => Some(a),
-            _ => None,
-        };
-        // Past the buffered end is allowed only when the buffer ended with
-        // the plan's last segment: the plan ends at rest, so the path does too.
-        let had_last = n.executed.iter().any(|e| e.1 as usize + 1 == n_segments);
-        if n.node.state() == State::Fault
-            && n.node.plan_ns() > n.node.buffered_end_ns()
-            && !had_last
-        {
-            within = false;
-        }
-    }
-    let stop_time_ns = match (first_fault_ns, rest_ns) {
-        (Some(f), Some(r)) if started => Some(r.saturating_sub(f)),
-        _ => None,
-    };
-    (stop_time_ns, within)
 }

@@ -1,9 +1,11 @@
 //! Plans run through the host's upload session (`triquint-link`) on the
 //! in-process virtual hardware of `triquint-sim`: `triquint simulate`
 //! ([`simulate`]), and the seeded fault runs of the fault tests and the
-//! soak ([`fault_run`]).
+//! soak ([`fault_run`]), both reported as `triquint_sim::report::RunReport`
+//! (`measure.rs`).
 
 pub mod fault_run;
+mod measure;
 pub mod simulate;
 #[cfg(test)]
 mod tests;

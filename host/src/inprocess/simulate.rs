@@ -9,9 +9,11 @@ use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
 use triquint_sim::host_port::SimPort;
 use triquint_sim::metrics;
-use triquint_sim::report::{JsonFault, RunReport};
+use triquint_sim::report::RunReport;
 use triquint_sim::sim::{Sample, SimError};
 use triquint_sim::{Sim, SimConfig};
+
+use super::measure::run_report;
 
 /// Options of a simulation run.
 #[derive(Clone, Debug)]
@@ -139,52 +141,25 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         }
         sim.run_until(t)?;
     };
-    let start_ns = outcome.start_us * 1000;
-    let tracking = metrics::tracking(plan, start_ns, &sim.samples);
     let started: Vec<u64> = sim.nodes.iter().filter_map(|n| n.started_ns).collect();
     let skew = match (started.iter().min(), started.iter().max()) {
         (Some(a), Some(b)) if started.len() == 3 => b - a,
         _ => u64::MAX,
     };
     let now = sim.now_ns().max(1);
-    let faults_on_nodes = sim.faults();
-    let start_s = outcome.start_us as f64 * 1e-6;
-    let (stop_ns, stopped_within_buffer) =
-        super::fault_run::stop_figures(&sim, plan.segments.len(), None);
-    let mut run = RunReport {
-        peak_torque_nm: [0, 1, 2].map(|i| sim.nodes[i].peak_torque as f64),
-        bus_load: sim.bus.busy_ns() as f64 / now as f64,
-        frames: sim.bus.frames(),
-        faults: faults_on_nodes
-            .iter()
-            .map(|f| JsonFault::new(f, f.t_ns as f64 * 1e-9 - start_s))
-            .collect(),
-        completed: outcome.completed,
-        segment_bus_load: sim.bus.segment_busy_ns() as f64 / now as f64,
-        segment_frames: outcome.segment_frames_sent,
-        segments: plan.segments.len(),
-        plan_time_s: plan.total_time_s,
-        duration_s: now as f64 * 1e-9,
-        start_skew_us: match (started.iter().min(), started.iter().max()) {
-            (Some(a), Some(b)) => (b - a) as f64 * 1e-3,
-            _ => 0.0,
-        },
-        executed: sim
-            .nodes
-            .iter()
-            .map(|n| n.executed.iter().map(|e| (e.1, e.2)).collect())
-            .collect(),
-        stop_s: stop_ns.map(|t| t as f64 * 1e-9),
-        stopped_within_buffer,
-        max_stop_jerk: [0, 1, 2].map(|i| sim.nodes[i].max_stop_jerk as f64),
-        stop_ramp_s: ts,
-        ..RunReport::default()
-    };
-    run.set_tracking(&tracking);
+    let mut run = run_report(
+        plan,
+        &sim,
+        outcome.start_us * 1000,
+        outcome.segment_frames_sent,
+        ts,
+        None,
+    );
+    run.completed = outcome.completed;
     Ok(SimReport {
         run,
         faults: outcome.faults.clone(),
-        faults_on_nodes,
+        faults_on_nodes: sim.faults(),
         frames_per_segment: parts_per_segment(opts.fd),
         retransmits: outcome.retransmits,
         start_skew_ns: skew,
