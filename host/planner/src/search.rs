@@ -166,12 +166,21 @@ fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     let shapes: Vec<Solution> = r
         .shapes
         .iter()
-        .filter_map(|s| scale(&target, s, p.total_time))
+        .map(|s| {
+            // The same shape in time-scaled form, evaluated, not re-solved:
+            // C3 and the rest ends are homogeneous in time, so it is exact.
+            let alpha = p.total_time / s.h.iter().sum::<f64>();
+            let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+            Solution {
+                lp_solves: 0,
+                ..target.evaluate(&h, &scaled_x(&s.x, alpha))
+            }
+        })
         .collect();
-    if shapes.len() != r.shapes.len() || !shapes.iter().all(within) {
+    if !shapes.iter().all(within) {
         return direct();
     }
-    let lp_solves = r.lp_solves + shapes.iter().map(|s| s.lp_solves).sum::<u64>();
+    let lp_solves = r.lp_solves;
     Some(SearchResult {
         best: shapes.first()?.clone(),
         shapes,
