@@ -57,6 +57,8 @@ mod sturm;
 mod watch;
 
 #[cfg(test)]
+mod scale_tests;
+#[cfg(test)]
 mod search_tests;
 
 pub use check::{CheckRow, check, max_abs};

@@ -238,7 +238,7 @@ fn fine(p: &Problem, total: f64) -> Problem {
 /// Min-max-jerk: the solution's intervals stretched to the whole budget (more
 /// time never raises the jerk) and rounded to whole µs within it, re-solved
 /// exactly; None when that breaks a limit.
-fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option<Solution> {
+pub(crate) fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option<Solution> {
     let total: f64 = s.h.iter().sum();
     let stretch = total_time / total;
     let h: Vec<f64> = s.h.iter().map(|x| x * stretch).collect();
