@@ -18,10 +18,12 @@ use triquint_sim::{Sim, SimConfig, testplan};
 const CPM: f64 = 131_072.0 / 0.010;
 
 fn machine(modes: [SwitchMode; 3]) -> Sim {
+    machine_at(Vector3::new(-0.09, 0.09, 0.68), modes)
+}
+
+fn machine_at(r: Vector3<f64>, modes: [SwitchMode; 3]) -> Sim {
     let robot = Robot::default();
-    let q0 = Pose::from_cartesian(&robot.model::<f64>(), Vector3::new(-0.09, 0.09, 0.68))
-        .unwrap()
-        .q;
+    let q0 = Pose::from_cartesian(&robot.model::<f64>(), r).unwrap().q;
     let cfg = SimConfig {
         record_every: 1000,
         ..SimConfig::default()
@@ -216,4 +218,17 @@ fn stuck_and_dead_switches_end_in_their_faults() {
         assert_eq!(s.nodes[axis].fault.name, code.name());
         assert_eq!(s.nodes[axis].homing, "failed");
     }
+}
+
+#[test]
+fn homing_from_the_lowest_corner_of_the_workspace_takes_under_30_s() {
+    // Slider 3 at 104 mm, the lowest of the paper workspace's corners
+    // (x, y ±90 mm, z 540 mm): 316 mm to its switch.
+    let mut sim = machine_at(Vector3::new(-0.09, -0.09, 0.54), [SwitchMode::Working; 3]);
+    configure(&mut sim);
+    home_all(&mut sim);
+    let took = until_homed(&mut sim, 35.0);
+    eprintln!("homed from the lowest corner in {took:.2} s of machine time");
+    assert!(sim.nodes.iter().all(|n| n.node.is_homed() && n.node.state() == State::Idle));
+    assert!(took < 30.0, "{took}");
 }

@@ -153,9 +153,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
                 _ => None,
             };
         }
-        if at_first_switch.is_none()
-            && l.nodes.any(|v| v.flags & flags::SWITCH != 0)
-        {
+        if at_first_switch.is_none() && l.nodes.any(|v| v.flags & flags::SWITCH != 0) {
             at_first_switch = Some(l.nodes.0.map(|v| v.position));
         }
         if let Some(p0) = at_first_switch {
