@@ -229,6 +229,10 @@ fn homing_from_the_lowest_corner_of_the_workspace_takes_under_30_s() {
     home_all(&mut sim);
     let took = until_homed(&mut sim, 35.0);
     eprintln!("homed from the lowest corner in {took:.2} s of machine time");
-    assert!(sim.nodes.iter().all(|n| n.node.is_homed() && n.node.state() == State::Idle));
+    assert!(
+        sim.nodes
+            .iter()
+            .all(|n| n.node.is_homed() && n.node.state() == State::Idle)
+    );
     assert!(took < 30.0, "{took}");
 }

@@ -423,4 +423,3 @@ fn a_peer_emergency_stops_every_node_within_two_ticks() {
         .expect("a running node received an Emergency");
     assert!(t <= 2.0, "{t}");
 }
-

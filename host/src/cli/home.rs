@@ -14,7 +14,7 @@ use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
 use triquint_shared::protocol::{Command, CommandCode, Emergency, FaultCode, State, flags};
 use triquint_shared::{Limits, Robot};
 
-use crate::cli::listen::{listen, nodes_arg, open};
+use crate::cli::listen::{drain, nodes_arg, open};
 use crate::cli::upload::{BusArgs, check_bus_args, upload_error};
 use crate::exit::{CliError, CliResult};
 
@@ -114,7 +114,9 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
     let mut next_line = Instant::now();
     let n = nodes_arg(ids);
     loop {
-        listen(&mut port, &mut l, Duration::from_millis(100), false)?;
+        // A few frames at a time, 20 ms apart: no busy loop next to the drives.
+        std::thread::sleep(Duration::from_millis(20));
+        drain(&mut port, &mut l)?;
         let now_s = t0.elapsed().as_secs_f64();
         let mut progress = [None; 3];
         for (i, v) in l.nodes.0.iter().enumerate() {
@@ -205,10 +207,17 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
         if line_due {
             next_line = Instant::now() + Duration::from_secs(1);
         }
-        if let Some((i, Progress::Failed(c))) = shown.iter().enumerate().find_map(|(i, p)| {
-            p.filter(|p| matches!(p, Progress::Failed(_)))
-                .map(|p| (i, p))
-        }) {
+        // The cause first: a drive that failed on its own, not one that
+        // stopped for its peer's Emergency.
+        let failed = |i: usize| match shown[i] {
+            Some(Progress::Failed(c)) => Some((i, c)),
+            _ => None,
+        };
+        let cause = (0..3)
+            .filter_map(failed)
+            .find(|(_, c)| *c != FaultCode::PeerEmergency)
+            .or_else(|| (0..3).find_map(failed));
+        if let Some((i, c)) = cause {
             return Err(CliError::motion_fault(format!(
                 "{}: axis {} (node {}) failed to home: {}; `triquint clear --iface {}{n}`, then home again",
                 bus.iface,

@@ -34,6 +34,14 @@ pub fn listen(
     Ok(())
 }
 
+/// Takes in every frame waiting now, without waiting for more.
+pub fn drain(port: &mut SocketCanPort, listener: &mut Listener) -> CliResult {
+    while let Some(rx) = CanPort::recv(port).map_err(CliError::device)? {
+        listener.take(&rx);
+    }
+    Ok(())
+}
+
 /// `--nodes` as the command line had it, for the commands a message suggests.
 pub fn nodes_arg(ids: [u8; 3]) -> String {
     if ids == [1, 2, 3] {
