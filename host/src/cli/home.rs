@@ -109,6 +109,9 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
     // Homed counts only after the axis was seen homing (a heartbeat sent
     // before the Home arrived still says Idle).
     let mut seen_homing = [false; 3];
+    // An axis whose switch was active once is not seeking any more (its
+    // position also jumps when its new zero is set).
+    let mut switch_seen = [false; 3];
     // Where each axis was when the first switch was reached: the skew bound.
     let mut at_first_switch: Option<[Option<f32>; 3]> = None;
     let mut next_line = Instant::now();
@@ -136,6 +139,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
                 start_pos[i] = v.position;
             }
             seen_homing[i] |= v.state == Some(State::Homing);
+            switch_seen[i] |= v.flags & flags::SWITCH != 0 || v.homed && seen_homing[i];
             progress[i] = match (v.state, v.homed) {
                 (Some(State::Fault), _) => Some(Progress::Failed(
                     FaultCode::from_u8(v.fault).unwrap_or(FaultCode::None),
@@ -164,10 +168,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
                     (Some(q), Some(q0)) => f64::from(q - q0).abs(),
                     _ => 0.0,
                 };
-                if v.state == Some(State::Homing)
-                    && v.flags & flags::SWITCH == 0
-                    && beyond > homing.max_skew
-                {
+                if v.state == Some(State::Homing) && !switch_seen[i] && beyond > homing.max_skew {
                     estop(&mut port)?;
                     return Err(CliError::motion_fault(format!(
                         "{}: axis {} (node {}) travelled {:.0} mm after the first switch without reaching its own (max_skew {:.0} mm): emergency stop; check its switch, then `triquint clear --iface {}{n}`",

@@ -236,7 +236,11 @@ impl Session {
         match msg {
             Msg::Heartbeat(h) => {
                 v.heartbeat(&h, rx.t_us);
-                if h.fault != 0 && !self.faults.iter().any(|f| f.node == node) {
+                // A fault in a heartbeat counts once motion is under way (an
+                // Emergency frame may be lost); before, a faulted node is
+                // refused or cleared in discovery.
+                let moving = matches!(self.phase, Phase::Arm | Phase::Stream | Phase::Finish);
+                if moving && h.fault != 0 && !self.faults.iter().any(|f| f.node == node) {
                     self.faults.push(FaultReport {
                         node,
                         code: FaultCode::from_u8(h.fault).unwrap_or(FaultCode::None),
@@ -435,6 +439,7 @@ impl Session {
                 });
             }
             self.out.command(0, CommandCode::ClearFault, 0);
+            self.faults.clear();
         }
         if self.opts.require_homed
             && let Some(v) = self.nodes.0.iter().find(|v| !v.homed)
