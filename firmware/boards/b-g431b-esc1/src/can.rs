@@ -4,7 +4,6 @@
 //! handing finished items to the tick; the transmit task sends what the node
 //! queued (heartbeats, acknowledgements, telemetry, emergencies).
 
-
 use embassy_futures::select::{Either, select};
 use embassy_stm32::can::frame::{FdFrame, Header};
 use embassy_stm32::can::{self, CanRx, CanTx};
