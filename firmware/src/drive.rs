@@ -7,6 +7,7 @@
 //! `telemetry` (periodic frames); the control law is the `law` module.
 
 mod commands;
+mod homing;
 mod reference;
 mod segments;
 mod supervision;
@@ -22,7 +23,8 @@ use triquint_shared::protocol::{
 use triquint_shared::quintic::JointMotion;
 
 use crate::active::Active;
-use crate::hal::{Encoder, MotorOutput};
+use crate::hal::{Encoder, LimitSwitch, MotorOutput, NoSwitch};
+use crate::homing::Homing;
 use crate::inbox::{Item, Source, Status, TAKE_PER_TICK};
 use crate::law::{self, Gains, LawState};
 use crate::ns::to_f32;
@@ -113,14 +115,33 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     last_command: Option<(Command, CommandAck, u64)>,
     /// Receive time (µs) of the command being handled.
     command_rx_us: u64,
-    /// Local time (µs) of the last heartbeat of each node (index node − 1).
+    /// Local time (µs) of the last heartbeat of the drive of each axis.
     peer_seen_us: [Option<u64>; 3],
+    /// The axis position is absolute (homed, or started homed).
+    homed: bool,
+    /// Encoder count of the axis zero (set by homing).
+    home_offset: i64,
+    /// The homing run, in state Homing.
+    homing: Option<Homing>,
+    /// The limit switch input at the last tick.
+    switch_active: bool,
     pub stats: Stats,
 }
 
 impl<const Q: usize> Drive<Q> {
-    /// A node with number `node_id` (1–3), Idle, unconfigured, motor off.
+    /// A node with number `node_id` (1–15), Idle, unconfigured, motor off,
+    /// homed (its encoder's zero is the axis zero: simulators, tests).
     pub fn new(node_id: u8) -> Self {
+        Self::with_homed(node_id, true)
+    }
+
+    /// A node after power-on on a machine whose position is unknown until
+    /// it is homed (a board with a limit switch, `triquint-sim --unhomed`).
+    pub fn new_unhomed(node_id: u8) -> Self {
+        Self::with_homed(node_id, false)
+    }
+
+    fn with_homed(node_id: u8, homed: bool) -> Self {
         Self {
             node_id,
             state: State::Idle,
@@ -163,6 +184,10 @@ impl<const Q: usize> Drive<Q> {
             outbox: Deque::new(),
             dropped_tx: 0,
             peer_seen_us: [None; 3],
+            homed,
+            home_offset: 0,
+            homing: None,
+            switch_active: false,
             last_command: None,
             command_rx_us: 0,
             stats: Stats::default(),
@@ -195,6 +220,18 @@ impl<const Q: usize> Drive<Q> {
             // Only a node with no motion pending may follow a new host time base.
             may_rebase: matches!(self.state, State::Idle | State::Fault),
         }
+    }
+    /// Is the axis position absolute?
+    pub fn is_homed(&self) -> bool {
+        self.homed
+    }
+    /// Encoder count of the axis zero.
+    pub fn home_offset(&self) -> i64 {
+        self.home_offset
+    }
+    /// The homing run (state Homing).
+    pub fn homing(&self) -> Option<&Homing> {
+        self.homing.as_ref()
     }
     pub fn config(&self) -> Option<DriveConfig> {
         self.active.as_ref().map(|_| self.cfg)
@@ -276,7 +313,11 @@ impl<const Q: usize> Drive<Q> {
     pub fn take(&mut self, item: &Item) {
         match *item {
             Item::Sync(s) => self.sync = s,
-            Item::Emergency { code, rx_us } => self.on_emergency(code, rx_us),
+            Item::Emergency { code, node, rx_us } => {
+                if node == 0 || self.is_peer(node) {
+                    self.on_emergency(code, rx_us)
+                }
+            }
             Item::PeerHeartbeat {
                 node,
                 heartbeat,
@@ -316,6 +357,10 @@ impl<const Q: usize> Drive<Q> {
 
     /// Enters Fault at once (not moving): Emergency frame, hold where we are.
     fn fault_now(&mut self, code: FaultCode) {
+        if let Some(h) = self.homing.take() {
+            // Hold where the homing reference is.
+            self.hold_own = h.q;
+        }
         self.state = State::Fault;
         self.fault = code;
         self.start_ns = None;
@@ -360,7 +405,20 @@ impl<const Q: usize> Drive<Q> {
     /// run the control law, supervise the motion, command the motor, and
     /// queue the periodic frames.
     pub fn tick<E: Encoder, M: MotorOutput>(&mut self, now_us: u64, enc: &mut E, motor: &mut M) {
+        self.tick_with_switch(now_us, enc, motor, &mut NoSwitch);
+    }
+
+    /// [`Drive::tick`] with the axis's limit switch (needed to home).
+    pub fn tick_with_switch<E: Encoder, M: MotorOutput, S: LimitSwitch>(
+        &mut self,
+        now_us: u64,
+        enc: &mut E,
+        motor: &mut M,
+        switch: &mut S,
+    ) {
         self.last_local_us = now_us;
+        self.switch_active = switch.active();
+        let edge = switch.take_edge();
         self.stats.ticks = self.stats.ticks.wrapping_add(1);
         let Some(a) = self.active else {
             motor.enable(false);
@@ -388,8 +446,12 @@ impl<const Q: usize> Drive<Q> {
         // Feedforward and PID on our own axis (`min` lets the compiler drop
         // the bounds checks: no panic path in the tick).
         let i = a.axis.min(2);
+        let mut r_own = reference.q[i];
+        if self.state == State::Homing {
+            r_own = self.homing_step(&a, q, edge, now_us);
+        }
         let mut ff = 0.0;
-        if self.cfg.feedforward != 0.0 && self.hold.is_some() {
+        if self.cfg.feedforward != 0.0 && self.hold.is_some() && self.homing.is_none() {
             match law::feedforward(&self.model, &self.cfg, &ff_ref, i) {
                 Some(t) => ff = t,
                 None => {
@@ -399,13 +461,7 @@ impl<const Q: usize> Drive<Q> {
                 }
             }
         }
-        let out = law::step(
-            &mut self.law,
-            &Gains::new(&self.cfg, &a),
-            reference.q[i],
-            q,
-            ff,
-        );
+        let out = law::step(&mut self.law, &Gains::new(&self.cfg, &a), r_own, q, ff);
         if let Some(code) = self.motion_fault(out.error, q) {
             self.begin_stop(StopReason::Fault(code), false, now_us);
         }
@@ -421,7 +477,7 @@ impl<const Q: usize> Drive<Q> {
 
     /// Reads the encoder: our position (m), and the filtered velocity.
     fn measure<E: Encoder>(&mut self, a: &Active, enc: &mut E) -> f32 {
-        let q = to_f32(enc.read_counts()) * a.inv_cpm;
+        let q = to_f32(enc.read_counts().wrapping_sub(self.home_offset)) * a.inv_cpm;
         let raw_v = match self.last_q {
             Some(l) => (q - l) / a.dt,
             None => 0.0,

@@ -9,6 +9,31 @@ pub trait Encoder {
     fn read_counts(&mut self) -> i64;
 }
 
+/// The axis's limit (home) switch on a capture input: the encoder count at
+/// the switch's edge is latched by hardware, so homing does not depend on
+/// when the tick looks.
+pub trait LimitSwitch {
+    /// Is the switch active now?
+    fn active(&mut self) -> bool;
+    /// The encoder count latched at the latest inactive → active edge, once
+    /// (`None` until the next edge).
+    fn take_edge(&mut self) -> Option<i64>;
+}
+
+/// No switch wired: never active, no edge (homing ends in
+/// `HomeSwitchNeverTriggered`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoSwitch;
+
+impl LimitSwitch for NoSwitch {
+    fn active(&mut self) -> bool {
+        false
+    }
+    fn take_edge(&mut self) -> Option<i64> {
+        None
+    }
+}
+
 /// The torque (current) loop of the motor.
 pub trait MotorOutput {
     /// Motor torque command (N·m), already clamped by the caller.

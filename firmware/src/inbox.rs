@@ -29,7 +29,7 @@ pub const INBOX_SLOTS: usize = 8;
 pub type Inbox = heapless::spsc::Queue<Item, INBOX_SLOTS>;
 
 /// Slots of the inbox that only urgent items ([`Item::is_urgent`]) may
-/// fill: a flood of segments cannot keep a Stop, an Emergency or a
+/// fill: a flood of segments cannot keep a Stop, an Emergency, a Home or a
 /// ClearFault out. Segments dropped for want of room are resent by the
 /// host's flow control; those three have no resend.
 pub const RESERVED_SLOTS: usize = 3;
@@ -176,6 +176,8 @@ pub enum Item {
     Sync(SyncEstimator),
     Emergency {
         code: FaultCode,
+        /// The sender (0: the host).
+        node: u8,
         rx_us: u64,
     },
     PeerHeartbeat {
@@ -199,7 +201,7 @@ pub enum Item {
 }
 
 impl Item {
-    /// Stop, QuickStop, ClearFault and Emergency: what has no resend by the
+    /// Stop, QuickStop, ClearFault, Home and Emergency: what has no resend by the
     /// host's flow control and must reach the tick even behind a flood of
     /// segments.
     pub fn is_urgent(&self) -> bool {
@@ -207,7 +209,10 @@ impl Item {
             Item::Emergency { .. } => true,
             Item::Command { command, .. } => matches!(
                 command.command(),
-                Ok(CommandCode::Stop | CommandCode::QuickStop | CommandCode::ClearFault)
+                Ok(CommandCode::Stop
+                    | CommandCode::QuickStop
+                    | CommandCode::ClearFault
+                    | CommandCode::Home)
             ),
             _ => false,
         }

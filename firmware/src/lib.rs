@@ -14,6 +14,7 @@
 pub mod active;
 pub mod drive;
 pub mod hal;
+pub mod homing;
 pub mod inbox;
 pub mod law;
 pub mod node;
@@ -24,7 +25,7 @@ pub mod segment;
 pub mod sync;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
-pub use hal::{CanPort, Encoder, MotorOutput, RxFrame};
+pub use hal::{CanPort, Encoder, LimitSwitch, MotorOutput, NoSwitch, RxFrame};
 pub use inbox::{Item, Status};
 pub use node::Node;
 pub use receiver::Receiver;

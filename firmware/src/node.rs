@@ -16,11 +16,19 @@ pub struct Node<const Q: usize = QUEUE_CAPACITY> {
 }
 
 impl<const Q: usize> Node<Q> {
-    /// A node with number `node_id` (1–3), Idle, unconfigured, motor off.
+    /// A node with number `node_id` (1–15), Idle, unconfigured, motor off.
     pub fn new(node_id: u8) -> Self {
         Self {
             receiver: Receiver::new(node_id),
             drive: Drive::new(node_id),
+        }
+    }
+
+    /// A node after power-on whose position is unknown until it is homed.
+    pub fn new_unhomed(node_id: u8) -> Self {
+        Self {
+            receiver: Receiver::new(node_id),
+            drive: Drive::new_unhomed(node_id),
         }
     }
 

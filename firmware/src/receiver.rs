@@ -101,6 +101,7 @@ impl Receiver {
                 } else {
                     FaultCode::PeerEmergency
                 },
+                node,
                 rx_us,
             }),
             Msg::Heartbeat(heartbeat) if node != self.node_id => Some(Item::PeerHeartbeat {

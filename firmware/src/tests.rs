@@ -19,6 +19,8 @@ use crate::hal::{Encoder, MotorOutput, RxFrame};
 use crate::node::Node;
 use crate::scaling::Phase;
 
+mod homing;
+
 const CAP: usize = 4;
 const TICK: u64 = 1000;
 
@@ -166,6 +168,7 @@ impl Rig {
             command: c as u8,
             token: self.token,
             arg,
+            arg2: 0,
         }
         .to_frame(0));
         self.sent[n..]
@@ -382,7 +385,14 @@ fn arm_is_refused_without_sync_far_from_start_or_empty() {
     r.offset = 1e-3;
     r.run(5);
     assert_eq!(r.command(CommandCode::Arm, 0), FaultCode::ArmTooFar as u8);
-    assert_eq!(r.node.fault(), FaultCode::ArmTooFar);
+    // A refusal: still Loaded, no fault, no Emergency; nearer, it arms.
+    assert_eq!(r.node.state(), State::Loaded);
+    assert_eq!(r.node.fault(), FaultCode::None);
+    assert!(r.emergencies().is_empty());
+    r.offset = 0.0;
+    r.run(5);
+    assert_eq!(r.command(CommandCode::Arm, 0), 0);
+    assert_eq!(r.node.state(), State::Armed);
     // Arm in Idle: wrong state, no fault.
     let mut r = Rig::new();
     r.configure();
@@ -641,6 +651,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
         command: CommandCode::Stop as u8,
         token: 77,
         arg: 0,
+        arg2: 0,
     };
     let rx = RxFrame {
         frame: stop.to_frame(2),
@@ -659,6 +670,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
     // An Emergency and a ClearFault fit too; a further segment does not.
     let emergency = Item::Emergency {
         code: FaultCode::HostEmergency,
+        node: 0,
         rx_us: r.t,
     };
     assert!(emergency.is_urgent());
@@ -693,6 +705,7 @@ fn only_stop_quick_stop_clear_fault_and_emergency_are_urgent() {
             command: c as u8,
             token: 1,
             arg: 0,
+            arg2: 0,
         },
         rx_us: 0,
         data: CommandData::None,

@@ -88,6 +88,7 @@ fn plan_input(segs: &[triquint_shared::protocol::WireSegment]) -> Vec<u8> {
             command: c as u8,
             token,
             arg,
+            arg2: 0,
         }
         .to_frame(2)
     };

@@ -269,6 +269,7 @@ impl Recorder {
             command: c as u8,
             token: 7,
             arg,
+            arg2: 0,
         }
         .to_frame(0));
     }

@@ -18,6 +18,7 @@ const LAYERS: &[&str] = &[
     "inbox",    // the hand-off between the receive side and the tick
     "hal",      // the hardware traits
     "law",      // the control law, a pure step function
+    "homing",   // the homing state machine, a pure step function
     "receiver", // the CAN receive side
     "drive",    // the control side: state machine, queue, tick
     "node",     // both sides in one context

@@ -219,6 +219,7 @@ pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
             command: CommandCode::ConfigCommit as u8,
             token: 0,
             arg: cfg.crc(),
+            arg2: 0,
         };
         h.frame(commit.to_frame(2));
         assert_eq!(h.node.drive.config_crc(), cfg.crc(), "harness set-up");

@@ -78,7 +78,7 @@ class Sim:
         while time.monotonic() - t0 < timeout and seen != set(nodes):
             assert self.proc.poll() is None, open(self.log_path).read()
             m = bus.recv(0.2)
-            if m is not None and 0x701 <= m.arbitration_id <= 0x703:
+            if m is not None and 0x701 <= m.arbitration_id <= 0x70F:
                 seen.add(m.arbitration_id - 0x700)
         assert seen == set(nodes), f"heartbeats from {sorted(seen)} only"
 

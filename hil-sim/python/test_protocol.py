@@ -5,7 +5,9 @@ import time
 
 import can
 
-STATES = {0: "Idle", 1: "Loaded", 2: "Armed", 3: "Running", 4: "Stopping", 5: "Fault"}
+STATES = {0: "Idle", 1: "Loaded", 2: "Armed", 3: "Running", 4: "Stopping", 5: "Fault", 6: "Homing"}
+# HeartbeatExt flags bits (protocol v2).
+SYNCED, HOMED, CONFIGURED = 1, 2, 32
 
 
 def collect(bus, seconds, pred=lambda m: True):
@@ -20,6 +22,8 @@ def collect(bus, seconds, pred=lambda m: True):
 
 def send(bus, db, name, fd=False, **signals):
     msg = db.get_message_by_name(name)
+    if name.startswith("Command_"):
+        signals.setdefault("arg2", 0)
     data = msg.encode(signals)
     bus.send(can.Message(arbitration_id=msg.frame_id, data=data, is_extended_id=False,
                          is_fd=fd, bitrate_switch=fd))
@@ -58,13 +62,15 @@ def test_heartbeat_rate_and_contents(make_sim, bus, db):
         for m in hb:
             d = decode(db, m)
             assert m.dlc == 8
-            assert d["protocol_version"] == 1
+            assert d["protocol_version"] == 2
             assert STATES[d["state"]] == "Idle" and d["fault"] == 0
             assert d["config_crc"] == 0, "unconfigured at power-on"
             assert d["queue_depth"] == 0
         for m in ext:
             d = decode(db, m)
-            assert d["next_seq"] == 0 and d["sync_ok"] == 0
+            # Not synced, not configured; homed (the simulator starts homed).
+            assert d["next_seq"] == 0 and d["flags"] & SYNCED == 0
+            assert d["flags"] & CONFIGURED == 0 and d["flags"] & HOMED
     sim.stop()
 
 
@@ -107,7 +113,7 @@ def test_each_message_is_answered(make_sim, bus, db):
         send(bus, db, "TimeSync", seq=seq, prev_tx_us=1_000_000 + int((time.monotonic() - t0) * 1e6) - 20_000)
         time.sleep(0.02)
     for n in (1, 2, 3):
-        wait_for(bus, db, f"HeartbeatExt_{n}", pred=lambda d: d["sync_ok"] == 1)
+        wait_for(bus, db, f"HeartbeatExt_{n}", pred=lambda d: d["flags"] & SYNCED)
     # Segment parts to unconfigured drives: SegmentAck WrongState (6) from each.
     golden = read_golden_segment()
     for data in golden:

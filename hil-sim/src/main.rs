@@ -18,11 +18,12 @@ use std::sync::atomic::AtomicBool;
 use clap::{Parser, Subcommand};
 use serde::Serialize;
 use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
-use triquint_cli_common::robot_file::load_robot;
+use triquint_cli_common::robot_file::load_machine;
 use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
 use triquint_shared::kinematics::Pose;
 use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
 use triquint_sim::report::RunReport;
+use triquint_sim::sim::SwitchMode;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -50,9 +51,23 @@ struct Args {
     /// SocketCAN interface (vcan0, can0).
     #[arg(long, value_name = "IFACE", required = true)]
     iface: Option<String>,
-    /// Drives to run, comma-separated (an absent drive is a silent node).
-    #[arg(long, default_value = "1,2,3", value_name = "1,2,3")]
+    /// Node ids (1–15) of the drives of axes 1, 2, 3 in order; fewer than
+    /// three leave the last axes without a drive (a silent node).
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
     nodes: String,
+    /// Power on with an unknown (seeded) encoder offset on every axis:
+    /// positions mean nothing until `triquint home`.
+    #[arg(long)]
+    unhomed: bool,
+    /// Seed of the encoder offsets of --unhomed.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    seed: u64,
+    /// Axis (1–3) whose limit switch is stuck active.
+    #[arg(long, value_name = "AXIS")]
+    stuck_switch: Option<u8>,
+    /// Axis (1–3) whose limit switch never triggers (broken wire).
+    #[arg(long, value_name = "AXIS")]
+    dead_switch: Option<u8>,
     /// CAN-FD sockets (the interface needs MTU 72).
     #[arg(long)]
     fd: bool,
@@ -125,20 +140,37 @@ fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
 fn run(args: &Args) -> CliResult {
     check_rate("--rate", args.rate)?;
     let nodes = parse_nodes("--nodes", &args.nodes)?;
-    let robot = load_robot(args.robot.as_deref())?;
+    let (robot, homing) = load_machine(args.robot.as_deref())?;
+    let mut switches = [SwitchMode::Working; 3];
+    for (opt, axis, mode) in [
+        ("--stuck-switch", args.stuck_switch, SwitchMode::Stuck),
+        ("--dead-switch", args.dead_switch, SwitchMode::Dead),
+    ] {
+        match axis {
+            None => {}
+            Some(a @ 1..=3) => switches[a as usize - 1] = mode,
+            Some(a) => {
+                return Err(CliError::bad_input(format!("{opt} {a}: an axis 1, 2 or 3")));
+            }
+        }
+    }
     let r0 = parse_triple("--start", &args.start)? * 1e-3;
     let pose = Pose::from_cartesian(&robot.model::<f64>(), r0)
         .map_err(|e| CliError::bad_input(format!("--start {}: {e}", args.start)))?;
     let iface = args.iface.as_deref().unwrap_or_default();
     let mut cfg = RealtimeConfig::new(iface, robot, pose.q);
     cfg.nodes = nodes;
+    cfg.unhomed = args.unhomed.then_some(args.seed);
+    cfg.homing = homing;
+    cfg.switches = switches;
     cfg.fd = args.fd;
     cfg.rate_hz = args.rate;
     let stop = stop_on_signals()?;
     let port = realtime::open(&cfg).map_err(CliError::device)?;
     eprintln!(
-        "triquint-sim: nodes {:?} on {} ({}), {} Hz; SIGINT/SIGTERM to stop",
+        "triquint-sim: nodes {:?} (axis 1 first{}) on {} ({}), {} Hz; SIGINT/SIGTERM to stop",
         cfg.nodes,
+        if args.unhomed { ", unhomed" } else { "" },
         cfg.iface,
         if cfg.fd { "CAN-FD" } else { "classic CAN" },
         cfg.rate_hz

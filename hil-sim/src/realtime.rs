@@ -26,15 +26,23 @@ use crate::metrics::{Tracking, segment_from_wire, tracking_segments};
 use crate::node_port::NodePort;
 use crate::plant::{Plant, PlantConfig};
 use crate::report::{JsonFault, RunReport};
-use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode};
+use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode, SimSwitch, SwitchMode};
 use triquint_link::socketcan::{SocketCanError, SocketCanPort};
+use triquint_shared::protocol::config::HomingSettings;
 
 /// What runs, where.
 #[derive(Clone, Debug)]
 pub struct RealtimeConfig {
     pub iface: String,
-    /// Drives to run (1–3); an absent drive leaves its axis braked.
+    /// Node ids of the drives to run, axis 1 first (1–15); fewer than
+    /// three leave the last axes without a drive (braked).
     pub nodes: Vec<u8>,
+    /// Power on unhomed, each encoder with an unknown offset from this seed.
+    pub unhomed: Option<u64>,
+    /// Switch heights and homing direction (the robot file's `[homing]`).
+    pub homing: HomingSettings,
+    /// How each axis's switch behaves.
+    pub switches: [SwitchMode; 3],
     pub fd: bool,
     pub rate_hz: f64,
     pub robot: Robot,
@@ -53,6 +61,9 @@ impl RealtimeConfig {
         Self {
             iface: iface.to_string(),
             nodes: vec![1, 2, 3],
+            unhomed: None,
+            homing: HomingSettings::default(),
+            switches: [SwitchMode::Working; 3],
             fd: false,
             rate_hz: 1000.0,
             robot,
@@ -196,15 +207,28 @@ pub fn run(
     report: &mut RealtimeReport,
 ) -> Result<(), RealtimeError> {
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.clock_seed);
+    let mut offsets = cfg.unhomed.map(ChaCha8Rng::seed_from_u64);
     let mut nodes: Vec<SimNode> = cfg
         .nodes
         .iter()
-        .map(|&id| {
+        .enumerate()
+        .map(|(axis, &id)| {
             let clock = LocalClock {
                 offset_ns: rng.random_range(0..10_000_000_000i64),
                 drift: rng.random_range(-1.0..1.0) * cfg.max_drift_ppm * 1e-6,
             };
-            SimNode::new(id, clock)
+            // An encoder's count at power-on says nothing of the position:
+            // up to ±10 m of counts.
+            let offset = offsets
+                .as_mut()
+                .map(|r| r.random_range(-130_000_000..130_000_000i64));
+            let mut n = SimNode::on_axis(id, axis, clock, offset);
+            n.switch = Some(SimSwitch::new(
+                cfg.homing.switch_height[axis.min(2)],
+                cfg.homing.direction,
+                cfg.switches[axis.min(2)],
+            ));
+            n
         })
         .collect();
     let tick_ns = (1e9 / cfg.rate_hz).round().max(1000.0) as u64;
@@ -281,7 +305,7 @@ pub fn run(
         }
         plant_ns = t;
         for n in nodes.iter_mut() {
-            let axis = n.node.node_id() as usize - 1;
+            let axis = n.axis;
             let local = n.clock.local_us(t);
             let mut p = NodePort {
                 port: &mut port,
@@ -376,7 +400,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
     let skew = started.iter().max().map_or(0, |m| m - t0);
     let mut peak = [0.0; 3];
     for n in nodes {
-        peak[n.node.node_id() as usize - 1] = n.peak_torque as f64;
+        peak[n.axis] = n.peak_torque as f64;
     }
     let mut faults: Vec<FaultEvent> = nodes
         .iter()
@@ -419,7 +443,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
         max_stop_jerk: [0, 1, 2].map(|a| {
             nodes
                 .iter()
-                .find(|n| n.node.node_id() as usize == a + 1)
+                .find(|n| n.axis == a)
                 .map_or(0.0, |n| n.max_stop_jerk as f64)
         }),
         fault_run: None,

@@ -4,9 +4,10 @@
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_firmware::{Encoder, MotorOutput, Node, RxFrame};
+use triquint_firmware::{Encoder, LimitSwitch, MotorOutput, NoSwitch, Node, RxFrame};
 use triquint_shared::Robot;
 use triquint_shared::kinematics::KinematicsError;
+use triquint_shared::protocol::config::HomingSettings;
 use triquint_shared::protocol::{FaultCode, Frame, State};
 
 use crate::bus::{Bus, BusConfig, Delivery};
@@ -91,9 +92,78 @@ pub struct FaultEvent {
     pub t_ns: u64,
 }
 
+/// How a guideway's limit switch behaves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SwitchMode {
+    /// Active at and beyond its height (in the homing direction).
+    #[default]
+    Working,
+    /// Always active (a shorted or stuck switch).
+    Stuck,
+    /// Never active (a broken wire).
+    Dead,
+}
+
+/// A guideway's limit switch at `height` (m, true joint position), active
+/// at and beyond it in `direction`; its edge latches the encoder count of
+/// the exact crossing, as a hardware capture input does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimSwitch {
+    pub height: f64,
+    pub direction: f64,
+    pub mode: SwitchMode,
+    active: bool,
+    edge: Option<i64>,
+}
+
+impl SimSwitch {
+    pub fn new(height: f64, direction: f64, mode: SwitchMode) -> Self {
+        Self {
+            height,
+            direction,
+            mode,
+            active: false,
+            edge: None,
+        }
+    }
+
+    fn is_on(&self, q: f64) -> bool {
+        match self.mode {
+            SwitchMode::Working => (q - self.height) * self.direction >= 0.0,
+            SwitchMode::Stuck => true,
+            SwitchMode::Dead => false,
+        }
+    }
+
+    /// The axis at `q` (m): an edge since the last update latches `edge_counts`,
+    /// the count at the switch height.
+    fn update(&mut self, q: f64, edge_counts: i64) {
+        let on = self.is_on(q);
+        if on && !self.active && self.mode == SwitchMode::Working {
+            self.edge = Some(edge_counts);
+        }
+        self.active = on;
+    }
+}
+
+impl LimitSwitch for SimSwitch {
+    fn active(&mut self) -> bool {
+        self.active
+    }
+    fn take_edge(&mut self) -> Option<i64> {
+        self.edge.take()
+    }
+}
+
 /// One simulated drive.
 pub struct SimNode {
     pub node: Node,
+    /// The axis (0–2) it drives.
+    pub axis: usize,
+    /// Encoder count at joint position 0 (0: homed at power-on).
+    pub enc_offset: i64,
+    /// Its guideway's limit switch (none: no switch).
+    pub switch: Option<SimSwitch>,
     pub clock: LocalClock,
     next_tick_us: u64,
     next_comm_us: u64,
@@ -138,10 +208,23 @@ impl MotorOutput for SimMotor {
 }
 
 impl SimNode {
-    /// Drive `id` (1–3) with its own clock, unconfigured, power stage off.
+    /// Drive `id` (1–3) of axis `id − 1` with its own clock, unconfigured,
+    /// power stage off, homed, no switch.
     pub fn new(id: u8, clock: LocalClock) -> Self {
+        Self::on_axis(id, id.saturating_sub(1).min(2) as usize, clock, None)
+    }
+
+    /// Drive `id` of `axis`; `unhomed`: powered on with this encoder
+    /// offset (counts), unhomed.
+    pub fn on_axis(id: u8, axis: usize, clock: LocalClock, unhomed: Option<i64>) -> Self {
         Self {
-            node: Node::new(id),
+            node: match unhomed {
+                Some(_) => Node::new_unhomed(id),
+                None => Node::new(id),
+            },
+            axis: axis.min(2),
+            enc_offset: unhomed.unwrap_or(0),
+            switch: None,
             clock,
             next_tick_us: 0,
             next_comm_us: 0,
@@ -168,10 +251,22 @@ impl SimNode {
     /// at true time `t_ns`. Returns the motor torque acting from now on: the
     /// previous tick's command (one-tick actuation delay), 0 when disabled.
     pub fn control_tick(&mut self, local_us: u64, q: f64, counts_per_metre: f64, t_ns: u64) -> f64 {
-        let counts = (q * counts_per_metre).floor() as i64;
+        let counts = (q * counts_per_metre).floor() as i64 + self.enc_offset;
         let mut motor = std::mem::take(&mut self.motor);
-        self.node
-            .tick(local_us, &mut SimEncoder(counts), &mut motor);
+        match self.switch.as_mut() {
+            Some(sw) => {
+                let edge = (sw.height * counts_per_metre).floor() as i64 + self.enc_offset;
+                sw.update(q, edge);
+                self.node
+                    .tick_with_switch(local_us, &mut SimEncoder(counts), &mut motor, sw);
+            }
+            None => self.node.tick_with_switch(
+                local_us,
+                &mut SimEncoder(counts),
+                &mut motor,
+                &mut NoSwitch,
+            ),
+        }
         let acting = if self.enabled {
             self.pending_torque
         } else {
@@ -277,6 +372,23 @@ impl Sim {
         sim
     }
 
+    /// Every guideway gets its limit switch (`homing`'s heights and
+    /// direction, `modes`), and every drive powers on again unhomed with a
+    /// seeded encoder offset (±10 m of counts): homing is needed, for real.
+    pub fn power_on_unhomed(&mut self, seed: u64, homing: &HomingSettings, modes: [SwitchMode; 3]) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for (i, n) in self.nodes.iter_mut().enumerate() {
+            let id = n.node.node_id();
+            n.node = Node::new_unhomed(id);
+            n.enc_offset = rng.random_range(-130_000_000..130_000_000i64);
+            n.switch = Some(SimSwitch::new(
+                homing.switch_height[i],
+                homing.direction,
+                modes[i],
+            ));
+        }
+    }
+
     /// Power-cycles node `i` (0–2): it restarts Idle, unconfigured, motor off,
     /// with its clock running on.
     pub fn reset_node(&mut self, i: usize) {
@@ -369,7 +481,7 @@ impl Sim {
         let station = i + 1;
         while let Some(d) = self.next_delivery(station) {
             let n = &mut self.nodes[i];
-            if (0x010..=0x013).contains(&d.frame.id) && d.from != station {
+            if (0x010..=0x01F).contains(&d.frame.id) && d.from != station {
                 n.emergency_rx_ns.get_or_insert(d.t_ns);
             }
             let rx = RxFrame {

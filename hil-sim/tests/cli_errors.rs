@@ -13,7 +13,7 @@ fn bad_input_and_unknown_interfaces_get_one_line_and_their_exit_status() {
             "triquint-nosuch0: cannot open SocketCAN interface",
         ),
         (&["--iface", "vcan0", "--rate", "5"], 2, "--rate"),
-        (&["--iface", "vcan0", "--nodes", "1,4"], 2, "--nodes"),
+        (&["--iface", "vcan0", "--nodes", "1,16"], 2, "--nodes"),
         (
             &[
                 "proxy",

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use triquint_host::cli;
 use triquint_host::exit::CliResult;
-use triquint_host::robot_file::load_robot;
+use triquint_host::robot_file::{load_machine, load_robot};
 
 #[derive(Parser, Debug)]
 #[command(name = "triquint", version, about, propagate_version = true)]
@@ -40,6 +40,14 @@ enum Command {
     MoveTo(cli::move_to::MoveToArgs),
     /// Decode live bus traffic with the protocol declaration.
     Monitor(cli::monitor::MonitorArgs),
+    /// What state each drive is in (read-only).
+    Status(cli::status::StatusArgs),
+    /// Home all three axes together on their limit switches.
+    Home(cli::home::HomeArgs),
+    /// Return faulted drives to Idle.
+    Clear(cli::clear::ClearArgs),
+    /// Send the host's emergency stop frame.
+    Estop(cli::estop::EstopArgs),
 }
 
 fn run(cli: Cli) -> CliResult {
@@ -58,10 +66,22 @@ fn run(cli: Cli) -> CliResult {
             cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
         }
         Command::Upload(a) => {
-            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::upload::run(a))
+            let (_, homing) = load_machine(cli.robot.as_deref())?;
+            cli::same_robot(cli.robot.as_deref(), &a.plan)
+                .and_then(|()| cli::upload::run(a, &homing))
         }
-        Command::MoveTo(a) => cli::move_to::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::MoveTo(a) => {
+            let (robot, homing) = load_machine(cli.robot.as_deref())?;
+            cli::move_to::run(a, &robot, &homing)
+        }
         Command::Monitor(a) => cli::monitor::run(a),
+        Command::Status(a) => cli::status::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Home(a) => {
+            let (robot, homing) = load_machine(cli.robot.as_deref())?;
+            cli::home::run(a, &robot, &homing)
+        }
+        Command::Clear(a) => cli::clear::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Estop(a) => cli::estop::run(a),
     }
 }
 

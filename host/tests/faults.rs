@@ -229,9 +229,12 @@ fn delay_and_jitter_change_nothing() {
     ];
     let r = run(&case2(), &scenario(w, 15));
     // The drives take the latest sync sample as their offset, so timestamp
-    // jitter reaches the reference: measured 96 µm worst error here (18.6 µm
-    // without faults), far inside the 1 mm following bound.
-    assert_recovered_within("delay 0-2 ms, sync jitter 0-20 µs", &r, 150e-6);
+    // jitter reaches the reference: the worst error depends on which syncs
+    // the seeded jitter hits, 44-167 µm over seeds 1-6 and 15 with protocol
+    // v2 (167 µm here; 96 µm with v1's frame sequence; 18.6 µm without
+    // faults), inside the 250 µm the vcan tests allow for time-sync jitter
+    // and far inside the 1 mm following bound.
+    assert_recovered_within("delay 0-2 ms, sync jitter 0-20 µs", &r, 250e-6);
     assert!(r.injected.delayed > 1000);
 }
 

@@ -14,7 +14,7 @@ fn finite() -> impl Strategy<Value = f32> {
 }
 
 fn node() -> impl Strategy<Value = u8> {
-    1u8..=3
+    1u8..=15
 }
 
 /// Any identifier, half the time one the protocol uses.
@@ -66,21 +66,21 @@ proptest! {
     #[test]
     fn fixed_messages_round_trip(
         n in node(), a in any::<u8>(), b in any::<u8>(), c in any::<u16>(), d in any::<u32>(),
-        e in any::<u8>(), f in any::<u8>(), x in finite(), y in finite(), h in 0u8..=3,
+        e in any::<u8>(), f in any::<u8>(), x in finite(), y in finite(), h in 0u8..=15,
     ) {
         let msgs = [
             (Emergency { code: a, state: b, segment: c, plan_time_us: d }.to_frame(h),
              Msg::Emergency(Emergency { code: a, state: b, segment: c, plan_time_us: d }), h),
             (TimeSync { seq: a, prev_tx_us: d }.to_frame(0), Msg::TimeSync(TimeSync { seq: a, prev_tx_us: d }), 0),
-            (Command { command: a, token: b, arg: d }.to_frame(h), Msg::Command(Command { command: a, token: b, arg: d }), h),
+            (Command { command: a, token: b, arg: d, arg2: c }.to_frame(h), Msg::Command(Command { command: a, token: b, arg: d, arg2: c }), h),
             (SegmentAck { seq: c, result: a, depth: b, next_seq: c ^ 0x5A5A, capacity: e, reason_count: f }.to_frame(n),
              Msg::SegmentAck(SegmentAck { seq: c, result: a, depth: b, next_seq: c ^ 0x5A5A, capacity: e, reason_count: f }), n),
             (CommandAck { command: a, token: b, result: e, state: f, value: d }.to_frame(n),
              Msg::CommandAck(CommandAck { command: a, token: b, result: e, state: f, value: d }), n),
             (Heartbeat { state: a, fault: b, queue_depth: e, protocol_version: f, config_crc: d }.to_frame(n),
              Msg::Heartbeat(Heartbeat { state: a, fault: b, queue_depth: e, protocol_version: f, config_crc: d }), n),
-            (HeartbeatExt { next_seq: c, rejects: c.rotate_left(3), tx_errors: a, rx_errors: b, last_reject: e, sync_ok: f }.to_frame(n),
-             Msg::HeartbeatExt(HeartbeatExt { next_seq: c, rejects: c.rotate_left(3), tx_errors: a, rx_errors: b, last_reject: e, sync_ok: f }), n),
+            (HeartbeatExt { next_seq: c, rejects: c.rotate_left(3), tx_errors: a, rx_errors: b, last_reject: e, flags: f }.to_frame(n),
+             Msg::HeartbeatExt(HeartbeatExt { next_seq: c, rejects: c.rotate_left(3), tx_errors: a, rx_errors: b, last_reject: e, flags: f }), n),
             (Telemetry { position: x, velocity: y }.to_frame(n), Msg::Telemetry(Telemetry { position: x, velocity: y }), n),
             (TelemetryExt { torque: x, following_error: y }.to_frame(n), Msg::TelemetryExt(TelemetryExt { torque: x, following_error: y }), n),
             (config_write_frame(h, a, x), Msg::ConfigWrite { index: a, value: x }, h),

@@ -52,6 +52,10 @@ impl<const Q: usize> Drive<Q> {
                         self.begin_stop(StopReason::Commanded, quick, local_us);
                         FaultCode::None
                     }
+                    State::Homing => {
+                        self.abort_homing();
+                        FaultCode::None
+                    }
                     State::Armed => {
                         self.state = State::Loaded;
                         self.start_ns = None;
@@ -105,6 +109,7 @@ impl<const Q: usize> Drive<Q> {
                 }
                 _ => FaultCode::WrongState,
             },
+            CommandCode::Home => self.home(local_us),
             CommandCode::ReadConfig => {
                 if let CommandData::Values(values) = data {
                     for (i, v) in values.iter().enumerate() {
@@ -134,6 +139,10 @@ impl<const Q: usize> Drive<Q> {
     }
 
     pub(super) fn arm(&mut self, local_us: u64) -> FaultCode {
+        // A refusal, not a fault: nothing has moved, the node stays as it is.
+        if !self.homed {
+            return FaultCode::NotHomed;
+        }
         if self.state != State::Loaded {
             return FaultCode::WrongState;
         }
@@ -157,10 +166,9 @@ impl<const Q: usize> Drive<Q> {
         let own = start[a.axis.min(2)];
         match self.last_q {
             Some(q) if (q - own).abs() <= self.cfg.arm_tolerance => {}
-            _ => {
-                self.fault_now(FaultCode::ArmTooFar);
-                return FaultCode::ArmTooFar;
-            }
+            // A refusal (the node stays Loaded): the host says how far
+            // each axis is and what to run.
+            _ => return FaultCode::ArmTooFar,
         }
         self.hold = Some(start);
         self.hold_own = own;

@@ -54,6 +54,9 @@ impl<const Q: usize> Drive<Q> {
     /// sequence, queue room, C3 continuity with the previous segment) and
     /// its place in plan time. The receive side did the expensive ones.
     pub(super) fn accept(&mut self, c: &CheckedSegment) -> Result<(), Reject> {
+        if !self.homed {
+            return Err(Reject::NotHomed);
+        }
         if !matches!(
             self.state,
             State::Idle | State::Loaded | State::Armed | State::Running

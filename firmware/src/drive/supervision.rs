@@ -17,7 +17,7 @@ impl<const Q: usize> Drive<Q> {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
             }
-            State::Loaded | State::Armed => self.fault_now(code),
+            State::Loaded | State::Armed | State::Homing => self.fault_now(code),
             State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
             _ => {}
         }
@@ -26,8 +26,8 @@ impl<const Q: usize> Drive<Q> {
     /// Peer supervision: a peer that reports a fault (its Emergency may have
     /// been lost) or has lost its configuration (it was reset) stops us too.
     pub(super) fn on_peer_heartbeat(&mut self, node: u8, h: &Heartbeat, rx_us: u64) {
-        let Some(slot) = (node as usize)
-            .checked_sub(1)
+        let Some(slot) = self
+            .peer_axis(node)
             .and_then(|i| self.peer_seen_us.get_mut(i))
         else {
             return;
@@ -68,7 +68,7 @@ impl<const Q: usize> Drive<Q> {
         self.peer_seen_us
             .iter()
             .enumerate()
-            .filter(|(i, _)| *i + 1 != self.node_id as usize)
+            .filter(|(i, _)| *i != a.axis)
             .any(|(_, t)| t.is_some_and(|t| now_us.saturating_sub(t) > a.sync_timeout_us))
     }
 

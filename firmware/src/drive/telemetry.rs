@@ -5,12 +5,22 @@ use triquint_shared::protocol::contract::{
     MIN_HEARTBEAT_US, UNCONFIGURED_HEARTBEAT_US, UNCONFIGURED_SYNC_TIMEOUT_US,
 };
 use triquint_shared::protocol::{
-    Heartbeat, HeartbeatExt, PROTOCOL_VERSION, Telemetry, TelemetryExt,
+    Heartbeat, HeartbeatExt, PROTOCOL_VERSION, Telemetry, TelemetryExt, flags,
 };
 
-use super::Drive;
+use super::{Drive, StopReason};
 
 impl<const Q: usize> Drive<Q> {
+    /// HeartbeatExt `flags`.
+    fn flags(&self, now_us: u64, sync_timeout_us: u64) -> u8 {
+        let bit = |on: bool, b: u8| if on { b } else { 0 };
+        bit(self.sync.is_synced(now_us, sync_timeout_us), flags::SYNCED)
+            | bit(self.homed, flags::HOMED)
+            | bit(self.stop_reason == Some(StopReason::Hold), flags::HELD)
+            | bit(self.switch_active, flags::SWITCH)
+            | bit(self.active.is_some(), flags::CONFIGURED)
+    }
+
     pub(super) fn periodic(&mut self, now_us: u64) {
         let (hb_us, tel_us) = match &self.active {
             Some(a) => (a.heartbeat_us.max(MIN_HEARTBEAT_US), a.telemetry_us),
@@ -38,7 +48,7 @@ impl<const Q: usize> Drive<Q> {
                 tx_errors: self.errors.0,
                 rx_errors: self.errors.1,
                 last_reject: self.stats.last_reject,
-                sync_ok: self.sync.is_synced(now_us, timeout) as u8,
+                flags: self.flags(now_us, timeout),
             };
             let f = ext.to_frame(self.node_id);
             self.send(f);

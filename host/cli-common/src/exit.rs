@@ -23,6 +23,9 @@ pub enum Status {
     SolverFailure = 6,
     /// Planning was cancelled (Ctrl-C) before it finished.
     Cancelled = 7,
+    /// Refused: the machine is not ready for the command (not homed, a
+    /// node faulted, not at the plan's start); nothing moved.
+    Refused = 8,
 }
 
 /// An error that ends a command with a status from the table and a one-line message.
@@ -53,6 +56,9 @@ impl CliError {
     }
     pub fn motion_fault(message: impl fmt::Display) -> Self {
         Self::new(Status::MotionFault, message)
+    }
+    pub fn refused(message: impl fmt::Display) -> Self {
+        Self::new(Status::Refused, message)
     }
 }
 
@@ -118,6 +124,7 @@ mod tests {
             (Status::MotionFault, 5),
             (Status::SolverFailure, 6),
             (Status::Cancelled, 7),
+            (Status::Refused, 8),
         ];
         for (s, n) in table {
             assert_eq!(s as u8, n);

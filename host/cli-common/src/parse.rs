@@ -12,8 +12,10 @@ use crate::exit::{CliError, CliResult};
 /// the two share one range.
 pub const RATE_HZ: std::ops::RangeInclusive<f64> = 1000.0..=10000.0;
 
-/// The drive nodes there are: node i drives axis i.
+/// The default node ids of the drives of axes 1–3.
 pub const NODES: [u8; 3] = [1, 2, 3];
+/// Node ids the drives may have.
+pub const NODE_IDS: std::ops::RangeInclusive<u8> = 1..=15;
 
 /// Parses one finite number, naming what it is on error.
 pub fn finite(what: &str, text: &str) -> CliResult<f64> {
@@ -44,21 +46,38 @@ pub fn parse_triple(option: &str, text: &str) -> CliResult<Vector3<f64>> {
     Ok(v)
 }
 
-/// Parses a comma-separated list of distinct drive nodes (1, 2 or 3), sorted.
+/// Parses a comma-separated list of at most three distinct node ids
+/// (1–15), in axis order: the first drives axis 1.
 pub fn parse_nodes(option: &str, text: &str) -> CliResult<Vec<u8>> {
     let mut nodes = Vec::new();
     for p in text.split(',').map(str::trim) {
         match p.parse::<u8>() {
-            Ok(n) if NODES.contains(&n) && !nodes.contains(&n) => nodes.push(n),
+            Ok(n) if NODE_IDS.contains(&n) && !nodes.contains(&n) => nodes.push(n),
             _ => {
                 return Err(CliError::bad_input(format!(
-                    "{option}: `{p}` in `{text}` is not a distinct node 1, 2 or 3"
+                    "{option}: `{p}` in `{text}` is not a distinct node id 1 to 15"
                 )));
             }
         }
     }
-    nodes.sort_unstable();
+    if nodes.len() > 3 {
+        return Err(CliError::bad_input(format!(
+            "{option}: `{text}` lists {} nodes; a robot has three axes",
+            nodes.len()
+        )));
+    }
     Ok(nodes)
+}
+
+/// Parses the node ids of the drives of axes 1, 2, 3 (`--nodes A,B,C`).
+pub fn parse_axis_nodes(option: &str, text: &str) -> CliResult<[u8; 3]> {
+    match parse_nodes(option, text)?.as_slice() {
+        [a, b, c] => Ok([*a, *b, *c]),
+        other => Err(CliError::bad_input(format!(
+            "{option}: `{text}` lists {} node ids; give one per axis, axis 1 first (e.g. 1,2,3)",
+            other.len()
+        ))),
+    }
 }
 
 /// Checks a control rate against [`RATE_HZ`].
@@ -90,9 +109,13 @@ mod tests {
             assert_eq!(e.status, Status::BadInput);
             assert!(e.message.starts_with("--start"), "{}", e.message);
         }
-        assert_eq!(parse_nodes("--nodes", "3,1").unwrap(), vec![1, 3]);
-        for bad in ["1,4", "1,1", "", "0"] {
+        assert_eq!(parse_nodes("--nodes", "3,1").unwrap(), vec![3, 1]);
+        assert_eq!(parse_axis_nodes("--nodes", "4,5,6").unwrap(), [4, 5, 6]);
+        for bad in ["1,16", "1,1", "", "0", "1,2,3,4"] {
             assert!(parse_nodes("--nodes", bad).is_err(), "{bad}");
+        }
+        for bad in ["1,2", "4,5,x"] {
+            assert!(parse_axis_nodes("--nodes", bad).is_err(), "{bad}");
         }
         assert_eq!(check_rate("--rate", 1000.0).unwrap(), 1000.0);
         assert_eq!(check_rate("--rate", 10000.0).unwrap(), 10000.0);

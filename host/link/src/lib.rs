@@ -9,6 +9,8 @@
 //!   of each node (`session/nodes.rs`);
 //! - [`configs`]: the drives' configurations for a plan, from its exact
 //!   maxima (`plan.max_abs`), or for the limits themselves;
+//! - [`status`]: what state each drive is in, from its heartbeats (the
+//!   model of `triquint status`, serialisable);
 //! - [`socketcan`]: a Linux SocketCAN interface as a port (the one SocketCAN
 //!   access of the project; `triquint-sim` uses it too).
 //!
@@ -19,10 +21,12 @@
 pub mod configs;
 pub mod session;
 pub mod socketcan;
+pub mod status;
 
 pub use configs::DriveConfigs;
 pub use session::{FaultReport, NodeView, Outcome, Progress, Session, SessionOptions, UploadError};
 pub use socketcan::{SocketCanError, SocketCanPort, SocketRx, open_host};
+pub use status::{Listener, MachineStatus, NodeStatus};
 
 use triquint_shared::protocol::Frame;
 

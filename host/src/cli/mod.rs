@@ -1,13 +1,18 @@
 //! One module per `triquint` subcommand.
 
 pub mod check;
+pub mod clear;
+pub mod estop;
 pub mod fk;
+pub mod home;
 pub mod ik;
+pub mod listen;
 pub mod monitor;
 pub mod move_to;
 pub mod plan;
 pub mod report;
 pub mod simulate;
+pub mod status;
 pub mod torque;
 pub mod upload;
 

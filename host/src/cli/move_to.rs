@@ -3,19 +3,20 @@
 //! given platform position (mm), within the limits, run through `upload`.
 //! This is how a machine is brought to a plan's start.
 
-use std::time::{Duration, Instant, SystemTime};
+use std::time::Duration;
 
 use clap::Args;
 use nalgebra::Vector3;
-use triquint_link::{DriveConfigs, Session, SessionOptions, SocketCanPort, open_host};
+use triquint_link::{Listener, SocketCanPort};
 use triquint_planner::{Job, Objective, Options, plan};
 use triquint_shared::kinematics::Pose;
-use triquint_shared::protocol::config::DriveSettings;
-use triquint_shared::protocol::{Msg, decode};
+use triquint_shared::protocol::config::HomingSettings;
 use triquint_shared::{Limits, Robot};
 
 use crate::cli::finite;
-use crate::cli::upload::{BusArgs, report, run_plan};
+use crate::cli::home::configure;
+use crate::cli::listen::{listen, open};
+use crate::cli::upload::{BusArgs, check_bus_args, report, run_plan};
 use crate::exit::{CliError, CliResult, plan_error};
 
 #[derive(Args, Debug)]
@@ -36,53 +37,22 @@ pub struct MoveToArgs {
     pub json: bool,
 }
 
-/// Joint positions (m) from every node's Telemetry within `wait`.
-fn listen_positions(port: &mut SocketCanPort, wait: Duration) -> CliResult<[Option<f64>; 3]> {
-    let t0 = Instant::now();
-    let mut q = [None; 3];
-    while t0.elapsed() < wait && q.iter().any(Option::is_none) {
-        match port.recv().map_err(CliError::device)? {
-            Some(rx) => {
-                if let Ok((Msg::Telemetry(t), node @ 1..=3)) = decode(&rx.frame) {
-                    q[node as usize - 1] = Some(t.position as f64);
-                }
-            }
-            None => std::thread::sleep(Duration::from_millis(1)),
-        }
-    }
-    Ok(q)
+/// Joint positions (m) from every drive's Telemetry within `wait`, and
+/// whether each is homed.
+fn listen_positions(
+    port: &mut SocketCanPort,
+    ids: [u8; 3],
+    wait: Duration,
+) -> CliResult<([Option<f64>; 3], [bool; 3])> {
+    let mut l = Listener::new(ids);
+    listen(port, &mut l, wait, true)?;
+    Ok((
+        l.nodes.0.map(|v| v.position.map(f64::from)),
+        l.nodes.0.map(|v| v.homed && v.sync_seen_at.is_some()),
+    ))
 }
 
-/// Configures unconfigured drives (they report positions only once configured)
-/// with stop times for the limits themselves.
-fn configure(robot: &Robot, limits: &Limits, bus: &BusArgs) -> CliResult {
-    let settings = DriveSettings {
-        control_rate: bus.rate,
-        ..DriveSettings::default()
-    };
-    let configs = DriveConfigs::for_limits(robot, limits, &settings).nodes;
-    let opts = SessionOptions {
-        fd: bus.fd,
-        response_timeout_us: (bus.timeout * 1e6) as u64,
-        ..SessionOptions::default()
-    };
-    let mut session = Session::configure(configs, opts);
-    let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
-    loop {
-        match session.poll(&mut port) {
-            Ok(Some(_)) => return Ok(()),
-            Ok(None) => std::thread::sleep(Duration::from_millis(1)),
-            Err(e) => {
-                return Err(CliError::device(format!(
-                    "{}: configuring the drives: {e}",
-                    bus.iface
-                )));
-            }
-        }
-    }
-}
-
-pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
+pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResult {
     let target_mm = Vector3::new(
         finite("X", &args.x)?,
         finite("Y", &args.y)?,
@@ -99,18 +69,29 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
         ))
     })?;
     let limits = Limits::default();
-    let mut port = SocketCanPort::open(&args.bus.iface, true, false, SystemTime::now())
-        .map_err(CliError::device)?;
-    let mut q = listen_positions(&mut port, Duration::from_millis(300))?;
+    check_bus_args(&args.bus)?;
+    let ids = args.bus.ids()?;
+    let mut port = open(&args.bus.iface)?;
+    let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
     if q.iter().any(Option::is_none) {
-        configure(robot, &limits, &args.bus)?;
-        q = listen_positions(&mut port, Duration::from_secs_f64(args.bus.timeout))?;
+        configure(robot, homing, &args.bus)?;
+        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(args.bus.timeout))?;
     }
     drop(port);
+    if let Some(i) = homed.iter().position(|h| !h) {
+        let n = crate::cli::listen::nodes_arg(ids);
+        return Err(CliError::refused(format!(
+            "{}: node {} is not homed (its position is unknown): run `triquint home --iface {}{n}` first",
+            args.bus.iface, ids[i], args.bus.iface
+        )));
+    }
     let q0 = match q {
         [Some(a), Some(b), Some(c)] => Vector3::new(a, b, c),
         _ => {
-            let node = q.iter().position(Option::is_none).map_or(1, |i| i + 1);
+            let node = q
+                .iter()
+                .position(Option::is_none)
+                .map_or(ids[0], |i| ids[i]);
             return Err(CliError::device(format!(
                 "{}: node {node}: no position (Telemetry) within {} s",
                 args.bus.iface, args.bus.timeout
@@ -154,6 +135,6 @@ pub fn run(args: &MoveToArgs, robot: &Robot) -> CliResult {
         p.segments.len(),
         p.total_time_s
     );
-    let summary = run_plan(&p, &args.bus)?;
+    let summary = run_plan(&p, &args.bus, homing, false)?;
     report(&summary, &args.bus, args.json)
 }

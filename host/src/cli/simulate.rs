@@ -37,7 +37,7 @@ fn to_cli(e: SimulateError) -> CliError {
         SimulateError::Upload(u @ triquint_link::UploadError::Segment { .. }) => {
             CliError::bad_input(u)
         }
-        SimulateError::Upload(u) if u.is_motion_fault() => CliError::motion_fault(u),
+        SimulateError::Upload(u) if u.is_refusal() => CliError::refused(u),
         SimulateError::Plan(m) => CliError::bad_input(m),
         e @ SimulateError::Config(_) => CliError::bad_input(e),
         other => CliError::device(other),

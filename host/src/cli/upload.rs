@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
 use triquint_shared::protocol::{FaultCode, State};
 
 use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, UploadError, open_host};
@@ -27,6 +27,10 @@ pub struct UploadArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Clear faulted drives first (without it, an upload to a faulted
+    /// drive is refused: see `triquint status`, `triquint clear`).
+    #[arg(long)]
+    pub clear: bool,
 }
 
 /// The bus options shared by `upload` and `move-to`.
@@ -44,6 +48,16 @@ pub struct BusArgs {
     /// How long a node may stay silent before the upload fails (s).
     #[arg(long, default_value_t = 2.0, value_name = "S")]
     pub timeout: f64,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
+    pub nodes: String,
+}
+
+impl BusArgs {
+    /// The node ids of `--nodes`.
+    pub fn ids(&self) -> CliResult<[u8; 3]> {
+        triquint_cli_common::parse::parse_axis_nodes("--nodes", &self.nodes)
+    }
 }
 
 /// What an upload did.
@@ -77,7 +91,7 @@ pub struct FaultSummary {
     pub name: &'static str,
 }
 
-fn check_bus_args(b: &BusArgs) -> CliResult {
+pub fn check_bus_args(b: &BusArgs) -> CliResult {
     triquint_cli_common::parse::check_rate("--rate", b.rate)?;
     if !(b.timeout.is_finite() && b.timeout > 0.0) {
         return Err(CliError::bad_input(format!(
@@ -85,26 +99,62 @@ fn check_bus_args(b: &BusArgs) -> CliResult {
             b.timeout
         )));
     }
+    b.ids()?;
     Ok(())
 }
 
-fn upload_error(e: UploadError, iface: &str, timeout: f64) -> CliError {
+/// An upload's error for people: refusals say what to run.
+pub fn upload_error(e: UploadError, bus: &BusArgs) -> CliError {
+    let iface = &bus.iface;
+    let n = crate::cli::listen::nodes_arg(bus.ids().unwrap_or([1, 2, 3]));
     match e {
         e if e.is_config() => CliError::bad_input(e),
         e @ UploadError::Segment { .. } => CliError::bad_input(e),
-        e if e.is_motion_fault() => CliError::motion_fault(e),
+        e @ UploadError::Faulted { .. } => CliError::refused(format!(
+            "{iface}: {e}: see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}` (or upload with --clear)"
+        )),
+        e @ UploadError::NotHomed { .. } => CliError::refused(format!(
+            "{iface}: {e}: run `triquint home --iface {iface}{n}` first"
+        )),
+        ref e @ UploadError::ArmTooFar { start_mm, .. } => CliError::refused(format!(
+            "{iface}: {e}; run `triquint move-to {} {} {} --iface {iface}{n}` first",
+            mm(start_mm[0]),
+            mm(start_mm[1]),
+            mm(start_mm[2])
+        )),
+        e @ (UploadError::Refused { .. } | UploadError::Version { .. }) => {
+            CliError::refused(format!("{iface}: {e}"))
+        }
         e @ UploadError::Timeout { .. } => {
-            CliError::device(format!("{iface}: {e} (silent for {timeout} s)"))
+            CliError::device(format!("{iface}: {e} (silent for {} s)", bus.timeout))
         }
         e => CliError::device(format!("{iface}: {e}")),
     }
 }
 
+/// A millimetre figure as a command argument: 3 decimals, no trailing zeros.
+fn mm(x: f64) -> String {
+    let s = format!("{x:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
 /// Uploads and runs `plan` over `bus`, with a progress bar on a terminal.
-pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
+pub fn run_plan(
+    plan: &Plan,
+    bus: &BusArgs,
+    homing: &HomingSettings,
+    clear: bool,
+) -> CliResult<UploadSummary> {
     check_bus_args(bus)?;
     let settings = DriveSettings {
         control_rate: bus.rate,
+        node_ids: bus.ids()?,
+        homing: homing.clone(),
         ..DriveSettings::default()
     };
     let configs = DriveConfigs::for_plan(plan, &settings)
@@ -113,10 +163,10 @@ pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout * 1e6) as u64,
+        clear_faults: clear,
         ..SessionOptions::default()
     };
-    let mut session =
-        Session::new(plan, configs, opts).map_err(|e| upload_error(e, &bus.iface, bus.timeout))?;
+    let mut session = Session::new(plan, configs, opts).map_err(|e| upload_error(e, bus))?;
     let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
     let bar = ProgressBar::new(plan.segments.len() as u64);
     bar.set_style(
@@ -140,7 +190,7 @@ pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
             Ok(None) => {}
             Err(e) => {
                 bar.abandon();
-                return Err(upload_error(e, &bus.iface, bus.timeout));
+                return Err(upload_error(e, bus));
             }
         }
         // 1 ms: the window (4 segments) stays full and time stamps come from
@@ -152,9 +202,9 @@ pub fn run_plan(plan: &Plan, bus: &BusArgs) -> CliResult<UploadSummary> {
     let nodes = session
         .node_states()
         .iter()
-        .enumerate()
-        .map(|(i, (state, fault))| NodeSummary {
-            node: i as u8 + 1,
+        .zip(session.nodes())
+        .map(|((state, fault), v)| NodeSummary {
+            node: v.id,
             state: state.map_or("silent", State::name),
             fault: *fault,
             fault_name: FaultCode::from_u8(*fault).map_or("unknown", FaultCode::name),
@@ -216,8 +266,8 @@ pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
     }))
 }
 
-pub fn run(args: &UploadArgs) -> CliResult {
+pub fn run(args: &UploadArgs, homing: &HomingSettings) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let summary = run_plan(&plan, &args.bus)?;
+    let summary = run_plan(&plan, &args.bus, homing, args.clear)?;
     report(&summary, &args.bus, args.json)
 }

@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use triquint_link::configs::ConfigError;
-use triquint_link::{DriveConfigs, FaultReport, Outcome, Session, SessionOptions, UploadError};
+use triquint_link::{DriveConfigs, FaultReport, Session, SessionOptions, UploadError};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
@@ -119,20 +119,6 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         match session.poll(&mut port) {
             Ok(Some(o)) => break o,
             Ok(None) => {}
-            // A motion fault before the start (arm refused): let the nodes'
-            // emergencies play out and report it like any other fault.
-            Err(e) if e.is_motion_fault() && !opts.strict => {
-                sim.run_until(sim.now_ns() + 50_000_000)?;
-                break Outcome {
-                    completed: false,
-                    faults: session.faults().to_vec(),
-                    start_us: session.start_us(),
-                    frames_sent: 0,
-                    segment_frames_sent: 0,
-                    retransmits: 0,
-                    rejects_seen: 0,
-                };
-            }
             Err(e) => return Err(e.into()),
         }
         let t = sim.now_ns() + opts.host_poll_us * 1000;

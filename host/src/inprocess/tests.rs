@@ -172,29 +172,33 @@ fn stalled_host_underruns_and_every_node_stops_on_the_path() {
 #[test]
 fn arm_is_refused_away_from_the_plan_start() {
     let plan = testplan::paper_case1().unwrap();
-    let e = run(&plan, |o| {
-        o.start_offset_m = [0.0, 1e-3, 0.0];
-        o.strict = true;
-    })
-    .unwrap_err();
-    match e {
-        SimulateError::Upload(u @ UploadError::Refused { node: 2, .. }) => {
-            assert!(u.is_motion_fault());
-            assert!(u.to_string().contains("ArmTooFar"), "{u}");
+    for strict in [true, false] {
+        let e = run(&plan, |o| {
+            o.start_offset_m = [0.0, 1e-3, 0.0];
+            o.strict = strict;
+        })
+        .unwrap_err();
+        // A refusal: how far each axis is, and the move that fixes it.
+        match e {
+            SimulateError::Upload(
+                ref u @ UploadError::ArmTooFar {
+                    node: 2,
+                    distances_mm,
+                    start_mm,
+                },
+            ) => {
+                assert!(u.is_refusal());
+                assert!(u.to_string().contains("axis 2 +1.000 mm"), "{u}");
+                let d = distances_mm.map(|d| d.unwrap());
+                assert!(
+                    d[0].abs() < 0.01 && (d[1] - 1.0).abs() < 0.01 && d[2].abs() < 0.01,
+                    "{d:?}"
+                );
+                assert!((start_mm[0] + 90.0).abs() < 1e-9 && (start_mm[2] - 680.0).abs() < 1e-9);
+            }
+            other => panic!("{other}"),
         }
-        other => panic!("{other}"),
     }
-    // Not strict (the CLI): a report with the fault, nothing completed.
-    let r = run(&plan, |o| o.start_offset_m = [0.0, 1e-3, 0.0]).unwrap();
-    assert!(!r.run.completed);
-    let first = r.faults_on_nodes.first().expect("fault");
-    assert_eq!((first.node, first.code), (2, FaultCode::ArmTooFar));
-    // The other nodes were armed and faulted on node 2's emergency.
-    assert!(
-        r.faults_on_nodes
-            .iter()
-            .any(|f| f.node != 2 && f.code == FaultCode::PeerEmergency)
-    );
 }
 
 #[test]
@@ -219,6 +223,7 @@ fn a_node_with_another_configuration_is_named() {
                 command: CommandCode::ConfigCommit as u8,
                 token: 1,
                 arg: c.crc(),
+                arg2: 0,
             }
             .to_frame(node),
         );

@@ -119,7 +119,7 @@ config_params! {
     35 friction_coulomb ["N"],
     /// Identified viscous friction of the slider (feedforward).
     36 friction_viscous ["N.s/m"],
-    /// Node id (1–3) the drive answers to; a board keeps it in flash and uses it from its next start.
+    /// Node id (1–15) the drive answers to; a board keeps it in flash and uses it from its next start.
     37 node_id [""],
     /// Motor torque constant Kt: the current loop's q-axis reference is torque / Kt.
     38 torque_constant ["N.m/A"],
@@ -127,10 +127,34 @@ config_params! {
     39 soft_limit_min ["m"],
     /// Soft limit of this axis's joint position, high end.
     40 soft_limit_max ["m"],
+    /// Homing: cruise speed toward the switch (and of the back-off).
+    41 homing_velocity ["m/s"],
+    /// Homing: acceleration limit.
+    42 homing_acceleration ["m/s2"],
+    /// Homing: jerk limit.
+    43 homing_jerk ["m/s3"],
+    /// Homing: +1 seeks the switch upward (increasing joint position), −1 downward.
+    44 homing_direction [""],
+    /// Homing: joint position of the switch edge; the axis zero is set from it.
+    45 switch_height ["m"],
+    /// Homing: distance moved back off the switch after its edge.
+    46 homing_backoff ["m"],
+    /// Homing: longest travel toward the switch (HomeSwitchNeverTriggered beyond).
+    47 homing_max_travel ["m"],
+    /// Homing: longest time from Home to homed (HomingTimeout beyond).
+    48 homing_timeout ["s"],
+    /// Homing: following-error bound while the pose is unknown (FollowingError beyond).
+    49 homing_following_error_max ["m"],
+    /// Node id of the drive of axis 1 (peer supervision listens to these three only).
+    50 axis_node_1 [""],
+    /// Node id of the drive of axis 2.
+    51 axis_node_2 [""],
+    /// Node id of the drive of axis 3.
+    52 axis_node_3 [""],
 }
 
 /// Number of configuration parameters.
-pub const PARAM_COUNT: usize = 41;
+pub const PARAM_COUNT: usize = 53;
 
 /// ConfigWrite: host → node n, one parameter per frame.
 pub const CONFIG_WRITE: MessageDef = MessageDef {
@@ -256,6 +280,49 @@ pub struct DriveSettings {
     /// Soft limits [low, high] of each axis's joint position (m): the
     /// guideway travel the drives enforce.
     pub soft_limits: [[f64; 2]; 3],
+    /// Node id of the drive of each axis (1–15, distinct).
+    pub node_ids: [u8; 3],
+    pub homing: HomingSettings,
+}
+
+/// How the drives home (the robot file's `[homing]` table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HomingSettings {
+    pub velocity: f64,
+    pub acceleration: f64,
+    pub jerk: f64,
+    /// +1: the switches are above the sliders' travel, −1: below.
+    pub direction: f64,
+    /// Joint position of each axis's switch edge (m).
+    pub switch_height: [f64; 3],
+    pub backoff: f64,
+    pub max_travel: f64,
+    pub timeout: f64,
+    pub following_error_max: f64,
+    /// Host side (`triquint home`): once one axis is at its switch, how
+    /// much further another may travel without reaching its own before
+    /// the host stops every drive (m): bounds the platform's sideways push.
+    pub max_skew: f64,
+}
+
+impl Default for HomingSettings {
+    fn default() -> Self {
+        // Switches 10 mm above the highest slider position of the paper's
+        // workspace (0.08–0.41 m): from any pose at most 0.34 m at
+        // 25 mm/s, about 14 s; the travel bound a little beyond that.
+        Self {
+            velocity: 0.025,
+            acceleration: 0.25,
+            jerk: 2.5,
+            direction: 1.0,
+            switch_height: [0.42; 3],
+            backoff: 0.005,
+            max_travel: 0.4,
+            timeout: 30.0,
+            following_error_max: 2.0e-3,
+            max_skew: 0.36,
+        }
+    }
 }
 
 /// The loop bandwidth every plan runs with (Hz). Not tuned per plan.
@@ -285,6 +352,8 @@ impl Default for DriveSettings {
             // The paper machine's sliders stay within 0.08–0.41 m in every
             // test plan; its guideway travel is assumed to be 0–0.8 m.
             soft_limits: [[0.0, 0.8]; 3],
+            node_ids: [1, 2, 3],
+            homing: HomingSettings::default(),
         }
     }
 }
@@ -354,11 +423,28 @@ impl DriveConfig {
             velocity_filter: f(s.velocity_filter),
             friction_coulomb: f(s.friction_coulomb),
             friction_viscous: f(s.friction_viscous),
-            node_id: (a + 1) as f32,
+            node_id: s.node_ids[a] as f32,
             torque_constant: f(s.torque_constant[a]),
             soft_limit_min: f(s.soft_limits[a][0]),
             soft_limit_max: f(s.soft_limits[a][1]),
+            homing_velocity: f(s.homing.velocity),
+            homing_acceleration: f(s.homing.acceleration),
+            homing_jerk: f(s.homing.jerk),
+            homing_direction: f(s.homing.direction),
+            switch_height: f(s.homing.switch_height[a]),
+            homing_backoff: f(s.homing.backoff),
+            homing_max_travel: f(s.homing.max_travel),
+            homing_timeout: f(s.homing.timeout),
+            homing_following_error_max: f(s.homing.following_error_max),
+            axis_node_1: s.node_ids[0] as f32,
+            axis_node_2: s.node_ids[1] as f32,
+            axis_node_3: s.node_ids[2] as f32,
         }
+    }
+
+    /// Node ids of the drives of axes 1–3.
+    pub fn axis_nodes(&self) -> [f32; 3] {
+        [self.axis_node_1, self.axis_node_2, self.axis_node_3]
     }
 
     pub fn crc(&self) -> u32 {
@@ -397,7 +483,16 @@ impl DriveConfig {
                 });
             }
         }
-        let positive: [(&'static str, f32); 14] = [
+        let positive: [(&'static str, f32); 20] = [
+            ("homing_velocity", self.homing_velocity),
+            ("homing_acceleration", self.homing_acceleration),
+            ("homing_jerk", self.homing_jerk),
+            ("homing_max_travel", self.homing_max_travel),
+            ("homing_timeout", self.homing_timeout),
+            (
+                "homing_following_error_max",
+                self.homing_following_error_max,
+            ),
             ("torque_constant", self.torque_constant),
             ("max_velocity", self.max_velocity),
             ("max_acceleration", self.max_acceleration),
@@ -422,12 +517,35 @@ impl DriveConfig {
                 });
             }
         }
-        let rules: [(&'static str, f32, bool, &'static str); 12] = [
+        let id_ok =
+            |x: f32| (1.0..=super::wire::MAX_NODE_ID as f32).contains(&x) && (x as u8) as f32 == x;
+        let nodes = self.axis_nodes();
+        let own = nodes[(self.axis as usize).min(2)];
+        let rules: [(&'static str, f32, bool, &'static str); 18] = [
+            ("node_id", self.node_id, id_ok(self.node_id), "1 to 15"),
             (
-                "node_id",
-                self.node_id,
-                self.node_id == 1.0 || self.node_id == 2.0 || self.node_id == 3.0,
-                "1, 2 or 3",
+                "axis_node_1",
+                self.axis_node_1,
+                id_ok(self.axis_node_1),
+                "1 to 15",
+            ),
+            (
+                "axis_node_2",
+                self.axis_node_2,
+                id_ok(self.axis_node_2),
+                "1 to 15",
+            ),
+            (
+                "axis_node_3",
+                self.axis_node_3,
+                id_ok(self.axis_node_3),
+                "1 to 15",
+            ),
+            (
+                "axis_node_2",
+                self.axis_node_2,
+                nodes[0] != nodes[1] && nodes[1] != nodes[2] && nodes[0] != nodes[2],
+                "three distinct node ids",
             ),
             (
                 "soft_limit_max",
@@ -485,6 +603,18 @@ impl DriveConfig {
             ),
             ("ki", self.ki, self.ki >= 0.0, ">= 0"),
             (
+                "homing_direction",
+                self.homing_direction,
+                self.homing_direction == 1.0 || self.homing_direction == -1.0,
+                "+1 or -1",
+            ),
+            (
+                "homing_backoff",
+                self.homing_backoff,
+                self.homing_backoff >= 0.0,
+                ">= 0",
+            ),
+            (
                 "underrun_margin",
                 self.underrun_margin,
                 self.underrun_margin >= 0.0,
@@ -495,6 +625,13 @@ impl DriveConfig {
             if !ok {
                 return Err(ConfigError { name, value, rule });
             }
+        }
+        if own != self.node_id {
+            return Err(ConfigError {
+                name: "node_id",
+                value: self.node_id,
+                rule: "the axis_node_k of this drive's axis",
+            });
         }
         self.robot().validate().map_err(|e| match e {
             crate::params::ParamError::Invalid { name, rule, value } => {
@@ -567,7 +704,15 @@ mod tests {
         );
         c.validate().unwrap();
         for (bad, name) in [
+            (DriveConfig { node_id: 16.0, ..c }, "node_id"),
             (DriveConfig { node_id: 4.0, ..c }, "node_id"),
+            (
+                DriveConfig {
+                    axis_node_1: 3.0,
+                    ..c
+                },
+                "axis_node_2",
+            ),
             (DriveConfig { node_id: 0.0, ..c }, "node_id"),
             (
                 DriveConfig {

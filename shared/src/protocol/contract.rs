@@ -24,7 +24,7 @@ pub const LIMIT_CHECK_INTERVALS: i64 = 64;
 /// a frame whose ACK slot a receiver missed.
 pub const REPEAT_WINDOW_US: u64 = 100_000;
 /// Sync timeout of a node without a configuration (µs): what its
-/// HeartbeatExt `sync_ok` is judged by.
+/// HeartbeatExt `flags` (synced) is judged by.
 pub const UNCONFIGURED_SYNC_TIMEOUT_US: u64 = 500_000;
 /// Heartbeat period of a node without a configuration (µs).
 pub const UNCONFIGURED_HEARTBEAT_US: u64 = 100_000;
@@ -86,7 +86,7 @@ pub const BOUNDS: &[Bound] = &[
         name: "unconfigured sync timeout",
         value: UNCONFIGURED_SYNC_TIMEOUT_US as f64 / 1000.0,
         unit: "ms",
-        doc: "`sync_ok` of a node without a configuration (configured: `sync_timeout`).",
+        doc: "`flags` bit synced of a node without a configuration (configured: `sync_timeout`).",
     },
     Bound {
         name: "unconfigured heartbeat period",

@@ -322,6 +322,16 @@ pub fn markdown() -> String {
     enum_table(&mut o, "FaultCode", FaultCode::TABLE);
     enum_table(&mut o, "Reject (SegmentAck.result)", Reject::TABLE);
     enum_table(&mut o, "CommandCode", CommandCode::TABLE);
+    o.push_str(
+        "#### HeartbeatExt flags
+
+| Bit | Name | Meaning |
+|---:|---|---|
+",
+    );
+    for (bit, name, doc) in flags::TABLE {
+        let _ = writeln!(o, "| {} | {name} | {doc} |", bit.trailing_zeros());
+    }
     o
 }
 
@@ -382,6 +392,7 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
                 command: CommandCode::Start as u8,
                 token: 7,
                 arg: 1_250_000,
+                arg2: 0,
             },
         ),
         (
@@ -391,6 +402,17 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
                 command: CommandCode::Arm as u8,
                 token: 8,
                 arg: 0,
+                arg2: 0,
+            },
+        ),
+        (
+            "Command_5 Home",
+            5,
+            Command {
+                command: CommandCode::Home as u8,
+                token: 10,
+                arg: 0,
+                arg2: 0,
             },
         ),
         (
@@ -400,6 +422,7 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
                 command: CommandCode::ConfigCommit as u8,
                 token: 9,
                 arg: 0x1234_ABCD,
+                arg2: 0,
             },
         ),
     ] {
@@ -430,6 +453,14 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
         value: 0,
     };
     add("CommandAck_1", a.to_frame(1), Msg::CommandAck(a));
+    let a = CommandAck {
+        command: CommandCode::Arm as u8,
+        token: 11,
+        result: FaultCode::NotHomed as u8,
+        state: State::Loaded as u8,
+        value: 0,
+    };
+    add("CommandAck_6", a.to_frame(6), Msg::CommandAck(a));
     add(
         "ConfigValue_1 lead",
         config_value_frame(1, 12, 0.01),
@@ -452,9 +483,18 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
         tx_errors: 0,
         rx_errors: 1,
         last_reject: Reject::Duplicate as u8,
-        sync_ok: 1,
+        flags: flags::SYNCED | flags::HOMED | flags::CONFIGURED,
     };
     add("HeartbeatExt_2", h.to_frame(2), Msg::HeartbeatExt(h));
+    let h = HeartbeatExt {
+        next_seq: 0,
+        rejects: 0,
+        tx_errors: 0,
+        rx_errors: 0,
+        last_reject: 0,
+        flags: flags::SYNCED | flags::SWITCH,
+    };
+    add("HeartbeatExt_15", h.to_frame(15), Msg::HeartbeatExt(h));
     let t = Telemetry {
         position: 0.356_68,
         velocity: -0.125,

@@ -21,6 +21,9 @@ code_enum! {
         Stopping = 4,
         /// Stopped with a fault code; holds position; only ClearFault leaves it.
         Fault = 5,
+        /// Moving toward the limit switch, latching its edge and backing off
+        /// (after Home); Idle and homed when done, Fault if it fails.
+        Homing = 6,
     }
 }
 
@@ -63,6 +66,14 @@ code_enum! {
         PeerLost = 16,
         /// The measured position left this axis's soft limits while running: jerk-limited stop along the path.
         SoftLimit = 17,
+        /// Arm or segment refused: the axis is not homed (its position is unknown). The node stays Idle; run Home first.
+        NotHomed = 18,
+        /// Homing did not finish within `homing_timeout`.
+        HomingTimeout = 19,
+        /// Home refused: the limit switch is already active (axis on or beyond its switch; move it off by hand).
+        HomeSwitchActive = 20,
+        /// Homing travelled `homing_max_travel` without a switch edge (dead switch or wrong direction).
+        HomeSwitchNeverTriggered = 21,
     }
 }
 
@@ -89,6 +100,8 @@ code_enum! {
         Discontinuous = 8,
         /// The segment leaves this axis's soft limits.
         OutsideSoftLimits = 9,
+        /// The axis is not homed: segments are refused until it is.
+        NotHomed = 10,
     }
 }
 
@@ -115,11 +128,40 @@ code_enum! {
         Reset = 9,
         /// Answer with a ConfigValue frame for every parameter.
         ReadConfig = 10,
+        /// Idle with a configuration: home this axis (state Homing, then Idle and homed).
+        Home = 11,
     }
 }
 
-/// Protocol version carried in every heartbeat.
-pub const PROTOCOL_VERSION: u8 = 1;
+/// Protocol version carried in every heartbeat. Version 2: HeartbeatExt
+/// `flags` (was `sync_ok`), state Homing, command Home, 8-byte Command,
+/// node ids 1–15, homing parameters and fault codes.
+pub const PROTOCOL_VERSION: u8 = 2;
+
+/// Bits of HeartbeatExt `flags`.
+pub mod flags {
+    /// The node has a valid time sync.
+    pub const SYNCED: u8 = 1 << 0;
+    /// The axis is homed: its position is absolute.
+    pub const HOMED: u8 = 1 << 1;
+    /// Running and held at rest by feed hold.
+    pub const HELD: u8 = 1 << 2;
+    /// A feed-rate override is active (reserved for a later command).
+    pub const OVERRIDE: u8 = 1 << 3;
+    /// The limit switch input is active now.
+    pub const SWITCH: u8 = 1 << 4;
+    /// The node has an active configuration.
+    pub const CONFIGURED: u8 = 1 << 5;
+    /// Every flag with its name, for the spec and decoders.
+    pub const TABLE: &[(u8, &str, &str)] = &[
+        (SYNCED, "synced", "valid time sync"),
+        (HOMED, "homed", "axis homed: position absolute"),
+        (HELD, "held", "Running, held at rest by feed hold"),
+        (OVERRIDE, "override", "feed-rate override active (reserved)"),
+        (SWITCH, "switch", "limit switch input active"),
+        (CONFIGURED, "configured", "an active configuration"),
+    ];
+}
 
 messages! {
     /// Sent at once when a node faults (or by the host, node 0, as an emergency stop).
@@ -142,13 +184,15 @@ messages! {
         prev_tx_us: u32 @ 1 ["us", 1.0],
     }
     /// Command to node n (or all nodes on node 0); answered by CommandAck.
-    Command = Addr::ToNode(0x030), len 6, from "host", every "on event" {
+    Command = Addr::ToNode(0x030), len 8, from "host", every "on event" {
         /// Command code.
         command: u8 @ 0 ["", 1.0, CommandCode],
         /// Echoed in the CommandAck.
         token: u8 @ 1 ["", 1.0],
         /// Start: host time (µs); ConfigCommit: CRC-32; otherwise 0.
         arg: u32 @ 2 ["", 1.0],
+        /// Second argument for later commands (e.g. an override factor); 0 today.
+        arg2: u16 @ 6 ["", 1.0],
     }
     /// Acknowledgement of every segment, accepted or rejected.
     SegmentAck = Addr::FromNode(0x180), len 8, from "node", every "per segment" {
@@ -203,8 +247,8 @@ messages! {
         rx_errors: u8 @ 5 ["", 1.0],
         /// Reason of the last rejection.
         last_reject: u8 @ 6 ["", 1.0, Reject],
-        /// 1 when the node has a valid time sync.
-        sync_ok: u8 @ 7 ["", 1.0],
+        /// Bits: 0 synced, 1 homed, 2 held, 3 override active, 4 limit switch active, 5 configured.
+        flags: u8 @ 7 ["", 1.0],
     }
     /// Telemetry: measured position and velocity of node n's axis.
     Telemetry = Addr::FromNode(0x780), len 8, from "node", every "configurable" {
@@ -219,5 +263,12 @@ messages! {
         torque: f32 @ 0 ["N.m", 1.0],
         /// Position reference − measured position.
         following_error: f32 @ 4 ["m", 1.0],
+    }
+}
+
+impl HeartbeatExt {
+    /// Is flag `bit` (one of [`flags`]) set?
+    pub const fn has(&self, bit: u8) -> bool {
+        self.flags & bit != 0
     }
 }

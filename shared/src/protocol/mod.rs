@@ -8,8 +8,9 @@
 //! triquint-shared protocol` rewrites them).
 //!
 //! Bus: 1 Mbit/s classic CAN 2.0A (11-bit identifiers), or CAN-FD with
-//! 1 Mbit/s arbitration and 5 Mbit/s data phase. Node numbers 1–3 drive axes
-//! 1–3; node 0 is the host or "all nodes".
+//! 1 Mbit/s arbitration and 5 Mbit/s data phase. Node ids 1–15; which axis
+//! a node drives is its configuration (`axis`), by default node k drives
+//! axis k; node 0 is the host or "all nodes".
 
 pub mod config;
 pub mod contract;
@@ -26,11 +27,12 @@ pub use config::{DriveConfig, DriveSettings, PARAM_COUNT, PARAMS};
 pub use crc::crc32;
 pub use messages::*;
 pub use segment::{PartEvent, Reassembler, WireSegment};
-pub use wire::{Addr, MessageDef};
+pub use wire::{Addr, MAX_NODE_ID, MessageDef};
 
 /// Largest payload (CAN-FD).
 pub const MAX_PAYLOAD: usize = 64;
-/// Axis nodes on the bus.
+/// The default node ids of the drives of axes 1–3 (any distinct ids
+/// 1–15 may be configured).
 pub const NODES: [u8; 3] = [1, 2, 3];
 
 /// One CAN frame with an 11-bit identifier.
@@ -326,7 +328,7 @@ mod tests {
 
     #[test]
     fn identifiers_are_unique_and_ordered_by_priority() {
-        let mut ids: heapless::Vec<(u16, &str), 64> = heapless::Vec::new();
+        let mut ids: heapless::Vec<(u16, &str), 256> = heapless::Vec::new();
         for def in all_messages() {
             for &n in def.addr.nodes() {
                 ids.push((def.addr.id(n), def.name)).unwrap();

@@ -133,12 +133,18 @@ pub struct FieldDef {
     pub values: Option<&'static [EnumEntry]>,
 }
 
+/// Highest node id: ids 1–15 share the bus (node 0 is the host or "all").
+pub const MAX_NODE_ID: u8 = 15;
+const ALL_NODES: [u8; MAX_NODE_ID as usize + 1] =
+    [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+const NODE_IDS: [u8; MAX_NODE_ID as usize] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
 /// How a message's identifier depends on the node.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Addr {
     /// One identifier for everybody.
     Broadcast(u16),
-    /// Sent by node n (1–3) on `base + n`.
+    /// Sent by node n (1–15) on `base + n`.
     FromNode(u16),
     /// Sent by the host to node n on `base + n`, or to all nodes on `base + 0`.
     ToNode(u16),
@@ -163,8 +169,8 @@ impl Addr {
     pub const fn nodes(self) -> &'static [u8] {
         match self {
             Addr::Broadcast(_) => &[0],
-            Addr::FromNode(_) => &[1, 2, 3],
-            Addr::ToNode(_) | Addr::FromNodeOrHost(_) => &[0, 1, 2, 3],
+            Addr::FromNode(_) => &NODE_IDS,
+            Addr::ToNode(_) | Addr::FromNodeOrHost(_) => &ALL_NODES,
         }
     }
     /// Does `id` belong to this message? Returns the node number.
@@ -176,8 +182,8 @@ impl Addr {
         let n = id - base;
         match self {
             Addr::Broadcast(_) if n == 0 => Some(0),
-            Addr::FromNode(_) if n >= 1 && n <= 3 => Some(n as u8),
-            Addr::ToNode(_) | Addr::FromNodeOrHost(_) if n <= 3 => Some(n as u8),
+            Addr::FromNode(_) if n >= 1 && n <= MAX_NODE_ID as u16 => Some(n as u8),
+            Addr::ToNode(_) | Addr::FromNodeOrHost(_) if n <= MAX_NODE_ID as u16 => Some(n as u8),
             _ => None,
         }
     }
@@ -325,7 +331,8 @@ mod tests {
         let a = Addr::FromNode(0x700);
         assert_eq!(a.matches(0x700), None);
         assert_eq!(a.matches(0x702), Some(2));
-        assert_eq!(a.matches(0x704), None);
+        assert_eq!(a.matches(0x70F), Some(15));
+        assert_eq!(a.matches(0x710), None);
         assert_eq!(Addr::ToNode(0x30).matches(0x30), Some(0));
         assert_eq!(Addr::Broadcast(0x20).matches(0x21), None);
     }

@@ -3,13 +3,14 @@
 //! encoder scale, limits and soft limits; not the current sensing or the
 //! motor's poles).
 
-/// Node id when flash holds none (1–3); `TRIQUINT_NODE_ID=2 cargo run --release`
+/// Node id when flash holds none (1–15); `TRIQUINT_NODE_ID=2 cargo run --release`
 /// programs another, which is then kept in flash. A committed configuration
-/// with another `node_id` renumbers the board from its next start.
+/// with another `node_id` renumbers the board from its next start. Anything
+/// but 1–15 is node 1.
 pub const DEFAULT_NODE_ID: u8 = match option_env!("TRIQUINT_NODE_ID") {
     Some(s) => match s.as_bytes() {
-        [b'2'] => 2,
-        [b'3'] => 3,
+        [d @ b'1'..=b'9'] => *d - b'0',
+        [b'1', d @ b'0'..=b'5'] => 10 + (*d - b'0'),
         _ => 1,
     },
     None => 1,

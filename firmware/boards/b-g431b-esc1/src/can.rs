@@ -4,8 +4,6 @@
 //! handing finished items to the tick; the transmit task sends what the node
 //! queued (heartbeats, acknowledgements, telemetry, emergencies).
 
-use core::sync::atomic::Ordering;
-
 use embassy_futures::select::{Either, select};
 use embassy_stm32::can::frame::{FdFrame, Header};
 use embassy_stm32::can::{self, CanRx, CanTx};
@@ -18,7 +16,6 @@ use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
 
 use crate::control::STATUS;
-use crate::encoder::HOMED;
 
 /// Raised by the tick when it queued frames.
 pub static TX_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
@@ -59,8 +56,8 @@ pub async fn receive(
             Either::First(Err(_bus_error)) => None,
             Either::Second(kept) => Some(kept),
         };
-        // Until the axis is homed the node stays unconfigured.
-        let Some(frame) = frame.filter(|_| HOMED.load(Ordering::Acquire)) else {
+        // Every frame, homed or not: the core refuses motion until homed.
+        let Some(frame) = frame else {
             continue;
         };
         let status = critical_section::with(|cs| STATUS.borrow(cs).get());

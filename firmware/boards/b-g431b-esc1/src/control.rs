@@ -15,6 +15,7 @@ use triquint_firmware::{Drive, Item, Status};
 use triquint_shared::protocol::{Frame, PARAM_COUNT};
 
 use crate::encoder::QuadratureEncoder;
+use crate::homing::Switch;
 use crate::motor::TorqueToCurrent;
 
 /// Everything the tick owns.
@@ -59,12 +60,12 @@ fn TIM6_DAC() {
     let Some(t) = (unsafe { TICK.load(Ordering::Acquire).as_mut() }) else {
         return;
     };
-    // Hand-off from the CAN receive task (which drops frames until the axis
-    // is homed: the node stays unconfigured, motor off).
+    // Hand-off from the CAN receive task.
     t.drive.take_from(&mut t.inbox);
     let errors = (t.can.tx_error_count(), t.can.rx_error_count());
     t.drive.set_error_counters(errors);
-    t.drive.tick(now_us(), &mut t.encoder, &mut t.motor);
+    t.drive
+        .tick_with_switch(now_us(), &mut t.encoder, &mut t.motor, &mut Switch);
     let status = t.drive.status();
     critical_section::with(|cs| STATUS.borrow(cs).set(status));
     while let Some(f) = t.drive.peek_tx() {

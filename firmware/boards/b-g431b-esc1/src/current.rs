@@ -20,7 +20,6 @@ use embassy_stm32::timer::Channel;
 use embassy_stm32::timer::complementary_pwm::ComplementaryPwm;
 
 use crate::board::*;
-use crate::encoder::HOMED;
 use crate::foc::{CurrentLoop, Pi};
 use crate::motor::{ENABLE, iq_ref};
 
@@ -85,7 +84,7 @@ fn ADC1_2() {
     // time, so ADC1 is done when ADC2 is; reading clears both end flags.
     let [u] = c.phase_u.read_injected_samples();
     let [v] = c.phase_v.read_injected_samples();
-    let on = ENABLE.load(Ordering::Relaxed) && HOMED.load(Ordering::Acquire);
+    let on = ENABLE.load(Ordering::Relaxed);
     if !on {
         c.pwm.set_master_output_enable(false);
         LOOP.reset();

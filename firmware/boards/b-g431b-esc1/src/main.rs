@@ -3,7 +3,7 @@
 //! Interrupts, highest first: the current loop (end of the ADC conversions
 //! that TIM1 starts at the PWM centre, 20 kHz), the
 //! control tick (TIM6 update, 10 kHz, owns the node), then the embassy
-//! executor in thread mode (CAN receive / transmit, homing, flash). All motion
+//! executor in thread mode (CAN receive / transmit, limit switch, flash). All motion
 //! logic is the target-independent core (`triquint-firmware`).
 #![no_std]
 #![no_main]
@@ -78,7 +78,7 @@ async fn main(spawner: Spawner) {
     // Node id and configuration live in flash.
     let mut flash: storage::Storage = BlockingAsync::new(Flash::new_blocking(p.FLASH));
     let node_id = match storage::node_id(&mut flash).await {
-        Some(id @ 1..=3) if option_env!("TRIQUINT_NODE_ID").is_none() => id,
+        Some(id @ 1..=15) if option_env!("TRIQUINT_NODE_ID").is_none() => id,
         _ => {
             storage::store_node_id(&mut flash, board::DEFAULT_NODE_ID).await;
             board::DEFAULT_NODE_ID
@@ -160,7 +160,8 @@ async fn main(spawner: Spawner) {
     let (tx_prod, tx_cons) = TX_QUEUE.init(Queue::new()).split();
 
     let tick = control::Tick {
-        drive: Drive::new(node_id),
+        // Position unknown at power-on: the host homes it (Home command).
+        drive: Drive::new_unhomed(node_id),
         encoder,
         motor: motor::TorqueToCurrent {
             // Until a configuration brings Kt: no current at all.
@@ -191,6 +192,6 @@ async fn main(spawner: Spawner) {
     let home = ExtiInput::new(p.PB8, p.EXTI8, Pull::Down, Irqs);
     spawner.spawn(can::receive(can_rx, Receiver::new(node_id), inbox_prod).expect("spawn can rx"));
     spawner.spawn(can::transmit(can_tx, tx_cons).expect("spawn can tx"));
-    spawner.spawn(homing::home(home).expect("spawn homing"));
+    spawner.spawn(homing::watch(home).expect("spawn limit switch"));
     spawner.spawn(storage::keep(flash, node_id).expect("spawn storage"));
 }

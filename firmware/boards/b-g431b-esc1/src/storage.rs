@@ -3,7 +3,6 @@
 //! the node after homing on the next start, through the same protocol frames.
 
 use core::ops::Range;
-use core::sync::atomic::Ordering;
 
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_stm32::flash::{Blocking, Flash};
@@ -17,7 +16,6 @@ use triquint_shared::protocol::{
 
 use crate::can::RESTORE;
 use crate::control::{TO_STORE, now_us};
-use crate::encoder::HOMED;
 
 pub type Storage = BlockingAsync<Flash<'static, Blocking>>;
 
@@ -51,9 +49,6 @@ pub async fn store_node_id(flash: &mut Storage, id: u8) {
 #[embassy_executor::task]
 pub async fn keep(mut flash: Storage, node: u8) {
     let mut buf = [0u8; 4 * (PARAM_COUNT + 1) + 32];
-    while !HOMED.load(Ordering::Acquire) {
-        Timer::after_millis(10).await;
-    }
     // Replay the kept configuration: writes, then the commit with its CRC.
     let kept = fetch_item::<u8, [u32; PARAM_COUNT + 1], _>(
         &mut flash,
@@ -77,6 +72,7 @@ pub async fn keep(mut flash: Storage, node: u8) {
             command: CommandCode::ConfigCommit as u8,
             token: 0,
             arg: words[PARAM_COUNT],
+            arg2: 0,
         };
         let frame = commit.to_frame(0);
         RESTORE
@@ -98,7 +94,7 @@ pub async fn keep(mut flash: Storage, node: u8) {
         words[PARAM_COUNT] = crc;
         // The configuration's node id is the board's from its next start.
         let id = DriveConfig::from_values(&values).node_id as u8;
-        if id != node && (1..=3).contains(&id) && node_id(&mut flash).await != Some(id) {
+        if id != node && (1..=15).contains(&id) && node_id(&mut flash).await != Some(id) {
             store_node_id(&mut flash, id).await;
         }
         let _ = store_item(

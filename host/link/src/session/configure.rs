@@ -8,7 +8,7 @@ use triquint_shared::protocol::{
     CommandCode, DriveConfig, PARAM_COUNT, PARAMS, config_write_frame,
 };
 
-use super::nodes::{NODES, NodeView, Nodes, node_id};
+use super::nodes::{NODES, NodeView, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
 
@@ -49,6 +49,11 @@ impl Configuration {
         }
     }
 
+    /// Node id of index `i` (its configuration's).
+    fn id(&self, i: usize) -> u8 {
+        self.configs[i].node_id as u8
+    }
+
     /// Writes every node's configuration, then commits each.
     pub fn start(&mut self, now: u64, out: &mut Outbox) {
         for i in 0..NODES {
@@ -61,12 +66,12 @@ impl Configuration {
 
     fn write(&self, i: usize, out: &mut Outbox) {
         for (k, val) in self.configs[i].to_values().iter().enumerate() {
-            out.push_back(config_write_frame(node_id(i), k as u8, *val));
+            out.push_back(config_write_frame(self.id(i), k as u8, *val));
         }
     }
 
     fn commit(&mut self, i: usize, now: u64, resends: u32, out: &mut Outbox) {
-        let token = out.command(node_id(i), CommandCode::ConfigCommit, self.configs[i].crc());
+        let token = out.command(self.id(i), CommandCode::ConfigCommit, self.configs[i].crc());
         self.commits[i] = Commit {
             token,
             sent_at: now,
@@ -96,7 +101,7 @@ impl Configuration {
                 Some(a) if a.token == c.token => {
                     if !can_resend {
                         return Err(UploadError::ConfigCrc {
-                            node: node_id(i),
+                            node: self.id(i),
                             node_crc: a.value,
                             plan_crc: self.configs[i].crc(),
                         });
@@ -129,7 +134,7 @@ impl Configuration {
 
     /// Asks node index `i` for its configuration, value by value.
     pub fn read_back(&mut self, i: usize, out: &mut Outbox) {
-        let node = node_id(i);
+        let node = self.id(i);
         self.readback = Some(Readback {
             node,
             values: [None; PARAM_COUNT],

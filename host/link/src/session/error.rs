@@ -34,8 +34,25 @@ pub enum UploadError {
         node_crc: u32,
         plan_crc: u32,
     },
-    #[error("node {node}: protocol version {got}, expected {want}")]
+    #[error("node {node} speaks protocol version {got}, this host version {want}: update {}", if got < want { "the drive's firmware (or triquint-sim)" } else { "the host (triquint)" })]
     Version { node: u8, got: u8, want: u8 },
+    #[error("node {node} is in Fault ({code}); nothing was sent")]
+    Faulted { node: u8, code: &'static str },
+    #[error(
+        "node {node} refused: NotHomed (its position is unknown until it is homed); nothing moved"
+    )]
+    NotHomed { node: u8 },
+    #[error(
+        "node {node} refused Arm: ArmTooFar: the platform is not at the plan's start ({}); nothing moved",
+        too_far(distances_mm)
+    )]
+    ArmTooFar {
+        node: u8,
+        /// Measured minus start joint position of each axis (mm; `None`: no position heard).
+        distances_mm: [Option<f64>; 3],
+        /// The plan's start (mm).
+        start_mm: [f64; 3],
+    },
     #[error("node {node} rejected segment {seq}: {reason}")]
     Rejected {
         node: u8,
@@ -52,16 +69,36 @@ pub enum UploadError {
     },
 }
 
+/// "axis 1 12.345 mm, axis 2 …" for the ArmTooFar message.
+fn too_far(d: &[Option<f64>; 3]) -> String {
+    d.iter()
+        .enumerate()
+        .map(|(i, x)| match x {
+            Some(x) => format!("axis {} {:+.3} mm", i + 1, x),
+            None => format!("axis {} position unknown", i + 1),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 impl UploadError {
+    /// Is this a refusal: nothing moved, the machine is not ready for this
+    /// (not homed, faulted, not at the plan's start, an Arm refused)?
+    pub fn is_refusal(&self) -> bool {
+        matches!(
+            self,
+            UploadError::Faulted { .. }
+                | UploadError::NotHomed { .. }
+                | UploadError::ArmTooFar { .. }
+                | UploadError::Refused { .. }
+        )
+    }
+
     /// Is this the plan's or the machine's configuration (bad input, exit 2)?
     pub fn is_config(&self) -> bool {
         matches!(
             self,
             UploadError::ConfigMismatch { .. } | UploadError::ConfigCrc { .. }
         )
-    }
-    /// Is this a motion fault (exit 5)?
-    pub fn is_motion_fault(&self) -> bool {
-        matches!(self, UploadError::Refused { .. })
     }
 }

@@ -29,7 +29,7 @@ use triquint_shared::protocol::{
 };
 
 use self::configure::Configuration;
-use self::nodes::{Nodes, node_index};
+use self::nodes::Nodes;
 use self::outbox::Outbox;
 use self::start::StartSequence;
 use self::stream::Stream;
@@ -90,6 +90,7 @@ pub struct Session {
     opts: SessionOptions,
     phase: Phase,
     phase_since: u64,
+    polled: bool,
     nodes: Nodes,
     out: Outbox,
     sync: TimeSyncMaster,
@@ -98,6 +99,18 @@ pub struct Session {
     start: StartSequence,
     plan_end_us: u64,
     faults: Vec<FaultReport>,
+    /// The plan's first via-point (m) and the joints there, for an Arm
+    /// refused for distance.
+    plan_start: Option<PlanStart>,
+}
+
+/// Where a plan starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanStart {
+    /// Platform position (m).
+    pub r: [f64; 3],
+    /// Joint positions (m).
+    pub q: [f64; 3],
 }
 
 impl Session {
@@ -110,13 +123,22 @@ impl Session {
         let segments = plan
             .wire_segments()
             .map_err(|(seq, source)| UploadError::Segment { seq, source })?;
-        Ok(Self::with_segments(segments, configs, opts))
+        let mut s = Self::with_segments(segments, configs, opts);
+        s.plan_start = match (plan.via_points_m.first(), plan.segments.first()) {
+            (Some(r), Some(seg)) => Some(PlanStart {
+                r: *r,
+                q: [seg.coeffs[0][0], seg.coeffs[1][0], seg.coeffs[2][0]],
+            }),
+            _ => None,
+        };
+        Ok(s)
     }
 
     /// A session that only writes and checks the configurations (no motion):
     /// drives report their position once configured.
     pub fn configure(configs: [DriveConfig; NODES], mut opts: SessionOptions) -> Self {
         opts.configure_only = true;
+        opts.require_homed = false;
         Self::with_segments(Vec::new(), configs, opts)
     }
 
@@ -131,13 +153,15 @@ impl Session {
             opts,
             phase: Phase::Discover,
             phase_since: 0,
-            nodes: Nodes::default(),
+            polled: false,
+            nodes: Nodes::new(configs.map(|c| c.node_id as u8)),
             out: Outbox::default(),
             sync: TimeSyncMaster::default(),
             config: Configuration::new(configs),
             stream,
             start: StartSequence::default(),
             faults: Vec::new(),
+            plan_start: None,
         }
     }
 
@@ -205,19 +229,18 @@ impl Session {
         let Ok((msg, node)) = decode(&rx.frame) else {
             return Ok(());
         };
-        let Some(i) = node_index(node) else {
+        let Some(i) = self.nodes.index(node) else {
             return Ok(());
         };
         let v = &mut self.nodes.0[i];
         match msg {
             Msg::Heartbeat(h) => {
-                v.heartbeat_at = Some(rx.t_us);
-                v.state = State::from_u8(h.state);
-                v.fault = h.fault;
-                v.config_crc = h.config_crc;
-                v.version = h.protocol_version;
-                v.depth = h.queue_depth;
-                if h.fault != 0 && !self.faults.iter().any(|f| f.node == node) {
+                v.heartbeat(&h, rx.t_us);
+                // A fault in a heartbeat counts once motion is under way (an
+                // Emergency frame may be lost); before, a faulted node is
+                // refused or cleared in discovery.
+                let moving = matches!(self.phase, Phase::Arm | Phase::Stream | Phase::Finish);
+                if moving && h.fault != 0 && !self.faults.iter().any(|f| f.node == node) {
                     self.faults.push(FaultReport {
                         node,
                         code: FaultCode::from_u8(h.fault).unwrap_or(FaultCode::None),
@@ -225,16 +248,13 @@ impl Session {
                     });
                 }
             }
-            Msg::HeartbeatExt(h) => {
-                v.sync_ok = h.sync_ok != 0;
-                v.sync_seen_at = Some(rx.t_us);
-                v.next_seq = h.next_seq;
-            }
+            Msg::HeartbeatExt(h) => v.heartbeat_ext(&h, rx.t_us),
+            Msg::Telemetry(t) => v.position = Some(t.position),
             Msg::SegmentAck(a) => {
                 v.next_seq = a.next_seq;
                 v.depth = a.depth;
                 v.capacity = a.capacity;
-                self.stream.acknowledged(i, &a, rx.t_us)?;
+                self.stream.acknowledged(i, node, &a, rx.t_us)?;
             }
             Msg::CommandAck(a) => v.last_answer = Some(a.into()),
             Msg::Emergency(e) => {
@@ -262,6 +282,12 @@ impl Session {
     /// Advances the session; `Ok(Some(outcome))` when finished.
     pub fn poll<P: CanPort>(&mut self, port: &mut P) -> Result<Option<Outcome>, UploadError> {
         let now = port.now_us();
+        // The first phase's clock starts at the first poll, whatever the
+        // port's clock reads then.
+        if !self.polled {
+            self.polled = true;
+            self.phase_since = now;
+        }
         while let Some(rx) = port.recv()? {
             self.handle(&rx)?;
         }
@@ -316,16 +342,19 @@ impl Session {
             }
             Phase::Arm => {
                 let answers = self.start.arm_answers(&self.nodes);
-                if self
+                let armed = match self
                     .start
-                    .poll_arm(now, &self.nodes, &self.opts, &mut self.out)?
+                    .poll_arm(now, &self.nodes, &self.opts, &mut self.out)
                 {
+                    Ok(a) => a,
+                    Err(e) => return Err(self.arm_refused(e, port)),
+                };
+                if armed {
                     self.set_phase(Phase::Stream, now);
                 } else {
-                    let node = answers
-                        .iter()
-                        .position(Option::is_none)
-                        .map_or(1, |i| i as u8 + 1);
+                    let node = self
+                        .nodes
+                        .id(answers.iter().position(Option::is_none).unwrap_or(0));
                     self.timeout(now, "answering Arm", node)?;
                 }
             }
@@ -361,24 +390,61 @@ impl Session {
         Ok(None)
     }
 
-    /// Every node heard: protocol version checked, faults cleared, Reset,
-    /// then the configuration written (or only checked).
+    /// An Arm refusal: every node back to Idle (Reset, nothing moved), and
+    /// for a refusal for distance, how far each axis is from the plan's start.
+    fn arm_refused<P: CanPort>(&mut self, e: UploadError, port: &mut P) -> UploadError {
+        self.out.command(0, CommandCode::Reset, 0);
+        let _ = self.out.flush(port);
+        let UploadError::Refused { node, code, .. } = e else {
+            return e;
+        };
+        match (code, self.plan_start) {
+            ("ArmTooFar", Some(start)) => UploadError::ArmTooFar {
+                node,
+                distances_mm: [0, 1, 2].map(|i| {
+                    self.nodes.0[i]
+                        .position
+                        .map(|q| (q as f64 - start.q[i]) * 1e3)
+                }),
+                start_mm: start.r.map(|x| x * 1e3),
+            },
+            ("NotHomed", _) => UploadError::NotHomed { node },
+            _ => e,
+        }
+    }
+
+    /// Every node heard: protocol version checked, homed, not faulted
+    /// (or faults cleared on request), Reset, then the configuration
+    /// written (or only checked).
     fn discover(&mut self, now: u64) -> Result<(), UploadError> {
-        if !self.nodes.all(|v| v.heartbeat_at.is_some()) {
-            let node = self.nodes.first(|v| v.heartbeat_at.is_none());
+        let heard = |v: &nodes::NodeView| v.heartbeat_at.is_some() && v.sync_seen_at.is_some();
+        if !self.nodes.all(heard) {
+            let node = self.nodes.first(|v| !heard(v));
             return self.timeout(now, "waiting for its heartbeat", node);
         }
-        for (i, v) in self.nodes.0.iter().enumerate() {
+        for v in &self.nodes.0 {
             if v.version != PROTOCOL_VERSION {
                 return Err(UploadError::Version {
-                    node: i as u8 + 1,
+                    node: v.id,
                     got: v.version,
                     want: PROTOCOL_VERSION,
                 });
             }
         }
-        if self.nodes.any(|v| v.state == Some(State::Fault)) {
+        if let Some(v) = self.nodes.0.iter().find(|v| v.state == Some(State::Fault)) {
+            if !self.opts.clear_faults {
+                return Err(UploadError::Faulted {
+                    node: v.id,
+                    code: FaultCode::from_u8(v.fault).map_or("unknown", FaultCode::name),
+                });
+            }
             self.out.command(0, CommandCode::ClearFault, 0);
+            self.faults.clear();
+        }
+        if self.opts.require_homed
+            && let Some(v) = self.nodes.0.iter().find(|v| !v.homed)
+        {
+            return Err(UploadError::NotHomed { node: v.id });
         }
         self.out.command(0, CommandCode::Reset, 0);
         if self.opts.configure {

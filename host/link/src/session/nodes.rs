@@ -1,19 +1,10 @@
 //! What the host knows of each drive node, from its heartbeats and answers.
 
-use triquint_shared::protocol::{CommandAck, State};
+use triquint_shared::protocol::{CommandAck, Heartbeat, HeartbeatExt, State, flags};
 
-/// Drive nodes (node `i + 1` drives axis `i`).
+/// Drives of a robot (index `i` drives axis `i + 1`; its node id is
+/// configured, by default `i + 1`).
 pub const NODES: usize = 3;
-
-/// Node id of index `i` (0-based).
-pub(crate) fn node_id(i: usize) -> u8 {
-    i as u8 + 1
-}
-
-/// Index of node id `node`, if it is one of the drives.
-pub(crate) fn node_index(node: u8) -> Option<usize> {
-    (1..=NODES as u8).contains(&node).then(|| node as usize - 1)
-}
 
 /// A node's answer to a command (its latest CommandAck).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,6 +31,8 @@ impl From<CommandAck> for CommandAnswer {
 /// One node as the host last heard it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NodeView {
+    /// Its node id.
+    pub id: u8,
     /// Host time (µs) of its latest heartbeat.
     pub heartbeat_at: Option<u64>,
     pub state: Option<State>,
@@ -48,6 +41,17 @@ pub struct NodeView {
     pub version: u8,
     /// Its clock follows the host's time sync.
     pub sync_ok: bool,
+    /// Its position is absolute (homed).
+    pub homed: bool,
+    /// HeartbeatExt `flags` as received.
+    pub flags: u8,
+    /// CAN transmit and receive error counters, rejects and the last reason.
+    pub tx_errors: u8,
+    pub rx_errors: u8,
+    pub rejects: u16,
+    pub last_reject: u8,
+    /// Joint position (m) from its latest Telemetry, in its own frame.
+    pub position: Option<f32>,
     /// Host time (µs) of its latest extended heartbeat (sync status).
     pub sync_seen_at: Option<u64>,
     /// The next segment sequence number it expects.
@@ -59,6 +63,29 @@ pub struct NodeView {
 }
 
 impl NodeView {
+    /// Takes in a Heartbeat received at host time `t_us`.
+    pub fn heartbeat(&mut self, h: &Heartbeat, t_us: u64) {
+        self.heartbeat_at = Some(t_us);
+        self.state = State::from_u8(h.state);
+        self.fault = h.fault;
+        self.config_crc = h.config_crc;
+        self.version = h.protocol_version;
+        self.depth = h.queue_depth;
+    }
+
+    /// Takes in a HeartbeatExt received at host time `t_us`.
+    pub fn heartbeat_ext(&mut self, h: &HeartbeatExt, t_us: u64) {
+        self.sync_ok = h.has(flags::SYNCED);
+        self.homed = h.has(flags::HOMED);
+        self.flags = h.flags;
+        self.sync_seen_at = Some(t_us);
+        self.next_seq = h.next_seq;
+        self.tx_errors = h.tx_errors;
+        self.rx_errors = h.rx_errors;
+        self.rejects = h.rejects;
+        self.last_reject = h.last_reject;
+    }
+
     /// Its answer (result) to the command with `token`, if it gave one.
     pub fn answer_to(&self, token: u8) -> Option<u8> {
         self.last_answer
@@ -79,10 +106,34 @@ impl NodeView {
 }
 
 /// The views of every node.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Nodes(pub [NodeView; NODES]);
 
+impl Default for Nodes {
+    fn default() -> Self {
+        Self::new(triquint_shared::protocol::NODES)
+    }
+}
+
 impl Nodes {
+    /// The drives of axes 1–3 on node ids `ids`.
+    pub fn new(ids: [u8; NODES]) -> Self {
+        Self(ids.map(|id| NodeView {
+            id,
+            ..NodeView::default()
+        }))
+    }
+
+    /// Node id of index `i`.
+    pub fn id(&self, i: usize) -> u8 {
+        self.0.get(i).map_or(0, |v| v.id)
+    }
+
+    /// Index of node id `node`, if it is one of the drives.
+    pub fn index(&self, node: u8) -> Option<usize> {
+        (node != 0).then(|| self.0.iter().position(|v| v.id == node))?
+    }
+
     pub fn all(&self, f: impl Fn(&NodeView) -> bool) -> bool {
         self.0.iter().all(f)
     }
@@ -110,8 +161,9 @@ impl Nodes {
             .unwrap_or(0)
     }
 
-    /// The first node for which `missing` holds (node 1 if none does).
+    /// The first node for which `missing` holds (the first node if none does).
     pub fn first(&self, missing: impl Fn(&NodeView) -> bool) -> u8 {
-        self.0.iter().position(missing).map_or(1, node_id)
+        let i = self.0.iter().position(missing).unwrap_or(0);
+        self.id(i)
     }
 }

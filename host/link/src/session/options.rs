@@ -28,6 +28,12 @@ pub struct SessionOptions {
     pub stall_after: Option<usize>,
     /// Only configure the nodes (and check the configuration), no motion.
     pub configure_only: bool,
+    /// Clear faulted nodes before the upload (`upload --clear`); otherwise
+    /// a faulted node ends the session before anything is sent.
+    pub clear_faults: bool,
+    /// Refuse to start when a node is not homed (every motion; not for
+    /// configuring only).
+    pub require_homed: bool,
 }
 
 impl Default for SessionOptions {
@@ -47,6 +53,8 @@ impl Default for SessionOptions {
             finish_grace_us: 5_000_000,
             stall_after: None,
             configure_only: false,
+            clear_faults: false,
+            require_homed: true,
         }
     }
 }

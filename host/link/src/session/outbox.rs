@@ -60,6 +60,7 @@ pub(crate) fn command_frame(node: u8, code: CommandCode, token: u8, arg: u32) ->
         command: code as u8,
         token,
         arg,
+        arg2: 0,
     }
     .to_frame(node)
 }

@@ -6,7 +6,7 @@
 
 use triquint_shared::protocol::{CommandCode, FaultCode};
 
-use super::nodes::{NODES, Nodes, node_id};
+use super::nodes::{NODES, Nodes};
 use super::outbox::{Outbox, command_frame};
 use super::{SessionOptions, UploadError};
 
@@ -74,7 +74,7 @@ impl StartSequence {
             // The same command (same token) to each silent node: one
             // that did arm answers again, one that missed it arms.
             for i in (0..NODES).filter(|&i| acks[i].is_none()) {
-                out.push_back(command_frame(node_id(i), CommandCode::Arm, token, 0));
+                out.push_back(command_frame(nodes.id(i), CommandCode::Arm, token, 0));
             }
             self.arm = Pending {
                 token,
@@ -90,7 +90,7 @@ impl StartSequence {
                 .and_then(FaultCode::from_u8)
                 .unwrap_or(FaultCode::None);
             return Err(UploadError::Refused {
-                node: node_id(i),
+                node: nodes.id(i),
                 command: "Arm",
                 code: code.name(),
             });
@@ -116,7 +116,7 @@ impl StartSequence {
         let acks = nodes.answers_to(token);
         for i in (0..NODES).filter(|&i| acks[i].is_none()) {
             out.push_front(command_frame(
-                node_id(i),
+                nodes.id(i),
                 CommandCode::Start,
                 token,
                 self.start_us as u32,

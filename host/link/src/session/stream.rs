@@ -6,7 +6,7 @@
 
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
-use super::nodes::{NODES, Nodes, node_id};
+use super::nodes::{NODES, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
 
@@ -69,7 +69,13 @@ impl Stream {
     }
 
     /// A SegmentAck from node index `i` (its view already updated), received at `t_us`.
-    pub fn acknowledged(&mut self, i: usize, a: &SegmentAck, t_us: u64) -> Result<(), UploadError> {
+    pub fn acknowledged(
+        &mut self,
+        i: usize,
+        node: u8,
+        a: &SegmentAck,
+        t_us: u64,
+    ) -> Result<(), UploadError> {
         match Reject::from_u8(a.result) {
             Some(Reject::Accepted) | Some(Reject::Duplicate) => {
                 if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == a.seq as usize) {
@@ -97,7 +103,7 @@ impl Stream {
             }
             other => {
                 return Err(UploadError::Rejected {
-                    node: node_id(i),
+                    node,
                     seq: a.seq,
                     reason: other.map_or("unknown reason", |r| r.name()),
                 });
@@ -131,7 +137,9 @@ impl Stream {
                 && out.len() < OUTBOX_LIMIT
             {
                 if f.tries > opts.max_retransmits {
-                    let node = (0..NODES).find(|&i| !f.acked[i]).map_or(1, node_id);
+                    let node = (0..NODES)
+                        .find(|&i| !f.acked[i])
+                        .map_or(nodes.id(0), |i| nodes.id(i));
                     return Err(UploadError::Retransmits {
                         node,
                         seq: f.seq,

@@ -1,0 +1,80 @@
+//! `triquint clear --iface IFACE`: faulted drives back to Idle
+//! (ClearFault to each), then their states as heard. Homing survives it.
+//! Exit 0 when every drive is out of Fault, 4 if one is silent, 5 if one
+//! stays faulted.
+
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use triquint_link::{CanPort, Listener};
+use triquint_shared::Robot;
+use triquint_shared::protocol::{Command, CommandCode, State};
+
+use crate::cli::listen::{listen, open};
+use crate::cli::status::print_text;
+use crate::exit::{CliError, CliResult};
+
+#[derive(Args, Debug)]
+pub struct ClearArgs {
+    /// SocketCAN interface (can0, vcan0).
+    #[arg(long, value_name = "IFACE")]
+    pub iface: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
+    pub nodes: String,
+}
+
+pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
+    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+    let mut port = open(&args.iface)?;
+    let mut l = Listener::new(ids);
+    listen(&mut port, &mut l, Duration::from_millis(500), false)?;
+    if let Some(v) = l.nodes.0.iter().find(|v| v.heartbeat_at.is_none()) {
+        return Err(CliError::device(format!(
+            "{}: node {} sent no heartbeat within 0.5 s",
+            args.iface, v.id
+        )));
+    }
+    let faulted: Vec<u8> = l
+        .nodes
+        .0
+        .iter()
+        .filter(|v| v.state == Some(State::Fault))
+        .map(|v| v.id)
+        .collect();
+    for (k, id) in faulted.iter().enumerate() {
+        let f = Command {
+            command: CommandCode::ClearFault as u8,
+            token: 0xC0 | k as u8,
+            arg: 0,
+            arg2: 0,
+        }
+        .to_frame(*id);
+        while !CanPort::send(&mut port, &f).map_err(CliError::device)? {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    // Heartbeats after the clear: a fresh listener.
+    let t0 = Instant::now();
+    let mut after = Listener::new(ids);
+    while t0.elapsed() < Duration::from_secs(1) {
+        listen(&mut port, &mut after, Duration::from_millis(300), false)?;
+        if after.all_heard() && after.nodes.all(|v| v.state != Some(State::Fault)) {
+            break;
+        }
+        after = Listener::new(ids);
+    }
+    let s = after.status(robot);
+    print_text(&s);
+    match s.nodes.iter().find(|n| n.state == Some("Fault")) {
+        None if faulted.is_empty() => {
+            println!("no drive was faulted");
+            Ok(())
+        }
+        None => Ok(()),
+        Some(n) => Err(CliError::motion_fault(format!(
+            "{}: node {} is still in Fault ({})",
+            args.iface, n.id, n.fault.name
+        ))),
+    }
+}

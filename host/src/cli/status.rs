@@ -1,0 +1,105 @@
+//! `triquint status --iface IFACE [--json]`: what state each drive is in,
+//! read-only (it sends nothing, so it never configures or moves a drive).
+//! Exit 0 when every drive sends heartbeats, whatever its state; 4 if one
+//! is silent.
+
+use std::time::Duration;
+
+use clap::Args;
+use triquint_link::{Listener, MachineStatus};
+use triquint_shared::Robot;
+
+use crate::cli::listen::{listen, open};
+use crate::exit::{CliError, CliResult};
+
+#[derive(Args, Debug)]
+pub struct StatusArgs {
+    /// SocketCAN interface (can0, vcan0).
+    #[arg(long, value_name = "IFACE")]
+    pub iface: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
+    pub nodes: String,
+    /// Print exactly one JSON document.
+    #[arg(long)]
+    pub json: bool,
+    /// How long to listen (s): long enough for a few heartbeats.
+    #[arg(long, default_value_t = 0.5, value_name = "S")]
+    pub wait: f64,
+}
+
+/// Listens to the drives of `ids` for up to `wait` seconds.
+pub fn machine_status(
+    iface: &str,
+    ids: [u8; 3],
+    wait: f64,
+    robot: &Robot,
+) -> CliResult<MachineStatus> {
+    let mut port = open(iface)?;
+    let mut l = Listener::new(ids);
+    listen(&mut port, &mut l, Duration::from_secs_f64(wait), true)?;
+    Ok(l.status(robot))
+}
+
+fn fmt_mm(x: Option<f64>) -> String {
+    x.map_or("unknown".to_string(), |x| format!("{x:.3} mm"))
+}
+
+/// The status for people, one line per node.
+pub fn print_text(s: &MachineStatus) {
+    for n in &s.nodes {
+        if !n.heard {
+            println!("axis {} (node {}): silent", n.axis, n.id);
+            continue;
+        }
+        let fault = if n.fault.code == 0 {
+            String::new()
+        } else {
+            format!(
+                ", fault {} ({}): {}",
+                n.fault.name, n.fault.code, n.fault.hint
+            )
+        };
+        println!(
+            "axis {} (node {}): {}, {}, position {}, queue {}, {}{}",
+            n.axis,
+            n.id,
+            n.state.unwrap_or("?"),
+            n.homing,
+            fmt_mm(n.joint_position_mm),
+            n.queue_depth,
+            if n.synced { "synced" } else { "not synced" },
+            fault
+        );
+    }
+    match s.platform_mm {
+        Some(p) => println!("platform at ({:.3}, {:.3}, {:.3}) mm", p[0], p[1], p[2]),
+        None => println!("platform position unknown (every axis must be homed and report)"),
+    }
+}
+
+pub fn run(args: &StatusArgs, robot: &Robot) -> CliResult {
+    if !(args.wait.is_finite() && args.wait > 0.0 && args.wait <= 60.0) {
+        return Err(CliError::bad_input(format!(
+            "--wait {}: must be 0 to 60 seconds",
+            args.wait
+        )));
+    }
+    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+    let s = machine_status(&args.iface, ids, args.wait, robot)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&s).map_err(|e| CliError::device(e.to_string()))?
+        );
+    } else {
+        print_text(&s);
+    }
+    match s.nodes.iter().find(|n| !n.heard) {
+        None => Ok(()),
+        Some(n) => Err(CliError::device(format!(
+            "{}: node {} (axis {}) sent no heartbeat within {} s",
+            args.iface, n.id, n.axis, args.wait
+        ))),
+    }
+}
