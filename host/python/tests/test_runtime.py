@@ -104,8 +104,11 @@ def test_ctrl_c_raises_keyboard_interrupt_within_a_second():
             sys.exit(42)
         sys.exit("finished without an interrupt")
     """)
+    # SIGINT as at a terminal: a process started in the background by a
+    # non-interactive shell (as CI may be) inherits SIGINT ignored, and
+    # Python then keeps it ignored instead of raising KeyboardInterrupt.
     child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True)
+                             text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         assert child.stdout.readline().strip() == "planning"
         time.sleep(1.0)
