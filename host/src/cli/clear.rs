@@ -6,11 +6,12 @@
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use triquint_link::{CanPort, Listener};
+use triquint_link::Listener;
 use triquint_shared::Robot;
-use triquint_shared::protocol::{Command, CommandCode, State};
+use triquint_shared::protocol::{CommandCode, State};
 
 use crate::cli::listen::{listen, open};
+use crate::cli::send::send_command;
 use crate::cli::status::print_text;
 use crate::exit::{CliError, CliResult};
 
@@ -43,16 +44,7 @@ pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
         .map(|v| v.id)
         .collect();
     for (k, id) in faulted.iter().enumerate() {
-        let f = Command {
-            command: CommandCode::ClearFault as u8,
-            token: 0xC0 | k as u8,
-            arg: 0,
-            arg2: 0,
-        }
-        .to_frame(*id);
-        while !CanPort::send(&mut port, &f).map_err(CliError::device)? {
-            std::thread::sleep(Duration::from_millis(1));
-        }
+        send_command(&mut port, *id, CommandCode::ClearFault, 0xC0 | k as u8)?;
     }
     // Heartbeats after the clear: a fresh listener.
     let t0 = Instant::now();

@@ -2,12 +2,10 @@
 //! from node 0). Every drive stops: a moving one along its path within its
 //! stop time, an idle one goes to Fault; `triquint clear` afterwards.
 
-use clap::Args;
-use triquint_link::CanPort;
-use triquint_shared::protocol::{Emergency, FaultCode, State};
-
 use crate::cli::listen::open;
+use crate::cli::send::send_emergency;
 use crate::exit::{CliError, CliResult};
+use clap::Args;
 
 #[derive(Args, Debug)]
 pub struct EstopArgs {
@@ -18,20 +16,10 @@ pub struct EstopArgs {
 
 pub fn run(args: &EstopArgs) -> CliResult {
     let mut port = open(&args.iface)?;
-    let f = Emergency {
-        code: FaultCode::HostEmergency as u8,
-        state: State::Fault as u8,
-        segment: 0,
-        plan_time_us: 0,
-    }
-    .to_frame(0);
-    // The controller's queue may be full for a moment: try for 100 ms.
-    for _ in 0..100 {
-        if CanPort::send(&mut port, &f).map_err(CliError::device)? {
-            println!("emergency stop sent on {}", args.iface);
-            return Ok(());
-        }
-        std::thread::sleep(std::time::Duration::from_millis(1));
+    // The controller's queue may be full for a moment: tried for 100 ms.
+    if send_emergency(&mut port)? {
+        println!("emergency stop sent on {}", args.iface);
+        return Ok(());
     }
     Err(CliError::device(format!(
         "{}: the emergency frame could not be sent (transmit queue full)",

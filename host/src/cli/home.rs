@@ -9,12 +9,13 @@
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use triquint_link::{CanPort, DriveConfigs, Listener, Session, SessionOptions, UploadError};
+use triquint_link::{DriveConfigs, Listener, Session, SessionOptions, UploadError};
 use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
-use triquint_shared::protocol::{Command, CommandCode, Emergency, FaultCode, State, flags};
+use triquint_shared::protocol::{CommandCode, FaultCode, State, flags};
 use triquint_shared::{Limits, Robot};
 
 use crate::cli::listen::{drain, nodes_arg, open};
+use crate::cli::send::{send_command, send_emergency};
 use crate::cli::upload::{BusArgs, check_bus_args, upload_error};
 use crate::exit::{CliError, CliResult};
 
@@ -58,18 +59,8 @@ pub fn configure(robot: &Robot, homing: &HomingSettings, bus: &BusArgs) -> CliRe
 
 /// The host's emergency frame: every drive stops.
 fn estop(port: &mut triquint_link::SocketCanPort) -> CliResult {
-    let f = Emergency {
-        code: FaultCode::HostEmergency as u8,
-        state: State::Fault as u8,
-        segment: 0,
-        plan_time_us: 0,
-    }
-    .to_frame(0);
-    for _ in 0..100 {
-        if CanPort::send(port, &f).map_err(CliError::device)? {
-            return Ok(());
-        }
-        std::thread::sleep(Duration::from_millis(1));
+    if send_emergency(port)? {
+        return Ok(());
     }
     Err(CliError::device("the emergency frame could not be sent"))
 }
@@ -90,16 +81,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
     let mut port = open(&bus.iface)?;
     // Every axis at once: the commands go out back to back (well within a tick).
     for (k, id) in ids.iter().enumerate() {
-        let f = Command {
-            command: CommandCode::Home as u8,
-            token: 0xB0 | k as u8,
-            arg: 0,
-            arg2: 0,
-        }
-        .to_frame(*id);
-        while !CanPort::send(&mut port, &f).map_err(CliError::device)? {
-            std::thread::sleep(Duration::from_millis(1));
-        }
+        send_command(&mut port, *id, CommandCode::Home, 0xB0 | k as u8)?;
     }
     let t0 = Instant::now();
     let limit = Duration::from_secs_f64(homing.timeout + 5.0);

@@ -11,6 +11,7 @@ pub mod monitor;
 pub mod move_to;
 pub mod plan;
 pub mod report;
+pub mod send;
 pub mod simulate;
 pub mod status;
 pub mod torque;
