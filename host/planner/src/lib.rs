@@ -32,8 +32,10 @@
 //! How it works: for fixed intervals the min-max-jerk spline is one exact
 //! second-order-cone program (`local`); a deterministic multistart
 //! trust-region search moves the intervals (`search`); the minimum time is
-//! found by bisection on the total time; intervals are rounded to whole
-//! microseconds (what the drives run) and repaired until every limit holds.
+//! found by a descent on the total time from the jerk-only optimum's
+//! shapes, each iterate time-scaled until it meets every limit; intervals
+//! are rounded to whole microseconds (what the drives run) and repaired
+//! until every limit holds.
 
 mod banded;
 mod check;
@@ -54,6 +56,7 @@ mod search;
 mod spline;
 mod stats;
 mod sturm;
+mod time_descent;
 mod watch;
 
 #[cfg(test)]

@@ -48,7 +48,7 @@ const TOL: f64 = 1e-9;
 const MAX_INNER_ROUNDS: usize = 25;
 /// Cutting-plane rounds when judging a trust-region step (its figures are
 /// exact whatever the count; more rounds only improve x).
-const STEP_ROUNDS: usize = 6;
+pub(crate) const STEP_ROUNDS: usize = 6;
 /// Accuracy of the inner solves. Tighter asks for more than the interior
 /// point method delivers on these degenerate problems (most solves then end
 /// "almost solved", less accurate than this).
@@ -93,6 +93,14 @@ impl Solution {
     pub fn merit(&self, weight: f64) -> f64 {
         self.jerk + weight * self.violation
     }
+}
+
+/// A step of the minimum-time descent: new intervals, knot derivatives,
+/// and the LPs it took.
+pub(crate) struct TimeStep {
+    pub h: Vec<f64>,
+    pub x: [Vec<f64>; 3],
+    pub solves: u64,
 }
 
 /// (segment, normalised time) of one side of a jerk condition.
@@ -639,6 +647,63 @@ impl Problem {
         cur
     }
 
+    /// One step of the minimum-time descent ([`crate::time_descent`]) from
+    /// `cur`: the LP linearised in h at `cur` (h moving by at most Δ·h_k),
+    /// minimising Σh with the jerk capped at its limit and every limit
+    /// elastic; returns the new intervals, the LP's knot derivatives
+    /// projected onto C3 there.
+    pub(crate) fn time_step(&self, cur: &Solution, delta: f64) -> Result<TimeStep, LpFailure> {
+        let nv = self.nv();
+        let nseg = self.nseg();
+        let (dh0, s_col) = (3 * nv, 3 * nv + nseg);
+        let sigma = s_col + 1;
+        let t: f64 = cur.h.iter().sum();
+        let jerk = self.limits.jerk;
+        let mut cuts = self.figures(&cur.h, &cur.x, self.torque_samples).cuts;
+        let mut out = None;
+        // Cutting planes as in the inner loop: the LP's point is checked
+        // exactly and its new extrema cut, so the step does not promise
+        // what is only true at the old extrema.
+        for round in 1..=STEP_ROUNDS as u64 {
+            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta));
+            lp.tolerance = 1e-8;
+            lp.refine = false;
+            // Relative time against relative violation: making up a
+            // violation ν by time-scaling costs about ν/2 of the time, so
+            // 1e3 keeps σ at 0 whenever the linearisation allows it.
+            lp.cost[s_col] = 0.0;
+            lp.cost[sigma] = 1e3;
+            for k in 0..nseg {
+                lp.cost[dh0 + k] = 1.0 / t;
+            }
+            lp.at_most(&[(s_col, 1.0), (sigma, -jerk)], jerk);
+            let sol = self.solve(&lp)?;
+            let h: Vec<f64> = (0..nseg)
+                .map(|k| (cur.h[k] + sol[dh0 + k]).max(self.h_min))
+                .collect();
+            let mut x = self.unpack(&sol);
+            self.project(&h, &mut x);
+            let before = cuts.len();
+            for c in self.figures(&h, &x, self.torque_samples).cuts {
+                if !cuts
+                    .iter()
+                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
+                {
+                    cuts.push(c);
+                }
+            }
+            out = Some(TimeStep {
+                h,
+                x,
+                solves: round,
+            });
+            if cuts.len() == before {
+                break;
+            }
+        }
+        out.ok_or(LpFailure::Cancelled)
+    }
+
     /// The jerk-only relaxation of this problem. Its optimum is a lower
     /// bound; when that optimum meets every other limit it is the optimum.
     pub fn relaxed(&self) -> Problem {
@@ -678,7 +743,12 @@ impl Problem {
     }
 
     /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
-    fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+    pub(crate) fn inner_at(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+    ) -> Option<Solution> {
         if !self.jerk_only
             && let Some(r) = self.relaxed().inner(h, x0)
         {

@@ -291,19 +291,18 @@ pub struct MinTimeFailure {
     pub best: Option<Box<Solution>>,
 }
 
-/// Shortest total time with a plan meeting every limit, and the
-/// min-max-jerk plan there. It does not depend on the job's total-time
-/// limit, so a job's verdict and its shortest time agree whatever bound is
-/// asked.
+/// Shortest total time with a plan meeting every limit, and a plan there.
+/// It does not depend on the job's total-time limit, so a job's verdict
+/// and its shortest time agree whatever bound is asked.
 ///
 /// Jerk alone gives a lower bound: the jerk-only optimum's shape does not
 /// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
-/// to the jerk limit, is the shortest time when nothing else binds.
-/// Velocity, acceleration and torque are handled by walking up from there
-/// and bisecting, each trial from the shortest feasible plan so far (the
-/// jerk-only shape for the walk-up), optimised locally until
-/// feasible; then the multistart search at slightly less time checks that
-/// no other basin does better (and continues from there if one does).
+/// to the jerk limit, is the shortest time when nothing else binds. Each
+/// refined shape of that relaxation is time-scaled until velocity,
+/// acceleration and torque hold too, then shortened by the descent on Σh
+/// ([`Problem::descend_time`], every iterate feasible); the shortest wins.
+/// Only when no shape meets the limits at any time scale does a walk-up
+/// with the local search (which may reshape it) look for a first plan.
 pub fn min_time(
     template: &Problem,
     opts: &Options,
@@ -321,91 +320,108 @@ pub fn min_time(
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();
     let t_low = total * (s.jerk / template.limits.jerk).cbrt();
-    let mut spent = 0;
+    // Each refined shape of the relaxation, time-scaled until it meets every
+    // limit, then shortened by the descent on Σh (every iterate feasible).
+    let descents: Vec<Solution> = parallel(&probe.shapes, opts.threads, |shape| {
+        let tight = shortest_scaling(template, &template.evaluate(&shape.h, &shape.x))?;
+        Some(template.descend_time(&tight))
+    })
+    .into_iter()
+    .flatten()
+    .collect();
+    let mut spent: u64 = descents.iter().map(|d| d.lp_solves).sum();
+    let total_of = |s: &Solution| s.h.iter().sum::<f64>();
+    if let Some(best) = descents
+        .into_iter()
+        .min_by(|a, b| total_of(a).total_cmp(&total_of(b)))
+    {
+        return Ok((
+            Solution {
+                lp_solves: spent,
+                ..best
+            },
+            probe,
+        ));
+    }
+    // No shape of the relaxation meets the limits at any time scale (torque
+    // that slowing down does not lower): walk up from the lower bound with
+    // the local search, which may reshape it.
     let mut last = None;
-    // A plan at t from `from`'s shape: scaled to t first (exact when only
-    // jerk binds), then locally optimised when another limit is violated.
-    let mut try_at = |t: f64, from: &Solution| {
-        let p = at(t);
-        let guess = scale(&p, from, t)?;
-        spent += guess.lp_solves;
-        if feasible(&p, &guess) {
-            return Some(guess);
-        }
-        // Only feasibility is asked here: stop at the first feasible point.
-        let sol = p.local_search_until(&guess, TRIAL_STEPS, 1e-9, &|sol| feasible(&p, sol));
-        spent += sol.lp_solves - guess.lp_solves;
-        if feasible(&p, &sol) {
-            Some(sol)
-        } else {
-            last = Some(sol);
-            None
-        }
-    };
-    // Walk up from the lower bound until feasible, then bisect.
-    let mut lo = t_low;
-    let mut hi = t_low;
-    let mut best = None;
+    let mut found = None;
+    let mut t = t_low;
     for _ in 0..40 {
-        if let Some(sol) = try_at(hi, s) {
-            best = Some(sol);
-            break;
+        let p = at(t);
+        if let Some(guess) = scale(&p, s, t) {
+            let sol = p.local_search_until(&guess, TRIAL_STEPS, 1e-9, &|sol| feasible(&p, sol));
+            spent += sol.lp_solves;
+            if feasible(&p, &sol) {
+                found = Some(sol);
+                break;
+            }
+            last = Some(sol);
         }
         if template.watch.cancelled().is_some() {
             break;
         }
-        lo = hi;
-        hi *= 1.1;
+        t *= 1.1;
     }
-    let Some(mut best) = best else {
+    let Some(found) = found else {
         return Err(MinTimeFailure {
             best: last.map(Box::new),
         });
     };
-    for round in 0..=GLOBAL_CHECKS {
-        while hi > lo && hi - lo > BISECTION_TOL * hi {
-            let mid = 0.5 * (lo + hi);
-            // From the shortest feasible plan so far: scaled down by a
-            // little, it is the nearest start there is.
-            let from = best.clone();
-            match try_at(mid, &from) {
-                Some(sol) => {
-                    hi = mid;
-                    best = sol;
-                }
-                None => lo = mid,
-            }
-        }
-        // When only jerk binds the lower bound is the answer: nothing to check.
-        if hi <= t_low * (1.0 + 1e-5) || round == GLOBAL_CHECKS {
-            break;
-        }
-        let t = hi * (1.0 - GLOBAL_CHECK_STEP);
-        if t <= lo {
-            break;
-        }
-        let p = at(t);
-        match global(&p, opts) {
-            Some(r) if feasible(&p, &r.best) => {
-                hi = t;
-                best = r.best;
-            }
-            _ => break,
-        }
-    }
+    let mut best = template.descend_time(&found);
     best.lp_solves = spent;
     Ok((best, probe))
 }
 
-/// Trust-region steps of one bisection trial: a trial that has not found a
-/// feasible point by then counts as infeasible (the multistart checks below
-/// catch what that misses).
+/// `s`'s shape time-scaled (and evaluated, not re-solved) to the shortest
+/// total time at which it meets every limit. Velocity, acceleration and
+/// jerk fall as α⁻¹, α⁻², α⁻³ with the time scale α, and torque's inertial
+/// part as α⁻², so the feasible scalings are (in practice) a half-line:
+/// bracketed, then bisected to a relative 1e-9.
+pub(crate) fn shortest_scaling(p: &Problem, s: &Solution) -> Option<Solution> {
+    let at = |alpha: f64| {
+        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+        p.evaluate(&h, &scaled_x(&s.x, alpha))
+    };
+    let ok = |sol: &Solution| feasible(p, sol);
+    let (mut lo, mut hi, mut best) = if ok(s) {
+        // No shape meets the jerk limit faster than (J / J_max)^(1/3).
+        let lo = (s.jerk / p.limits.jerk).cbrt().min(1.0);
+        (lo * (1.0 - 1e-12), 1.0, s.clone())
+    } else {
+        let mut alpha = 1.0;
+        let mut found = None;
+        for _ in 0..30 {
+            alpha *= 1.0 + (0.5 * s.violation).clamp(1e-4, 0.5);
+            let sol = at(alpha);
+            if ok(&sol) {
+                found = Some(sol);
+                break;
+            }
+        }
+        (1.0, alpha, found?)
+    };
+    while hi - lo > 1e-9 * hi {
+        let mid = 0.5 * (lo + hi);
+        let sol = at(mid);
+        if ok(&sol) {
+            hi = mid;
+            best = sol;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(Solution {
+        lp_solves: s.lp_solves,
+        ..best
+    })
+}
+
+/// Trust-region steps of one walk-up trial: a trial that has not found a
+/// feasible point by then counts as infeasible.
 const TRIAL_STEPS: usize = 20;
-/// Relative accuracy of the shortest time.
-const BISECTION_TOL: f64 = 1e-4;
-/// Multistart checks below the bisection's answer, and how far below.
-const GLOBAL_CHECKS: usize = 3;
-const GLOBAL_CHECK_STEP: f64 = 0.005;
 
 /// A solution's shape time-scaled to total time `t` (velocities ÷ α,
 /// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
