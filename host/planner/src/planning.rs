@@ -13,7 +13,10 @@ use crate::error::{Limit, PlanError, PointKind};
 use crate::job::{Job, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::local::{Problem, Quantity, Solution, knots_from, problem};
 use crate::options::{Control, Observer, Options, Stage};
-use crate::search::{MinTimeFailure, global, min_time, round_to_microseconds, stretch};
+use crate::search::{
+    MinTimeFailure, SearchResult, global_from, min_time, relaxed_global, round_to_microseconds,
+    stretch,
+};
 use crate::watch::Watch;
 
 /// Torque samples per segment in the final solve (the search uses fewer).
@@ -150,9 +153,13 @@ fn infeasible(p: &Problem, s: &Solution, shortest: Option<f64>) -> PlanError {
 
 /// The shortest plan in whole microseconds that meets every limit:
 /// min-time search, then rounding and repair.
-fn shortest(p: &Problem, opts: &Options) -> Result<(Solution, usize), MinTimeFailure> {
+fn shortest(
+    p: &Problem,
+    opts: &Options,
+    relaxed: Option<SearchResult>,
+) -> Result<(Solution, usize), MinTimeFailure> {
     p.watch.set_stage(Stage::MinTime);
-    let (best, probe) = min_time(p, opts)?;
+    let (best, probe) = min_time(p, opts, relaxed)?;
     p.watch.set_stage(Stage::Finishing);
     let Some(rounded) = lengthen_until_feasible(p, &best) else {
         return Err(MinTimeFailure {
@@ -167,7 +174,30 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
     match job.objective() {
         Objective::MinMaxJerk => {
             p.watch.set_stage(Stage::Searching);
-            let r = global(p, opts).ok_or_else(|| solver_failure(p))?;
+            let relaxed = relaxed_global(p, opts);
+            // When the relaxation's optimum breaks a limit other than jerk,
+            // the full search at this time only pays if a plan exists here:
+            // the shortest time (which does not depend on this one) decides.
+            let mut known_short = None;
+            if let Some(r) = &relaxed
+                && p.accept_relaxed(&r.best).is_none()
+            {
+                let short = shortest(p, opts, Some(r.clone()));
+                match &short {
+                    Ok((s, _)) if s.h.iter().sum::<f64>() > total_time * (1.0 + 1e-12) => {
+                        return Err(too_short(p, s, total_time));
+                    }
+                    Err(f) => {
+                        return Err(match &f.best {
+                            Some(b) => infeasible(p, b, None),
+                            None => infeasible(p, &p.evaluate(&r.best.h, &r.best.x), None),
+                        });
+                    }
+                    Ok(_) => {}
+                }
+                known_short = Some(short);
+            }
+            let r = global_from(p, opts, relaxed).ok_or_else(|| solver_failure(p))?;
             let found = crate::search::feasible(p, &r.best);
             if found {
                 p.watch.set_stage(Stage::Finishing);
@@ -178,7 +208,7 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
             // Restoration: the shortest feasible plan, stretched to the time
             // budget and optimised there; or, when rounding that fails, the
             // shortest plan itself.
-            let short = shortest(p, opts);
+            let short = known_short.unwrap_or_else(|| shortest(p, opts, None));
             let Ok((s, starts)) = short else {
                 return Err(infeasible(p, &r.best, None));
             };
@@ -192,27 +222,32 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
             Ok((stretched.unwrap_or(s), starts))
         }
         Objective::MinTime => {
-            let (s, starts) = shortest(p, opts).map_err(|f| match &f.best {
+            let (s, starts) = shortest(p, opts, None).map_err(|f| match &f.best {
                 Some(b) => infeasible(p, b, None),
                 None => solver_failure(p),
             })?;
-            let t: f64 = s.h.iter().sum();
-            if t > total_time * (1.0 + 1e-12) {
-                let mut at = p.clone();
-                at.total_time = total_time;
-                let scaled = crate::search::scale(&at, &s, total_time);
-                return Err(match scaled {
-                    Some(x) => infeasible(p, &x, Some(t)),
-                    None => PlanError::Infeasible {
-                        limit: Limit::TotalTime,
-                        limit_value: total_time,
-                        reached: t,
-                        shortest_total_time: Some(t),
-                    },
-                });
+            if s.h.iter().sum::<f64>() > total_time * (1.0 + 1e-12) {
+                return Err(too_short(p, &s, total_time));
             }
             Ok((s, starts))
         }
+    }
+}
+
+/// The verdict when the shortest plan `s` is longer than `total_time`: the
+/// limit it breaks when time-scaled to `total_time`, and its time.
+fn too_short(p: &Problem, s: &Solution, total_time: f64) -> PlanError {
+    let t: f64 = s.h.iter().sum();
+    let mut at = p.clone();
+    at.total_time = total_time;
+    match crate::search::scale(&at, s, total_time) {
+        Some(x) => infeasible(p, &x, Some(t)),
+        None => PlanError::Infeasible {
+            limit: Limit::TotalTime,
+            limit_value: total_time,
+            reached: t,
+            shortest_total_time: Some(t),
+        },
     }
 }
 

@@ -109,9 +109,16 @@ const AGREE: f64 = 1e-4;
 /// every other limit it is the answer; otherwise the full problem is
 /// searched, from the relaxation's optimum and the same starts.
 pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
-    let starts = start_points(p, opts.starts, opts.seed);
-    let relaxed = relaxed_global(p, opts);
-    let mut starts = starts;
+    global_from(p, opts, relaxed_global(p, opts))
+}
+
+/// [`global`] from the relaxation's search result, already known.
+pub(crate) fn global_from(
+    p: &Problem,
+    opts: &Options,
+    relaxed: Option<SearchResult>,
+) -> Option<SearchResult> {
+    let mut starts = start_points(p, opts.starts, opts.seed);
     let mut lp_solves = 0;
     if let Some(r) = relaxed {
         if let Some(best) = p.accept_relaxed(&r.best) {
@@ -148,7 +155,7 @@ const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 /// made it depend on T (33 points on the axis: J·T³ = 4.2520 at 2 s,
 /// 4.1947 at 5 s, 4.1905 at the reference 16 s). Searched at T when the
 /// scaled intervals leave [h_min, h_max].
-fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
+pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     let target = p.relaxed();
     let direct = || multistart(&target, &start_points(p, opts.starts, opts.seed), opts);
     let t_ref = REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64;
@@ -303,9 +310,13 @@ pub struct MinTimeFailure {
 /// ([`Problem::descend_time`], every iterate feasible); the shortest wins.
 /// Only when no shape meets the limits at any time scale does a walk-up
 /// with the local search (which may reshape it) look for a first plan.
+///
+/// `relaxed` is the relaxation's search result when the caller has it (at
+/// any total time: only its shapes are used).
 pub fn min_time(
     template: &Problem,
     opts: &Options,
+    relaxed: Option<SearchResult>,
 ) -> Result<(Solution, SearchResult), MinTimeFailure> {
     let at = |t: f64| {
         let mut p = template.clone();
@@ -316,21 +327,32 @@ pub fn min_time(
     // for h_min and h_max); the search's absolute tolerances make it matter
     // in practice (Case II min-time: 3.491 s from 0.5, 3.563 s from 1).
     let t_ref = 0.5 * template.knots.segments() as f64;
-    let probe = global(&at(t_ref).relaxed(), opts).ok_or(MinTimeFailure { best: None })?;
+    let probe = match relaxed {
+        Some(r) => r,
+        None => global(&at(t_ref).relaxed(), opts).ok_or(MinTimeFailure { best: None })?,
+    };
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();
     let t_low = total * (s.jerk / template.limits.jerk).cbrt();
     // Each refined shape of the relaxation, time-scaled until it meets every
-    // limit, then shortened by the descent on Σh (every iterate feasible).
-    let descents: Vec<Solution> = parallel(&probe.shapes, opts.threads, |shape| {
-        let tight = shortest_scaling(template, &template.evaluate(&shape.h, &shape.x))?;
-        Some(template.descend_time(&tight))
-    })
-    .into_iter()
-    .flatten()
-    .collect();
-    let mut spent: u64 = descents.iter().map(|d| d.lp_solves).sum();
+    // limit; the shortest is shortened by the descent on Σh (every iterate
+    // feasible).
     let total_of = |s: &Solution| s.h.iter().sum::<f64>();
+    let mut tight: Vec<Solution> = probe
+        .shapes
+        .iter()
+        .filter_map(|shape| shortest_scaling(template, &template.evaluate(&shape.h, &shape.x)))
+        .collect();
+    tight.sort_by(|a, b| total_of(a).total_cmp(&total_of(b)));
+    // One descent, from the shape that starts shortest: from all three it
+    // took twice the time and ended at the same plan (Case II, the 10- and
+    // 20-point closed curves).
+    let descents: Vec<Solution> = tight
+        .first()
+        .map(|t| template.descend_time(t))
+        .into_iter()
+        .collect();
+    let mut spent: u64 = descents.iter().map(|d| d.lp_solves).sum();
     if let Some(best) = descents
         .into_iter()
         .min_by(|a, b| total_of(a).total_cmp(&total_of(b)))
