@@ -48,7 +48,7 @@ const TOL: f64 = 1e-9;
 const MAX_INNER_ROUNDS: usize = 25;
 /// Cutting-plane rounds when judging a trust-region step (its figures are
 /// exact whatever the count; more rounds only improve x).
-pub(crate) const STEP_ROUNDS: usize = 6;
+const STEP_ROUNDS: usize = 6;
 /// Accuracy of the inner solves. Tighter asks for more than the interior
 /// point method delivers on these degenerate problems (most solves then end
 /// "almost solved", less accurate than this).
@@ -526,14 +526,7 @@ impl Problem {
                 && fig.violation <= sigma_lp + TOL
                 && (fig.binding != Quantity::Torque || moved <= 1e-9 * scale);
             let before = cuts.len();
-            for c in &fig.cuts {
-                if !cuts
-                    .iter()
-                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
-                {
-                    cuts.push(*c);
-                }
-            }
+            add_new_cuts(&mut cuts, &fig.cuts);
             // Without a new cut the next LP is the same one, unless torque
             // cuts are re-linearised at the new point: stop, the figures are exact.
             let relinearise = moved > 1e-9 * scale && cuts.iter().any(|c| c.q == Quantity::Torque);
@@ -684,14 +677,7 @@ impl Problem {
             let mut x = self.unpack(&sol);
             self.project(&h, &mut x);
             let before = cuts.len();
-            for c in self.figures(&h, &x, self.torque_samples).cuts {
-                if !cuts
-                    .iter()
-                    .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
-                {
-                    cuts.push(c);
-                }
-            }
+            add_new_cuts(&mut cuts, &self.figures(&h, &x, self.torque_samples).cuts);
             out = Some(TimeStep {
                 h,
                 x,
@@ -743,12 +729,7 @@ impl Problem {
     }
 
     /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
-    pub(crate) fn inner_at(
-        &self,
-        h: &[f64],
-        x0: &[Vec<f64>; 3],
-        max_rounds: usize,
-    ) -> Option<Solution> {
+    fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
         if !self.jerk_only
             && let Some(r) = self.relaxed().inner(h, x0)
         {
@@ -766,6 +747,19 @@ impl Problem {
     /// Zero knot derivatives: the start of the first inner solve.
     pub fn zero_x(&self) -> [Vec<f64>; 3] {
         [0, 1, 2].map(|_| vec![0.0; self.nv()])
+    }
+}
+
+/// Appends the cuts of `found` that `cuts` does not hold yet (same
+/// quantity, joint, segment and normalised time).
+fn add_new_cuts(cuts: &mut Vec<Cut>, found: &[Cut]) {
+    for c in found {
+        if !cuts
+            .iter()
+            .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
+        {
+            cuts.push(*c);
+        }
     }
 }
 

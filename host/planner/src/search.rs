@@ -338,33 +338,19 @@ pub fn min_time(
     // limit; the shortest is shortened by the descent on Σh (every iterate
     // feasible).
     let total_of = |s: &Solution| s.h.iter().sum::<f64>();
-    let mut tight: Vec<Solution> = probe
+    let shortest_start = probe
         .shapes
         .iter()
         .filter_map(|shape| shortest_scaling(template, &template.evaluate(&shape.h, &shape.x)))
-        .collect();
-    tight.sort_by(|a, b| total_of(a).total_cmp(&total_of(b)));
+        .min_by(|a, b| total_of(a).total_cmp(&total_of(b)));
     // One descent, from the shape that starts shortest: from all three it
     // took twice the time and ended at the same plan (Case II, the 10- and
     // 20-point closed curves).
-    let descents: Vec<Solution> = tight
-        .first()
-        .map(|t| template.descend_time(t))
-        .into_iter()
-        .collect();
-    let mut spent: u64 = descents.iter().map(|d| d.lp_solves).sum();
-    if let Some(best) = descents
-        .into_iter()
-        .min_by(|a, b| total_of(a).total_cmp(&total_of(b)))
-    {
-        return Ok((
-            Solution {
-                lp_solves: spent,
-                ..best
-            },
-            probe,
-        ));
+    if let Some(start) = shortest_start {
+        let best = template.descend_time(&start);
+        return Ok((best, probe));
     }
+    let mut spent = 0;
     // No shape of the relaxation meets the limits at any time scale (torque
     // that slowing down does not lower): walk up from the lower bound with
     // the local search, which may reshape it.
@@ -393,7 +379,8 @@ pub fn min_time(
         });
     };
     let mut best = template.descend_time(&found);
-    best.lp_solves = spent;
+    // The descent's count starts from the walk-up trial's, already in `spent`.
+    best.lp_solves = spent + best.lp_solves - found.lp_solves;
     Ok((best, probe))
 }
 
