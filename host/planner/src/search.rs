@@ -100,6 +100,10 @@ pub(crate) fn parallel<T: Sync, R: Send>(
 const REFINE: usize = 3;
 /// Relative distance below which two coarse results are the same point.
 const AGREE: f64 = 1e-4;
+/// Coarse searches run in batches of this many starts.
+const BATCH: usize = 4;
+/// Starts that must agree on the best point before the rest are skipped.
+const AGREEING: usize = 3;
 
 /// Multistart global search for min-max jerk at the problem's total time.
 ///
@@ -197,27 +201,7 @@ pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult
 }
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
-    let coarse: Vec<Option<Solution>> = parallel(starts, opts.threads, |h| {
-        let first = p.inner(h, &p.zero_x())?;
-        let sol = p.local_search(&first, 60, 1e-5);
-        if sol.violation == 0.0 {
-            p.watch.offer_jerk(sol.jerk);
-        }
-        Some(sol)
-    });
-    let mut lp_solves: u64 = coarse.iter().flatten().map(|s| s.lp_solves).sum();
-    let mut order: Vec<usize> = (0..coarse.len()).filter(|&i| coarse[i].is_some()).collect();
-    if order.is_empty() {
-        return None;
-    }
     let merit = |s: &Solution| s.merit(p.weight);
-    order.sort_by(|&a, &b| {
-        let (ma, mb) = (
-            coarse[a].as_ref().map_or(f64::INFINITY, merit),
-            coarse[b].as_ref().map_or(f64::INFINITY, merit),
-        );
-        ma.total_cmp(&mb).then(a.cmp(&b))
-    });
     // Starts that reached the same point (same intervals, same merit) are
     // one basin: only the first of them is refined.
     let same = |a: &Solution, b: &Solution| {
@@ -227,6 +211,42 @@ fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<Search
                 .zip(&b.h)
                 .all(|(x, y)| (x - y).abs() <= AGREE * x.abs())
     };
+    // Coarse searches in fixed batches (the plan must not depend on the
+    // thread count), stopping once the best point so far has been reached
+    // from enough starts: more starts would only find it again.
+    let mut coarse: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
+    for batch in starts.chunks(BATCH) {
+        coarse.extend(parallel(batch, opts.threads, |h| {
+            let first = p.inner(h, &p.zero_x())?;
+            let sol = p.local_search(&first, 60, 1e-5);
+            if sol.violation == 0.0 {
+                p.watch.offer_jerk(sol.jerk);
+            }
+            Some(sol)
+        }));
+        let found: Vec<&Solution> = coarse.iter().flatten().collect();
+        let best = found
+            .iter()
+            .copied()
+            .min_by(|a, b| merit(a).total_cmp(&merit(b)));
+        if let Some(best) = best
+            && found.iter().filter(|s| same(best, s)).count() >= AGREEING
+        {
+            break;
+        }
+    }
+    let mut lp_solves: u64 = coarse.iter().flatten().map(|s| s.lp_solves).sum();
+    let mut order: Vec<usize> = (0..coarse.len()).filter(|&i| coarse[i].is_some()).collect();
+    if order.is_empty() {
+        return None;
+    }
+    order.sort_by(|&a, &b| {
+        let (ma, mb) = (
+            coarse[a].as_ref().map_or(f64::INFINITY, merit),
+            coarse[b].as_ref().map_or(f64::INFINITY, merit),
+        );
+        ma.total_cmp(&mb).then(a.cmp(&b))
+    });
     let mut chosen: Vec<usize> = Vec::with_capacity(REFINE);
     for &i in &order {
         let Some(s) = coarse[i].as_ref() else {
@@ -257,7 +277,7 @@ fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<Search
     Some(SearchResult {
         best: shapes.first()?.clone(),
         shapes,
-        starts: starts.len(),
+        starts: coarse.len(),
         lp_solves,
     })
 }

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use triquint_planner::evolution::compare;
-use triquint_planner::{Job, Limits, Options, check, plan};
+use triquint_planner::{Job, Limits, Objective, Options, PlanError, check, plan};
 
 fn dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/regression")
@@ -73,5 +73,35 @@ fn differential_evolution_finds_nothing_better() {
             "{name}: DE {de} < search {}",
             c.search_best
         );
+    }
+}
+
+/// Case II's shortest time by b0eb6e5's min-time search (bisection), s.
+const B0EB6E5_CASE2_MIN_TIME_S: f64 = 3.4910;
+
+#[test]
+fn case2_min_time_is_never_longer_than_b0eb6e5s_and_the_verdict_agrees() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper-case2.toml");
+    let case2 = Job::load(&path).unwrap();
+    let min_time = case2
+        .to_builder()
+        .objective(Objective::MinTime)
+        .build()
+        .unwrap();
+    let p = plan(&min_time, &Options::default()).unwrap();
+    for r in check(&p).unwrap() {
+        assert!(r.ok, "{} = {} > {}", r.what, r.value, r.bound);
+    }
+    let t = p.total_time_s;
+    eprintln!("Case II min-time {t:.6} s against b0eb6e5's {B0EB6E5_CASE2_MIN_TIME_S} s");
+    assert!(t <= B0EB6E5_CASE2_MIN_TIME_S, "{t}");
+    // Asked for 3.0 s, the verdict's shortest time is the min-time answer.
+    let short = case2.to_builder().total_time(3.0).build().unwrap();
+    match plan(&short, &Options::default()) {
+        Err(PlanError::Infeasible {
+            shortest_total_time: Some(s),
+            ..
+        }) => assert!((s - t).abs() <= 1e-5 * t, "verdict {s} against min-time {t}"),
+        other => panic!("{other:?}"),
     }
 }
