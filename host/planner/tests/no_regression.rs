@@ -3,7 +3,8 @@
 //! is never worse than b0eb6e5's (`tests/regression/baseline.toml`, written
 //! by that binary) by more than 1e-4 relative, and every plan passes the
 //! independent check. On three of them with only jerk limited, differential evolution over the
-//! intervals finds nothing better than the search by more than 0.1 %.
+//! intervals finds nothing better than the search by more than 0.1 %. Case II
+//! min-time is never longer than b0eb6e5's, and an infeasible verdict names it.
 
 use std::path::{Path, PathBuf};
 
@@ -101,7 +102,10 @@ fn case2_min_time_is_never_longer_than_b0eb6e5s_and_the_verdict_agrees() {
         Err(PlanError::Infeasible {
             shortest_total_time: Some(s),
             ..
-        }) => assert!((s - t).abs() <= 1e-5 * t, "verdict {s} against min-time {t}"),
+        }) => assert!(
+            (s - t).abs() <= 1e-5 * t,
+            "verdict {s} against min-time {t}"
+        ),
         other => panic!("{other:?}"),
     }
 }
