@@ -101,9 +101,9 @@ const REFINE: usize = 3;
 /// Relative distance below which two coarse results are the same point.
 const AGREE: f64 = 1e-4;
 /// Coarse searches run in batches of this many starts.
-const BATCH: usize = 4;
+const BATCH: usize = 2;
 /// Starts that must agree on the best point before the rest are skipped.
-const AGREEING: usize = 3;
+const AGREEING: usize = 2;
 
 /// Multistart global search for min-max jerk at the problem's total time.
 ///
