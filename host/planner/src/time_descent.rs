@@ -12,6 +12,8 @@ use crate::search::shortest_scaling;
 
 /// Steps at most.
 const MAX_STEPS: usize = 80;
+/// A step promising less than this share of the time ends the descent.
+const PROMISE_FLOOR: f64 = 1e-6;
 /// Consecutive steps gaining less than this (relative) end the descent.
 const STALL_GAIN: f64 = 1e-7;
 
@@ -37,8 +39,10 @@ impl Problem {
             solves += step.solves;
             let (h, x) = (step.h, step.x);
             let promised = t_cur - h.iter().sum::<f64>();
-            // Below the step LP's accuracy a promised gain is noise.
-            if promised <= 1e-9 * t_cur {
+            // A promised gain near the plan's microsecond rounding is not
+            // worth the steps: on the 20-point closed curve the last 52 of
+            // 80 steps gained 2.4e-5 of the time together.
+            if promised <= PROMISE_FLOOR * t_cur {
                 break;
             }
             let exact = p.evaluate(&h, &x);
