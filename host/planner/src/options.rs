@@ -6,8 +6,9 @@ use std::time::Duration;
 /// byte for byte (apart from `solver.seconds`), whatever `threads` is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
-    /// Starting interval sets of the global search (the first three are
-    /// deterministic shapes, the rest seeded random).
+    /// Starting interval sets of the global search at most (the first three
+    /// are deterministic shapes, the rest seeded random); the search stops
+    /// taking them once two reach the same best point.
     pub starts: usize,
     /// Seed of the random starts.
     pub seed: u64,

@@ -1,6 +1,6 @@
 //! Global search over the intervals: deterministic multistart of the local
-//! trust-region SLP (coarse for every start, then to convergence for the
-//! best few), rounding to whole microseconds, and the min-time search.
+//! trust-region SLP (coarse from the starts in batches until two agree on
+//! the best point, then to convergence for the best few), rounding to whole microseconds, and the min-time search.
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
