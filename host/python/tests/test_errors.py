@@ -132,6 +132,8 @@ def test_bad_input_never_crashes_the_interpreter():
         import triquint
         nan, inf = float("nan"), float("inf")
         p = triquint.plan([[0, 0, 600], [20, 0, 600]], starts=1)
+        a = np.linspace(0, 2 * np.pi, 41)[:-1]
+        circle = np.c_[120 * np.cos(a), 120 * np.sin(a), 600 + 0 * a]
         calls = [
             lambda: triquint.plan([[nan, nan, nan]] * 3),
             lambda: triquint.plan([[inf, 0, 600], [0, 0, 600]]),
@@ -145,7 +147,8 @@ def test_bad_input_never_crashes_the_interpreter():
             lambda: triquint.plan([[0, 0, 600], [20, 0, 600]], velocity=inf),
             lambda: triquint.plan([[0, 0, 600], [20, 0, 600]], seed=-1),
             lambda: triquint.plan([[0, 0, 600], [20, 0, 600]], starts=2**70),
-            lambda: triquint.plan([[0, 0, 600], [20, 0, 600]], progress=lambda p: 1 / 0),
+            # A job long enough (about 1 s) that the callable is called at all.
+            lambda: triquint.plan(circle, total_time=8.0, progress=lambda p: 1 / 0),
             lambda: triquint.ik(np.full((4, 3), nan)),
             lambda: triquint.ik(np.zeros((0, 3))).shape == (0, 3) and 1 / 0,
             lambda: triquint.fk([1e300, -1e300, 0]),
