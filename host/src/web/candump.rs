@@ -55,8 +55,9 @@ pub fn parse_line(line: &str) -> Option<Logged> {
     })
 }
 
-/// Every frame of a log, times made relative to its first frame; errors
-/// name the first line that is not a frame.
+/// Every frame of a log in time order (a log interleaves the interfaces'
+/// timestamps slightly out of order), times made relative to its first
+/// frame; errors name the first line that is not a frame.
 pub fn parse_log(text: &str) -> Result<Vec<Logged>, String> {
     let mut out = Vec::new();
     for (n, line) in text.lines().enumerate() {
@@ -68,6 +69,7 @@ pub fn parse_log(text: &str) -> Result<Vec<Logged>, String> {
             None => return Err(format!("line {}: not a candump -L frame: {line:?}", n + 1)),
         }
     }
+    out.sort_by_key(|l| l.t_us);
     let Some(t0) = out.first().map(|l| l.t_us) else {
         return Err("no frames".into());
     };

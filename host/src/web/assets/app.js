@@ -157,7 +157,7 @@
   }
 
   // ---------- 3-D view ----------
-  let az = -0.7, el = 0.45;
+  let az = 0.55, el = 0.4;
   function draw3d() {
     const [g, w, h] = sized($("view3d"));
     g.clearRect(0, 0, w, h);
@@ -195,10 +195,9 @@
     line([b[0], b[1], b[2]], [b[0], b[1], e[2]], COL[2]);
     g.fillStyle = "#505050"; g.font = "11px system-ui, sans-serif";
     const lab = (p, t) => { const q = P(p); g.fillText(t, q[0], q[1]); };
-    lab([e[0] + half * 0.12, b[1], b[2]], `x ${fmt(e[0], 0)} mm`);
-    lab([b[0], e[1] + half * 0.12, b[2]], `y ${fmt(e[1], 0)} mm`);
-    lab([b[0], b[1], e[2] + half * 0.1], `z ${fmt(e[2], 0)} mm`);
-    lab([b[0] - half * 0.15, b[1] - half * 0.15, b[2]], `(${fmt(b[0], 0)}, ${fmt(b[1], 0)}, ${fmt(b[2], 0)})`);
+    lab([e[0] + half * 0.2, b[1], b[2]], `x ${fmt(b[0], 0)}…${fmt(e[0], 0)} mm`);
+    lab([b[0], e[1] + half * 0.2, b[2]], `y ${fmt(b[1], 0)}…${fmt(e[1], 0)} mm`);
+    lab([b[0], b[1], e[2] + half * 0.1], `z ${fmt(b[2], 0)}…${fmt(e[2], 0)} mm`);
     // Planned path, trail (fading), current position.
     if (planned.length > 1) {
       g.lineWidth = 1.5; g.strokeStyle = "#707070"; g.setLineDash([5, 4]); g.beginPath();
@@ -292,7 +291,7 @@
   // ---------- data ----------
   take(INITIAL);
   const es = new EventSource("/api/events");
-  es.onopen = () => { $("link").textContent = `live · ${CONFIG.event_hz} Hz`; $("link").className = "pill ok"; };
+  es.onopen = () => { $("link").textContent = `${CONFIG.replay ? "replay" : "live"} · ${CONFIG.event_hz} Hz`; $("link").className = "pill ok"; };
   es.onerror = () => { $("link").textContent = "reconnecting…"; $("link").className = "pill bad"; };
   es.onmessage = (m) => { events++; take(JSON.parse(m.data)); };
   window.triquintMonitor = { points: () => points, events: () => events, series: series };
