@@ -133,12 +133,12 @@ def main():
                    "--disable-component-update", "--disable-sync", "--mute-audio",
                    "--hide-scrollbars", f"--user-data-dir={profile}",
                    "--enable-logging=stderr", "--v=0",
-                   "--remote-debugging-pipe", "--window-size=1400,1020", "about:blank"])
+                   "--remote-debugging-pipe", "--window-size=1400,860", "about:blank"])
         target = cdp.call("Target.createTarget", url="about:blank")["targetId"]
         s = cdp.call("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
         for dom in ("Runtime.enable", "Log.enable", "Page.enable"):
             cdp.call(dom, session=s)
-        cdp.call("Emulation.setDeviceMetricsOverride", session=s, width=1400, height=1020,
+        cdp.call("Emulation.setDeviceMetricsOverride", session=s, width=1400, height=860,
                  deviceScaleFactor=1, mobile=False)
         cdp.call("Page.navigate", session=s, url=url)
 

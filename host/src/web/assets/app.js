@@ -190,9 +190,10 @@
       line([b[0] + f * 2 * half, b[1], b[2]], [b[0] + f * 2 * half, e[1], b[2]], "#e4e4e4");
       line([b[0], b[1] + f * 2 * half, b[2]], [e[0], b[1] + f * 2 * half, b[2]], "#e4e4e4");
     }
-    line([b[0], b[1], b[2]], [e[0], b[1], b[2]], COL[0]);
-    line([b[0], b[1], b[2]], [b[0], e[1], b[2]], COL[1]);
-    line([b[0], b[1], b[2]], [b[0], b[1], e[2]], COL[2]);
+    // Cartesian axes in grey: the colours belong to the joints.
+    line([b[0], b[1], b[2]], [e[0], b[1], b[2]], "#505050");
+    line([b[0], b[1], b[2]], [b[0], e[1], b[2]], "#505050");
+    line([b[0], b[1], b[2]], [b[0], b[1], e[2]], "#505050");
     g.fillStyle = "#505050"; g.font = "11px system-ui, sans-serif";
     const lab = (p, t) => { const q = P(p); g.fillText(t, q[0], q[1]); };
     lab([e[0] + half * 0.2, b[1], b[2]], `x ${fmt(b[0], 0)}…${fmt(e[0], 0)} mm`);
