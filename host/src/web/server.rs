@@ -261,9 +261,10 @@ pub async fn handle(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>) -> 
 pub async fn serve(listener: TcpListener, app: Arc<App>, stop: Arc<AtomicBool>) {
     let slots = Arc::new(Semaphore::new(MAX_CONNECTIONS));
     while !stop.load(Ordering::Relaxed) {
-        let accepted = tokio::select! {
-            a = listener.accept() => a,
-            _ = tokio::time::sleep(Duration::from_millis(100)) => continue,
+        let Ok(accepted) =
+            tokio::time::timeout(Duration::from_millis(100), listener.accept()).await
+        else {
+            continue;
         };
         let Ok((stream, peer)) = accepted else {
             // Out of file descriptors and the like: wait, never spin.
