@@ -121,6 +121,21 @@ fn bad_requests_get_4xx_and_the_server_goes_on() {
     let (code, body) = request(&m, "POST", "/api/hold", &[]);
     assert_eq!(code, 403, "{body}");
     assert!(body.contains("--allow-control"));
+    // The CSV of the trace window.
+    std::thread::sleep(Duration::from_millis(1500));
+    let (code, csv) = request(&m, "GET", "/api/trace.csv?window=5", &[]);
+    assert_eq!(code, 200);
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("t_s,axis,quantity,value,unit"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert!(
+        rows.iter().any(|r| r[2] == "position" && r[4] == "mm"),
+        "{csv}"
+    );
+    assert!(
+        rows.iter()
+            .all(|r| r.len() == 5 && r[3].parse::<f64>().is_ok())
+    );
     // Still serving, and the replay went on.
     let t0 = state(&m)["time_s"].as_f64().unwrap();
     std::thread::sleep(Duration::from_millis(300));
