@@ -107,7 +107,7 @@ def console_errors(events):
 
 def main():
     args = sys.argv[1:]
-    at = 6.0
+    at = 4.5
     if "--at" in args:
         i = args.index("--at")
         at = float(args[i + 1])

@@ -131,3 +131,65 @@ def test_web_monitor_follows_an_upload(make_sim, bus):
             mon.wait(10)
         except subprocess.TimeoutExpired:
             mon.kill()
+
+
+def test_web_stop_button_stops_an_upload(make_sim, bus):
+    """POST /api/stop (with --allow-control, from loopback, our Origin) sends
+    Stop to every drive: they stop along the path, then Idle, mid-plan."""
+    sim = make_sim("web-stop", start=plan_start_mm(2))
+    sim.wait_heartbeats(bus)
+    mon = subprocess.Popen(
+        [TRIQUINT, "monitor", "--web", "127.0.0.1:0", "--iface", IFACE, "--allow-control",
+         "--duration", "600"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    up = None
+    try:
+        m = re.search(r"http://127\.0\.0\.1:(\d+)/", mon.stdout.readline())
+        assert m, mon.stderr.read()
+        addr = ("127.0.0.1", int(m.group(1)))
+        up = subprocess.Popen([TRIQUINT, "upload", plan_path(2), "--iface", IFACE, "--json"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + UPLOAD_TIMEOUT_S
+        while not all(n["state"] == "Running" for n in get_state(addr)["nodes"]):
+            assert up.poll() is None, up.communicate()
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        c = http.client.HTTPConnection(*addr, timeout=10)
+        c.request("POST", "/api/stop", headers={"Origin": f"http://{addr[0]}:{addr[1]}"})
+        r = c.getresponse()
+        body = r.read().decode()
+        c.close()
+        assert r.status == 200, body
+        seen = [[] for _ in range(3)]
+        while True:
+            s = get_state(addr)
+            for i, n in enumerate(s["nodes"]):
+                if not seen[i] or seen[i][-1] != n["state"]:
+                    seen[i].append(n["state"])
+            if all(x[-1] == "Idle" for x in seen):
+                break
+            assert time.monotonic() < deadline, seen
+            time.sleep(0.05)
+        # `triquint upload` does not yet end when the drives are stopped by
+        # another client (it waits on: seen, left to the hold/resume work);
+        # it is given a while, then ended. Either way the plan did not finish.
+        try:
+            out, _ = up.communicate(timeout=10)
+            completed = up.returncode == 0 and json.loads(out).get("completed")
+        except subprocess.TimeoutExpired:
+            up.kill()
+            up.communicate()
+            completed = False
+        assert not completed, "the plan ran to its end despite Stop"
+        report = sim.stop()
+        assert not report["completed"]
+        print({"states_after_stop": seen, "upload_exit": up.returncode})
+    finally:
+        if up and up.poll() is None:
+            up.kill()
+            up.wait()
+        mon.terminate()
+        try:
+            mon.wait(10)
+        except subprocess.TimeoutExpired:
+            mon.kill()
