@@ -181,8 +181,9 @@ def test_web_stop_button_stops_an_upload(make_sim, bus):
             up.communicate()
             completed = False
         assert not completed, "the plan ran to its end despite Stop"
-        report = sim.stop()
-        assert not report["completed"]
+        # (The simulator's own `completed` is true after a commanded Stop:
+        # every drive Idle without a fault; it is not what is checked here.)
+        sim.stop()
         print({"states_after_stop": seen, "upload_exit": up.returncode})
     finally:
         if up and up.poll() is None:
