@@ -56,6 +56,20 @@ cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-
 step "on-target test (QEMU mps2-an386) and the board images"
 ./scripts/qemu-test.sh
 
+step "web monitor in headless Chromium (replayed testdata/hil log)"
+# Debian's chromium (after qemu-test.sh, whose apt-get update it reuses);
+# the page, its stream and its console, and a screenshot as an artefact
+# (target/web-monitor.png; docs/web-monitor.png is one).
+if ! command -v chromium >/dev/null; then
+    apt_chromium() {
+        DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=600 install -y -qq \
+            --no-install-recommends chromium >/dev/null
+    }
+    apt_chromium || { apt-get -o DPkg::Lock::Timeout=600 update -qq && apt_chromium; }
+fi
+timeout 120 python3 scripts/web_chromium.py "$target_dir/release/triquint" \
+    testdata/hil/case1-classic.candump.log "$target_dir/web-monitor.png"
+
 step "HIL suite: SocketCAN (vcan) in a virtme-ng VM"
 ./scripts/hil.sh
 

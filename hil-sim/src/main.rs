@@ -106,6 +106,7 @@ struct JsonReport {
     total_frames: u64,
     total_bus_load: f64,
     foreign_frames: u64,
+    final_joint_position_m: [f64; 3],
 }
 
 /// A flag set by SIGINT or SIGTERM.
@@ -133,6 +134,7 @@ fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
         total_frames: r.frames,
         total_bus_load: r.bus_load,
         foreign_frames: r.foreign_frames,
+        final_joint_position_m: r.final_joint_position_m,
     };
     serde_json::to_string_pretty(&j).unwrap_or_default()
 }

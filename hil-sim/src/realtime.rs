@@ -102,6 +102,9 @@ pub struct RealtimeReport {
     pub bus_load: f64,
     /// Frames on the bus that are not protocol frames.
     pub foreign_frames: u64,
+    /// The plant's joint positions when the simulator stopped (m), what
+    /// the drives' telemetry reports at rest (the web monitor's vcan test).
+    pub final_joint_position_m: [f64; 3],
 }
 
 /// The run being watched.
@@ -329,6 +332,7 @@ pub fn run(
     report.wall_time_s = (end - start_ns) as f64 * 1e-9;
     report.bus_load = all_busy_ns as f64 / (end - start_ns).max(1) as f64;
     report.foreign_frames = port.foreign;
+    report.final_joint_position_m = [plant.q[0], plant.q[1], plant.q[2]];
     // A run cut short by the stop is reported as it stands (not completed).
     if watch.since_ns.is_some() && watch.running {
         let r = finish(&watch, &nodes, end, false);

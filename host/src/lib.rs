@@ -8,3 +8,4 @@ pub mod exit;
 pub mod inprocess;
 pub mod report;
 pub mod robot_file;
+pub mod web;

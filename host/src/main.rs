@@ -74,7 +74,7 @@ fn run(cli: Cli) -> CliResult {
             let (robot, homing) = load_machine(cli.robot.as_deref())?;
             cli::move_to::run(a, &robot, &homing)
         }
-        Command::Monitor(a) => cli::monitor::run(a),
+        Command::Monitor(a) => cli::monitor::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Status(a) => cli::status::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Home(a) => {
             let (robot, homing) = load_machine(cli.robot.as_deref())?;

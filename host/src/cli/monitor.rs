@@ -3,6 +3,9 @@
 //! names; configuration parameters by name; segments reassembled), like
 //! `candump` but readable. Stops on SIGINT/SIGTERM, after `--count` frames or
 //! `--duration` seconds.
+//!
+//! With `--web [ADDR:PORT]`, serves the live web monitor instead (see
+//! [`crate::web`]), from `--iface` or a `--replay`ed `candump -L` log.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -19,10 +22,31 @@ use crate::exit::{CliError, CliResult};
 #[derive(Args, Debug)]
 pub struct MonitorArgs {
     /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
+    #[arg(long, value_name = "IFACE", required_unless_present = "replay")]
+    pub iface: Option<String>,
+    /// Serve the web monitor on ADDR:PORT (default 127.0.0.1:8080).
+    #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1,
+          default_missing_value = "127.0.0.1:8080")]
+    pub web: Option<std::net::SocketAddr>,
+    /// With --web: replay a `candump -L` log at its recorded pace, looping.
+    #[arg(
+        long,
+        value_name = "FILE.log",
+        conflicts_with = "iface",
+        requires = "web"
+    )]
+    pub replay: Option<std::path::PathBuf>,
+    /// With --web: node ids of the drives of axes 1, 2, 3.
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C", requires = "web")]
+    pub nodes: String,
+    /// With --web: accept POST /api/hold, /api/resume, /api/stop (from loopback).
+    #[arg(long, requires = "web")]
+    pub allow_control: bool,
+    /// With --allow-control: from other hosts too, with the token printed at start.
+    #[arg(long, requires = "allow_control")]
+    pub allow_remote_control: bool,
     /// One JSON object per line.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "web")]
     pub json: bool,
     /// Stop after this many frames.
     #[arg(long, value_name = "N")]
@@ -69,7 +93,7 @@ fn raw(frame: &Frame) -> String {
     format!("{:03X}#{}{hex}", frame.id, if frame.fd { "#" } else { "" })
 }
 
-pub fn run(args: &MonitorArgs) -> CliResult {
+pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
     if let Some(d) = args.duration
         && !(d.is_finite() && d > 0.0)
     {
@@ -82,9 +106,25 @@ pub fn run(args: &MonitorArgs) -> CliResult {
         signal_hook::flag::register(sig, Arc::clone(&stop))
             .map_err(|e| CliError::device(format!("cannot install the signal handler: {e}")))?;
     }
+    if let Some(addr) = args.web {
+        let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+        let opts = crate::web::WebOptions {
+            addr,
+            iface: args.iface.clone(),
+            replay: args.replay.clone(),
+            ids,
+            allow_control: args.allow_control,
+            allow_remote_control: args.allow_remote_control,
+            duration: args.duration,
+        };
+        return crate::web::run(&opts, robot, stop);
+    }
+    let Some(iface) = args.iface.as_deref() else {
+        return Err(CliError::bad_input("--iface IFACE is needed without --web"));
+    };
     // A CAN-FD socket receives classic and FD frames alike.
-    let mut port = SocketCanPort::open(&args.iface, true, false, SystemTime::now())
-        .map_err(CliError::device)?;
+    let mut port =
+        SocketCanPort::open(iface, true, false, SystemTime::now()).map_err(CliError::device)?;
     let t0 = Instant::now();
     let mut seen = 0u64;
     let mut parts = [Reassembler::default(), Reassembler::default()];

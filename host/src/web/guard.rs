@@ -1,0 +1,252 @@
+//! Which requests the server answers: the Host header must name the bound
+//! address or localhost (against DNS rebinding); control requests need
+//! `--allow-control`, come from loopback unless `--allow-remote-control`
+//! (then with the token printed at start), carry no foreign Origin (a
+//! missing Origin only from loopback), and are rate-limited.
+
+use std::net::{IpAddr, SocketAddr};
+use std::time::{Duration, Instant};
+
+use hyper::StatusCode;
+use hyper::header::HeaderMap;
+
+/// A refusal: status and a one-line reason for the body.
+pub type Refusal = (StatusCode, String);
+
+/// What the server was started with.
+#[derive(Clone, Debug)]
+pub struct Policy {
+    pub bound: SocketAddr,
+    pub allow_control: bool,
+    pub allow_remote_control: bool,
+    /// Required from remote clients (with `allow_remote_control`).
+    pub token: Option<String>,
+}
+
+fn refuse(status: StatusCode, why: impl Into<String>) -> Refusal {
+    (status, why.into())
+}
+
+/// `host[:port]` split, with IPv6 brackets removed.
+fn split_host(h: &str) -> Option<(&str, Option<u16>)> {
+    let (host, port) = if let Some(rest) = h.strip_prefix('[') {
+        let (host, after) = rest.split_once(']')?;
+        match after {
+            "" => (host, None),
+            p => (host, Some(p.strip_prefix(':')?.parse().ok()?)),
+        }
+    } else {
+        match h.rsplit_once(':') {
+            Some((host, p)) => (host, Some(p.parse().ok()?)),
+            None => (h, None),
+        }
+    };
+    (!host.is_empty()).then_some((host, port))
+}
+
+impl Policy {
+    /// Does `host` (a Host header, or an Origin's authority) name this server?
+    pub fn names_us(&self, host: &str) -> bool {
+        let Some((name, port)) = split_host(host) else {
+            return false;
+        };
+        if port.is_some_and(|p| p != self.bound.port()) {
+            return false;
+        }
+        let name = name.to_ascii_lowercase();
+        if name == "localhost" {
+            return true;
+        }
+        match name.parse::<IpAddr>() {
+            Ok(ip) => ip == self.bound.ip() || (self.bound.ip().is_loopback() && ip.is_loopback()),
+            Err(_) => false,
+        }
+    }
+
+    /// Every request: a Host header that names us.
+    pub fn check_host(&self, headers: &HeaderMap) -> Result<(), Refusal> {
+        let host = headers
+            .get(hyper::header::HOST)
+            .and_then(|h| h.to_str().ok())
+            .ok_or_else(|| refuse(StatusCode::BAD_REQUEST, "no Host header"))?;
+        if self.names_us(host) {
+            Ok(())
+        } else {
+            Err(refuse(
+                StatusCode::MISDIRECTED_REQUEST,
+                format!("Host {host:?} is not this server ({})", self.bound),
+            ))
+        }
+    }
+
+    /// A control request from `peer`.
+    pub fn check_control(&self, peer: SocketAddr, headers: &HeaderMap) -> Result<(), Refusal> {
+        if !self.allow_control {
+            return Err(refuse(
+                StatusCode::FORBIDDEN,
+                "control is off: start the monitor with --allow-control",
+            ));
+        }
+        let local = peer.ip().is_loopback();
+        if !local {
+            if !self.allow_remote_control {
+                return Err(refuse(
+                    StatusCode::FORBIDDEN,
+                    "control only from this machine (--allow-remote-control allows others)",
+                ));
+            }
+            let given = headers
+                .get("x-triquint-token")
+                .and_then(|v| v.to_str().ok());
+            if self.token.is_none() || given != self.token.as_deref() {
+                return Err(refuse(
+                    StatusCode::UNAUTHORIZED,
+                    "missing or wrong X-Triquint-Token",
+                ));
+            }
+        }
+        match headers.get(hyper::header::ORIGIN) {
+            None if local => Ok(()),
+            None => Err(refuse(StatusCode::FORBIDDEN, "no Origin header")),
+            Some(o) => {
+                let o = o.to_str().unwrap_or("");
+                let authority = o.strip_prefix("http://").unwrap_or("");
+                if self.names_us(authority) {
+                    Ok(())
+                } else {
+                    Err(refuse(
+                        StatusCode::FORBIDDEN,
+                        format!("foreign Origin {o:?}"),
+                    ))
+                }
+            }
+        }
+    }
+}
+
+/// At most `burst` control requests at once, refilled at `per_s`.
+#[derive(Debug)]
+pub struct RateLimit {
+    tokens: f64,
+    burst: f64,
+    per_s: f64,
+    last: Instant,
+}
+
+impl RateLimit {
+    pub fn new(burst: u32, per_s: f64) -> Self {
+        Self {
+            tokens: f64::from(burst),
+            burst: f64::from(burst),
+            per_s,
+            last: Instant::now(),
+        }
+    }
+
+    /// Takes one token at `now`, or says how long to wait.
+    pub fn take(&mut self, now: Instant) -> Result<(), Duration> {
+        let dt = now.saturating_duration_since(self.last).as_secs_f64();
+        self.last = now;
+        self.tokens = (self.tokens + dt * self.per_s).min(self.burst);
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            Ok(())
+        } else {
+            Err(Duration::from_secs_f64((1.0 - self.tokens) / self.per_s))
+        }
+    }
+}
+
+/// A random token (hex, 128 bits) from the kernel's generator.
+pub fn new_token() -> std::io::Result<String> {
+    use std::io::Read;
+    let mut b = [0u8; 16];
+    std::fs::File::open("/dev/urandom")?.read_exact(&mut b)?;
+    Ok(b.iter().map(|x| format!("{x:02x}")).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hyper::header::HeaderValue;
+
+    fn policy() -> Policy {
+        Policy {
+            bound: "127.0.0.1:8080".parse().unwrap(),
+            allow_control: true,
+            allow_remote_control: false,
+            token: None,
+        }
+    }
+
+    #[test]
+    fn host_names() {
+        let p = policy();
+        for ok in [
+            "127.0.0.1:8080",
+            "localhost:8080",
+            "LOCALHOST",
+            "[::1]:8080",
+            "127.0.0.1",
+        ] {
+            assert!(p.names_us(ok), "{ok}");
+        }
+        for bad in [
+            "evil.example:8080",
+            "127.0.0.1:9999",
+            "",
+            ":8080",
+            "[::1",
+            "10.0.0.1:8080",
+        ] {
+            assert!(!p.names_us(bad), "{bad}");
+        }
+    }
+
+    #[test]
+    fn control_origin_and_peer() {
+        let p = policy();
+        let local: SocketAddr = "127.0.0.1:5000".parse().unwrap();
+        let remote: SocketAddr = "192.0.2.1:5000".parse().unwrap();
+        let mut h = HeaderMap::new();
+        assert!(p.check_control(local, &h).is_ok());
+        assert_eq!(
+            p.check_control(remote, &h).unwrap_err().0,
+            StatusCode::FORBIDDEN
+        );
+        h.insert("origin", HeaderValue::from_static("http://evil.example"));
+        assert_eq!(
+            p.check_control(local, &h).unwrap_err().0,
+            StatusCode::FORBIDDEN
+        );
+        h.insert("origin", HeaderValue::from_static("http://localhost:8080"));
+        assert!(p.check_control(local, &h).is_ok());
+        let mut r = policy();
+        r.allow_remote_control = true;
+        r.token = Some("abc".into());
+        assert_eq!(
+            r.check_control(remote, &h).unwrap_err().0,
+            StatusCode::UNAUTHORIZED
+        );
+        h.insert("x-triquint-token", HeaderValue::from_static("abc"));
+        assert!(r.check_control(remote, &h).is_ok());
+        let off = Policy {
+            allow_control: false,
+            ..policy()
+        };
+        assert_eq!(
+            off.check_control(local, &HeaderMap::new()).unwrap_err().0,
+            StatusCode::FORBIDDEN
+        );
+    }
+
+    #[test]
+    fn rate_limit_refills() {
+        let mut r = RateLimit::new(2, 1.0);
+        let t = Instant::now();
+        assert!(r.take(t).is_ok());
+        assert!(r.take(t).is_ok());
+        assert!(r.take(t).is_err());
+        assert!(r.take(t + Duration::from_millis(1100)).is_ok());
+    }
+}

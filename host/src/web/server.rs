@@ -1,0 +1,294 @@
+//! The HTTP server (hyper 1, HTTP/1.1, on a single-threaded tokio runtime)
+//! and its routes:
+//! - `GET /`: the page, with the current state embedded;
+//! - `GET /api/state`: the state as JSON (`status --json`'s schema plus);
+//! - `GET /api/events`: server-sent events at [`EVENT_HZ`], each the state
+//!   and the trace samples new since the client's previous event, through a
+//!   bounded queue per client (a slow client misses events, never stalls
+//!   the frame source);
+//! - `GET /api/trace.csv?window=S`: the last S seconds of every trace;
+//! - `POST /api/hold`, `/api/resume`, `/api/stop`: see [`super::guard`].
+
+use std::convert::Infallible;
+use std::net::SocketAddr;
+use std::pin::Pin;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::task::{Context, Poll};
+use std::time::{Duration, Instant};
+
+use http_body_util::{BodyExt, Full, combinators::BoxBody};
+use hyper::body::{Body, Bytes, Frame as BodyFrame, Incoming};
+use hyper::server::conn::http1;
+use hyper::service::service_fn;
+use hyper::{Method, Request, Response, StatusCode, header};
+use hyper_util::rt::{TokioIo, TokioTimer};
+use serde_json::{Value as Json, json};
+use tokio::net::TcpListener;
+use tokio::sync::{Semaphore, mpsc};
+
+use super::control::{self, Action};
+use super::guard::{Policy, RateLimit};
+use super::model::Model;
+use super::page;
+use super::traces::QUANTITIES;
+
+/// Events per second on `/api/events`.
+pub const EVENT_HZ: u64 = 20;
+/// Events a client may have waiting before it misses some.
+const CLIENT_QUEUE: usize = 4;
+/// Samples per series in one event (the first one carries the history).
+const MAX_EVENT_SAMPLES: usize = 20_000;
+/// Open connections at most; more are closed at once.
+const MAX_CONNECTIONS: usize = 64;
+
+type Resp = Response<BoxBody<Bytes, Infallible>>;
+
+/// What every request handler shares.
+pub struct App {
+    pub model: Arc<Mutex<Model>>,
+    pub policy: Policy,
+    /// The interface control frames go to (`None`: replay, nothing to send to).
+    pub iface: Option<String>,
+    pub rate: Mutex<RateLimit>,
+    /// Events sent and missed (client queue full), over all clients.
+    pub events_sent: std::sync::atomic::AtomicU64,
+    pub events_missed: std::sync::atomic::AtomicU64,
+}
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+fn full(status: StatusCode, ctype: &str, body: impl Into<Bytes>) -> Resp {
+    Response::builder()
+        .status(status)
+        .header(header::CONTENT_TYPE, ctype)
+        .header(header::CACHE_CONTROL, "no-store")
+        .header("x-content-type-options", "nosniff")
+        .body(Full::new(body.into()).boxed())
+        .unwrap_or_else(|_| Response::new(Full::new(Bytes::new()).boxed()))
+}
+
+fn text(status: StatusCode, msg: impl Into<String>) -> Resp {
+    let mut m = msg.into();
+    m.push('\n');
+    full(status, "text/plain; charset=utf-8", m)
+}
+
+fn json_resp(status: StatusCode, v: &Json) -> Resp {
+    full(status, "application/json", v.to_string())
+}
+
+/// An SSE body over a client's bounded queue.
+struct EventBody(mpsc::Receiver<Bytes>);
+
+impl Body for EventBody {
+    type Data = Bytes;
+    type Error = Infallible;
+    fn poll_frame(
+        mut self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+    ) -> Poll<Option<Result<BodyFrame<Bytes>, Infallible>>> {
+        self.0
+            .poll_recv(cx)
+            .map(|o| o.map(|b| Ok(BodyFrame::data(b))))
+    }
+}
+
+/// One event: the state and what is new since `cursor` (bus time, µs).
+pub fn event(model: &Model, cursor: Option<u64>, planned_seen: Option<u64>) -> Json {
+    let mut state = model.state_json();
+    let delta = model.traces.delta(cursor, MAX_EVENT_SAMPLES);
+    if let Some(o) = state.as_object_mut() {
+        o.insert("traces".into(), json!(delta.series));
+        o.insert("trail".into(), json!(model.trail_since(cursor)));
+        if planned_seen != Some(model.planned_version) {
+            o.insert("planned".into(), json!(model.planned));
+        }
+    }
+    state
+}
+
+fn events(app: Arc<App>) -> Resp {
+    let (tx, rx) = mpsc::channel::<Bytes>(CLIENT_QUEUE);
+    tokio::spawn(async move {
+        let mut tick = tokio::time::interval(Duration::from_millis(1000 / EVENT_HZ));
+        tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        let mut cursor: Option<u64> = None;
+        let mut planned: Option<u64> = None;
+        loop {
+            tick.tick().await;
+            if tx.is_closed() {
+                return;
+            }
+            // Nothing is built while the client's queue is full.
+            let Ok(permit) = tx.try_reserve() else {
+                app.events_missed.fetch_add(1, Ordering::Relaxed);
+                continue;
+            };
+            let ev = {
+                let m = lock(&app.model);
+                let ev = event(&m, cursor, planned);
+                cursor = m
+                    .traces
+                    .newest_us
+                    .or(cursor)
+                    .max(m.trail.back().map(|t| t.0));
+                planned = Some(m.planned_version);
+                ev
+            };
+            permit.send(Bytes::from(format!("data: {ev}\n\n")));
+            app.events_sent.fetch_add(1, Ordering::Relaxed);
+        }
+    });
+    Response::builder()
+        .header(header::CONTENT_TYPE, "text/event-stream")
+        .header(header::CACHE_CONTROL, "no-store")
+        .body(EventBody(rx).boxed())
+        .unwrap_or_else(|_| text(StatusCode::INTERNAL_SERVER_ERROR, "event stream"))
+}
+
+/// The last `window_s` of every trace as CSV.
+pub fn trace_csv(model: &Model, window_s: f64) -> String {
+    let newest = model.traces.newest_us.unwrap_or(0);
+    let from = newest.saturating_sub((window_s * 1e6) as u64);
+    let mut out = String::from("t_s,axis,quantity,value,unit\n");
+    for (q, axes) in model.traces.series.iter().enumerate() {
+        let (name, unit) = QUANTITIES[q];
+        for (a, s) in axes.iter().enumerate() {
+            for &(t, v) in s.samples.iter().filter(|(t, _)| *t >= from) {
+                out.push_str(&format!(
+                    "{:.6},{},{name},{v},{unit}\n",
+                    t as f64 * 1e-6,
+                    a + 1
+                ));
+            }
+        }
+    }
+    out
+}
+
+fn query_window(query: Option<&str>) -> Result<f64, String> {
+    let Some(q) = query else { return Ok(10.0) };
+    for kv in q.split('&') {
+        if let Some(v) = kv.strip_prefix("window=") {
+            return match v.parse::<f64>() {
+                Ok(w) if w > 0.0 && w <= 60.0 => Ok(w),
+                _ => Err(format!("window={v}: must be 0 to 60 seconds")),
+            };
+        }
+    }
+    Ok(10.0)
+}
+
+async fn control(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>, action: Action) -> Resp {
+    if let Err((s, why)) = app.policy.check_control(peer, req.headers()) {
+        return text(s, why);
+    }
+    if let Err(wait) = lock(&app.rate).take(Instant::now()) {
+        let mut r = text(StatusCode::TOO_MANY_REQUESTS, "control requests too often");
+        if let Ok(v) = header::HeaderValue::from_str(&format!("{}", wait.as_secs() + 1)) {
+            r.headers_mut().insert(header::RETRY_AFTER, v);
+        }
+        return r;
+    }
+    let Some(iface) = app.iface.clone() else {
+        return text(StatusCode::CONFLICT, "replaying a log: no bus to send to");
+    };
+    match tokio::task::spawn_blocking(move || control::send(&iface, action)).await {
+        Ok(Ok(())) => json_resp(
+            StatusCode::OK,
+            &json!({ "sent": format!("{:?}", action.code()) }),
+        ),
+        Ok(Err(e)) => text(StatusCode::SERVICE_UNAVAILABLE, e),
+        Err(e) => text(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    }
+}
+
+/// Answers one request.
+pub async fn handle(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>) -> Resp {
+    if let Err((s, why)) = app.policy.check_host(req.headers()) {
+        return text(s, why);
+    }
+    let path = req.uri().path().to_string();
+    let get = req.method() == Method::GET || req.method() == Method::HEAD;
+    match (path.as_str(), get) {
+        ("/", true) => {
+            let html = page::render(&lock(&app.model), &app.policy);
+            full(StatusCode::OK, "text/html; charset=utf-8", html)
+        }
+        ("/api/state", true) => {
+            let v = lock(&app.model).state_json();
+            json_resp(StatusCode::OK, &v)
+        }
+        ("/api/events", true) => events(app),
+        ("/api/trace.csv", true) => match query_window(req.uri().query()) {
+            Ok(w) => {
+                let csv = trace_csv(&lock(&app.model), w);
+                let mut r = full(StatusCode::OK, "text/csv; charset=utf-8", csv);
+                r.headers_mut().insert(
+                    header::CONTENT_DISPOSITION,
+                    header::HeaderValue::from_static(
+                        "attachment; filename=\"triquint-traces.csv\"",
+                    ),
+                );
+                r
+            }
+            Err(e) => text(StatusCode::BAD_REQUEST, e),
+        },
+        (p, _) if Action::from_path(p).is_some() => {
+            if req.method() != Method::POST {
+                let mut r = text(StatusCode::METHOD_NOT_ALLOWED, "POST only");
+                r.headers_mut()
+                    .insert(header::ALLOW, header::HeaderValue::from_static("POST"));
+                return r;
+            }
+            let action = Action::from_path(p).unwrap_or(Action::Stop);
+            control(app, peer, req, action).await
+        }
+        ("/" | "/api/state" | "/api/events" | "/api/trace.csv", false) => {
+            let mut r = text(StatusCode::METHOD_NOT_ALLOWED, "GET only");
+            r.headers_mut()
+                .insert(header::ALLOW, header::HeaderValue::from_static("GET, HEAD"));
+            r
+        }
+        _ => text(StatusCode::NOT_FOUND, format!("no such page: {path}")),
+    }
+}
+
+/// Serves on `listener` until `stop` (checked every 100 ms).
+pub async fn serve(listener: TcpListener, app: Arc<App>, stop: Arc<AtomicBool>) {
+    let slots = Arc::new(Semaphore::new(MAX_CONNECTIONS));
+    while !stop.load(Ordering::Relaxed) {
+        let Ok(accepted) =
+            tokio::time::timeout(Duration::from_millis(100), listener.accept()).await
+        else {
+            continue;
+        };
+        let Ok((stream, peer)) = accepted else {
+            // Out of file descriptors and the like: wait, never spin.
+            tokio::time::sleep(Duration::from_millis(50)).await;
+            continue;
+        };
+        let Ok(slot) = Arc::clone(&slots).try_acquire_owned() else {
+            drop(stream);
+            continue;
+        };
+        let _ = stream.set_nodelay(true);
+        let app = Arc::clone(&app);
+        tokio::spawn(async move {
+            let svc = service_fn(move |req| {
+                let app = Arc::clone(&app);
+                async move { Ok::<_, Infallible>(handle(app, peer, req).await) }
+            });
+            let conn = http1::Builder::new()
+                .timer(TokioTimer::new())
+                .header_read_timeout(Duration::from_secs(10))
+                .max_buf_size(8192)
+                .serve_connection(TokioIo::new(stream), svc);
+            let _ = conn.await;
+            drop(slot);
+        });
+    }
+}
