@@ -122,7 +122,8 @@ impl<const Q: usize> Drive<Q> {
                 return Some(m);
             }
             let ahead = self.queued_end_ns - sc.s_ns;
-            let need = TimeScaling::stop_distance_ns(a.stop_ns) + a.margin_ns;
+            let need =
+                TimeScaling::stop_distance_ns(a.stop_ns, self.scaling.target_q16()) + a.margin_ns;
             if !last_queued
                 && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
                 && ahead < need
