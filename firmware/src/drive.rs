@@ -28,7 +28,7 @@ use crate::homing::Homing;
 use crate::inbox::{Item, Source, Status, TAKE_PER_TICK};
 use crate::law::{self, Gains, LawState};
 use crate::ns::to_f32;
-use crate::scaling::{Phase, TimeScaling};
+use crate::scaling::{Phase, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
@@ -91,6 +91,11 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     sync: SyncEstimator,
     scaling: TimeScaling,
     stop_reason: Option<StopReason>,
+    /// Feed override σ (1/65 536; persists until changed, clamped to a new
+    /// configuration's cap).
+    override_q16: u32,
+    /// A FeedHold before Start: the plan starts held.
+    hold_latched: bool,
     start_ns: Option<i64>,
     current_seq: u16,
     plan_ns: i64,
@@ -168,6 +173,8 @@ impl<const Q: usize> Drive<Q> {
             sync: SyncEstimator::default(),
             scaling: TimeScaling::nominal(0, 0),
             stop_reason: None,
+            override_q16: UNIT_Q16,
+            hold_latched: false,
             start_ns: None,
             current_seq: 0,
             plan_ns: 0,
@@ -250,6 +257,18 @@ impl<const Q: usize> Drive<Q> {
     }
     pub fn scaling_phase(&self) -> Phase {
         self.scaling.phase
+    }
+    /// The time-scaling now (tests, monitors).
+    pub fn scaling(&self) -> TimeScaling {
+        self.scaling
+    }
+    /// The feed override (per mille).
+    pub fn override_permille(&self) -> u32 {
+        (self.override_q16 * 1000 + UNIT_Q16 / 2) / UNIT_Q16
+    }
+    /// Held by feed hold (Running at or toward rest), or a hold latched before Start.
+    pub fn is_held(&self) -> bool {
+        self.hold_latched || self.stop_reason == Some(StopReason::Hold)
     }
     /// The segment the reference is taken from while Running or Stopping:
     /// (sequence number, CRC-32 of its body as received).
@@ -382,12 +401,17 @@ impl<const Q: usize> Drive<Q> {
     /// Begins a stop along the path (Running only); otherwise handles the
     /// reason directly.
     fn begin_stop(&mut self, reason: StopReason, quick: bool, local_us: u64) {
+        let t = self.sync.host_ns(local_us).unwrap_or(0);
+        self.begin_stop_at(reason, quick, t);
+    }
+
+    /// [`Drive::begin_stop`] from host time `t` (ns).
+    fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64) {
         let Some(a) = self.active else {
             return;
         };
         if self.state == State::Running {
             let ramp = if quick { a.quick_stop_ns } else { a.stop_ns };
-            let t = self.sync.host_ns(local_us).unwrap_or(0);
             self.scaling.begin_decel(t, ramp);
             self.stop_reason = Some(reason);
             if reason != StopReason::Hold {

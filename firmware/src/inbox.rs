@@ -201,9 +201,9 @@ pub enum Item {
 }
 
 impl Item {
-    /// Stop, QuickStop, ClearFault, Home and Emergency: what has no resend by the
-    /// host's flow control and must reach the tick even behind a flood of
-    /// segments.
+    /// Stop, QuickStop, ClearFault, Home, FeedHold, Resume, Override and
+    /// Emergency: what has no resend by the host's flow control and must
+    /// reach the tick even behind a flood of segments.
     pub fn is_urgent(&self) -> bool {
         match self {
             Item::Emergency { .. } => true,
@@ -212,7 +212,10 @@ impl Item {
                 Ok(CommandCode::Stop
                     | CommandCode::QuickStop
                     | CommandCode::ClearFault
-                    | CommandCode::Home)
+                    | CommandCode::Home
+                    | CommandCode::FeedHold
+                    | CommandCode::Resume
+                    | CommandCode::Override)
             ),
             _ => false,
         }

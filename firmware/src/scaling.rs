@@ -1,25 +1,37 @@
-//! Along-path time-scaling: plan time s advances at rate σ(t). A stop uses
-//! σ = 1 − S(u), u = (t − t₀)/T, S(u) = 10u³ − 15u⁴ + 6u⁵, in closed form, so
-//! every node computes the same s from the same host time with no drift:
-//! s = s₀ + T·(u − 2.5u⁴ + 3u⁵ − u⁶), at rest after T/2 of plan time.
-//! Resume uses σ = S(u): s = s₀ + T·(2.5u⁴ − 3u⁵ + u⁶).
+//! Along-path time-scaling: plan time s advances at rate σ(t).
+//!
+//! σ is either constant (σ = k: 1 nominal, 0 at rest, k a feed override) or
+//! in a transition from its value, rate and acceleration at the instant a
+//! command applies (σ₀, σ̇₀, σ̈₀) to a new constant k. A transition is the
+//! quintic σ(u) = Σ cᵢuⁱ, u = (t − t₀)/T, with σ(0), σ'(0), σ''(0) those of
+//! the curve it leaves and σ(1) = k, σ'(1) = σ''(1) = 0: value, first and
+//! second derivative of σ (and so position, velocity and acceleration of the
+//! reference) are continuous at every change, also in the middle of another
+//! transition. From σ = 1 at rest rates to k = 0 it is the smoothstep
+//! σ = 1 − S(u), S = 10u³ − 15u⁴ + 6u⁵, over the configured stop time.
+//!
+//! Everything is closed form from the anchor (t₀, s₀): every node computes
+//! the same s from the same host time with no drift. The plan time of a
+//! constant phase is integer (ns); only a transition's distance is f32
+//! (≤ T·max σ; its rounding stays below 1 µs of plan time for T ≤ 2 s,
+//! under 1 µm of path at 1 m/s).
 
 use crate::ns::{to_f32, to_i64};
 
 /// Phase of the time-scaling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
-    /// σ = 1: s = s₀ + (t − t₀).
+    /// σ = k > 0 constant (k = 1 nominal, else an override).
     Nominal,
-    /// σ falls from 1 to 0 over T.
+    /// A transition toward σ = 0 (hold or stop).
     Decel,
     /// σ = 0.
     Rest,
-    /// σ rises from 0 to 1 over T.
+    /// A transition toward σ = k > 0 (resume or override change).
     Accel,
 }
 
-/// Plan time and its first two time derivatives of σ at one instant.
+/// Plan time and σ with its first two time derivatives at one instant.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scaled {
     /// Plan time (ns).
@@ -31,218 +43,554 @@ pub struct Scaled {
     pub sigma_dd: f32,
 }
 
+/// σ = 1 in the fixed-point unit of a constant rate (1/65 536).
+pub const UNIT_Q16: u32 = 1 << 16;
+
+/// Peak |σ'| of the smoothstep (15/8) and peak |σ''| (10/√3).
+const PEAK_D1: f32 = 1.875;
+const PEAK_D2: f32 = 5.773_503;
+/// Transition durations tried, relative to the one from rest (shortest first).
+const CANDIDATES: [f32; 9] = [0.2, 0.3, 0.45, 0.65, 1.0, 1.4, 2.0, 2.8, 4.0];
+
 /// Time-scaling state, anchored at host time t₀ and plan time s₀.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeScaling {
     pub phase: Phase,
     pub t0_ns: i64,
     pub s0_ns: i64,
-    /// Ramp duration T (ns).
+    /// Transition duration T (ns).
     pub ramp_ns: i64,
-}
-
-fn smooth(u: f32) -> (f32, f32, f32) {
-    // S, S', S''
-    let u2 = u * u;
-    let s = u2 * u * (10.0 + u * (-15.0 + 6.0 * u));
-    let d1 = 30.0 * u2 * (1.0 + u * (-2.0 + u));
-    let d2 = 60.0 * u * (1.0 + u * (-3.0 + 2.0 * u));
-    (s, d1, d2)
-}
-
-/// T·∫₀ˣ S = T·(2.5x⁴ − 3x⁵ + x⁶) for the ramp fraction x = x_ns/T ≤ 1/2 (ns).
-/// Only this correction (≤ 0.08 T) is in f32; the rest of the plan time is
-/// integer, so s keeps ns resolution over seconds and the tick uses no f64.
-fn correction(x_ns: i64, ramp: i64) -> i64 {
-    let x = to_f32(x_ns) / to_f32(ramp);
-    let x2 = x * x;
-    to_i64(to_f32(ramp) * (x2 * x2 * (2.5 + x * (-3.0 + x))))
-}
-
-/// Plan time covered after `dt` of a ramp of length `ramp` (both ns), for
-/// σ = 1 − S (decelerating) or σ = S. Past the middle it uses the symmetry
-/// ∫₀ᵘ S = 1/2 − v + ∫₀ᵛ S with v = 1 − u, so the f32 part stays small.
-fn ramp_distance(dt: i64, ramp: i64, decel: bool) -> i64 {
-    let dt = dt.max(0).min(ramp);
-    let rest = ramp - dt;
-    match (decel, dt <= rest) {
-        (true, true) => dt - correction(dt, ramp),
-        (true, false) => ramp / 2 - correction(rest, ramp),
-        (false, true) => correction(dt, ramp),
-        (false, false) => dt - ramp / 2 + correction(rest, ramp),
-    }
-}
-
-fn fraction(dt: i64, ramp: i64) -> f32 {
-    to_f32(dt.max(0).min(ramp)) / to_f32(ramp)
+    /// The nominal ramp the transition was sized against (ns).
+    full_ns: i64,
+    /// σ(u) = Σ cᵢuⁱ during a transition.
+    c: [f32; 6],
+    /// σ of the constant phase, or that a transition ends at (1/65 536).
+    target_q16: u32,
+    /// A retarget deferred to the end of the running transition (target,
+    /// nominal ramp): one that would have run σ below 0 from here.
+    pending: Option<(u32, i64)>,
 }
 
 impl TimeScaling {
     /// σ = 1 from host time `t0_ns`, plan time `s0_ns`.
     pub fn nominal(t0_ns: i64, s0_ns: i64) -> Self {
+        Self::constant(t0_ns, s0_ns, UNIT_Q16)
+    }
+
+    /// σ = `q16`/65 536 from host time `t0_ns`, plan time `s0_ns` (at rest if 0).
+    pub fn constant(t0_ns: i64, s0_ns: i64, q16: u32) -> Self {
         Self {
-            phase: Phase::Nominal,
+            phase: if q16 == 0 {
+                Phase::Rest
+            } else {
+                Phase::Nominal
+            },
             t0_ns,
             s0_ns,
             ramp_ns: 1,
+            full_ns: 1,
+            c: [0.0; 6],
+            target_q16: q16,
+            pending: None,
         }
     }
 
-    /// Evaluates at host time `t_ns`, advancing phases that ended.
+    /// σ the scaling is at or heading to (1/65 536).
+    pub fn target_q16(&self) -> u32 {
+        self.target_q16
+    }
+
+    /// In a transition (Decel or Accel)?
+    pub fn in_transition(&self) -> bool {
+        matches!(self.phase, Phase::Decel | Phase::Accel)
+    }
+
+    /// Evaluates at host time `t_ns`, advancing a transition that ended.
     pub fn at(&mut self, t_ns: i64) -> Scaled {
         let dt = t_ns - self.t0_ns;
-        let ramp = self.ramp_ns.max(1);
-        let t_s = to_f32(ramp) * 1e-9;
-        match self.phase {
-            Phase::Nominal => Scaled {
-                s_ns: self.s0_ns + dt.max(0),
-                sigma: 1.0,
-                sigma_d: 0.0,
-                sigma_dd: 0.0,
-            },
-            Phase::Decel if dt < ramp => {
-                let (s, d1, d2) = smooth(fraction(dt, ramp));
-                let ds = ramp_distance(dt, ramp, true);
-                Scaled {
-                    s_ns: self.s0_ns + ds,
-                    sigma: 1.0 - s,
-                    sigma_d: -d1 / t_s,
-                    sigma_dd: -d2 / (t_s * t_s),
-                }
+        if self.in_transition() {
+            let ramp = self.ramp_ns.max(1);
+            if dt < ramp {
+                return self.transition(dt.max(0), ramp);
             }
-            Phase::Decel => {
-                // At rest after T/2 of plan time.
-                self.phase = Phase::Rest;
-                self.s0_ns += ramp / 2;
-                self.t0_ns += ramp;
-                self.at(t_ns)
+            // Ended: constant from its end on (the end's plan time by the
+            // same arithmetic as the transition's last instants).
+            self.s0_ns = self.transition(ramp, ramp).s_ns;
+            self.t0_ns += ramp;
+            self.phase = if self.target_q16 == 0 {
+                Phase::Rest
+            } else {
+                Phase::Nominal
+            };
+            if let Some((k, full)) = self.pending.take() {
+                let t0 = self.t0_ns;
+                self.retarget(t0, k, full);
+                return self.at(t_ns);
             }
-            Phase::Rest => Scaled {
-                s_ns: self.s0_ns,
-                sigma: 0.0,
-                sigma_d: 0.0,
-                sigma_dd: 0.0,
-            },
-            Phase::Accel if dt < ramp => {
-                let (s, d1, d2) = smooth(fraction(dt, ramp));
-                let ds = ramp_distance(dt, ramp, false);
-                Scaled {
-                    s_ns: self.s0_ns + ds,
-                    sigma: s,
-                    sigma_d: d1 / t_s,
-                    sigma_dd: d2 / (t_s * t_s),
-                }
-            }
-            Phase::Accel => {
-                self.phase = Phase::Nominal;
-                self.s0_ns += ramp / 2;
-                self.t0_ns += ramp;
-                self.at(t_ns)
-            }
+            return self.constant_at(t_ns - self.t0_ns);
+        }
+        self.constant_at(dt)
+    }
+
+    fn constant_at(&self, dt: i64) -> Scaled {
+        let dt = dt.max(0);
+        let (s_ns, sigma) = match self.target_q16 {
+            UNIT_Q16 => (self.s0_ns + dt, 1.0),
+            0 => (self.s0_ns, 0.0),
+            k => (
+                self.s0_ns + (dt.saturating_mul(k as i64) >> 16),
+                k as f32 * (1.0 / UNIT_Q16 as f32),
+            ),
+        };
+        Scaled {
+            s_ns,
+            sigma,
+            sigma_d: 0.0,
+            sigma_dd: 0.0,
         }
     }
 
-    /// Starts slowing down at host time `t_ns` (from Nominal or Accel) over `ramp_ns`.
-    /// From Accel the current plan time is kept and the ramp restarts at σ = 1
-    /// only if σ is close to 1; otherwise it rests at once on the next call.
+    fn transition(&self, dt: i64, ramp: i64) -> Scaled {
+        let t = to_f32(ramp);
+        let u = to_f32(dt) / t;
+        let c = &self.c;
+        let sigma = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (c[4] + u * c[5]))));
+        let d1 = c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
+        let d2 = 2.0 * c[2] + u * (6.0 * c[3] + u * (12.0 * c[4] + u * 20.0 * c[5]));
+        let integral = u
+            * (c[0]
+                + u * (c[1] * 0.5
+                    + u * (c[2] * (1.0 / 3.0)
+                        + u * (c[3] * 0.25 + u * (c[4] * 0.2 + u * c[5] * (1.0 / 6.0))))));
+        let inv_t = 1e9 / t;
+        Scaled {
+            s_ns: self.s0_ns + to_i64(t * integral),
+            sigma,
+            sigma_d: d1 * inv_t,
+            sigma_dd: d2 * inv_t * inv_t,
+        }
+    }
+
+    /// From host time `t_ns` on, move σ to `target_q16`/65 536 with the
+    /// continuity above. The transition's duration is the shortest of a few
+    /// candidates (around the one a move from rest over a nominal ramp of
+    /// `full_ns` would take) whose |σ̇| and |σ̈| stay within the
+    /// nominal ramp's peaks (1.875/T, 5.77/T²) and that does not cross the
+    /// target; if none does (a ramp already at its peak acceleration), the
+    /// one with the smallest peaks, σ outside its range counted against them.
+    /// Peaks and range are sampled at six points of each candidate. One
+    /// that would run σ below 0 (a resume late in a hold ramp) is deferred
+    /// to the end of the running transition instead. Already at or heading to the target: no
+    /// change, unless `full_ns` is shorter than the running transition's
+    /// (a quick stop during a stop).
+    pub fn retarget(&mut self, t_ns: i64, target_q16: u32, full_ns: i64) {
+        let t_ns = t_ns.max(self.t0_ns);
+        let now = self.at(t_ns);
+        self.pending = None;
+        let full_ns = full_ns.max(1);
+        if target_q16 == self.target_q16 && !(self.in_transition() && full_ns < self.full_ns) {
+            return;
+        }
+        let k = target_q16 as f32 * (1.0 / UNIT_Q16 as f32);
+        if !self.in_transition() && now.sigma == k {
+            *self = Self::constant(t_ns, now.s_ns, target_q16);
+            return;
+        }
+        let (s0, v0, a0) = (now.sigma, now.sigma_d, now.sigma_dd);
+        // σ stays between the values it has, had as a target and gets.
+        let prev = self.target_q16 as f32 * (1.0 / UNIT_Q16 as f32);
+        let hi = s0.max(k).max(prev) + 1e-3;
+        let lo = s0.min(k).min(prev).max(0.0) - 1e-3;
+        let tf = to_f32(full_ns) * 1e-9;
+        let (vmax, amax) = (PEAK_D1 / tf, PEAK_D2 / (tf * tf));
+        let ad = (k - s0).abs();
+        let base = if ad > 1.0 { ad } else { sqrt(ad) }.max(0.2);
+        let e0 = s0 - k;
+        let mut best = (f32::INFINITY, base);
+        let mut chosen = None;
+        for f in CANDIDATES {
+            let rho = base * f;
+            let c = tf * rho;
+            let inv = 1.0 / c;
+            let q = quintic(s0, v0, a0, k, c);
+            // Peaks of σ̇ and σ̈ and the range of σ, sampled.
+            let (mut vp, mut ap) = (0.0f32, a0.abs());
+            let (mut viol, mut back) = (0.0f32, 0.0f32);
+            for u in [0.083_333_f32, 0.25, 0.416_667, 0.583_333, 0.75, 0.916_667] {
+                let (x, d1, d2) = poly3(&q, u);
+                vp = vp.max(d1.abs() * inv);
+                ap = ap.max(d2.abs() * inv * inv);
+                viol = viol.max(x - hi).max(lo - x);
+                back = back.max(-x);
+            }
+            let r = (vp / vmax).max(ap / amax);
+            // A hold or stop never runs σ below 0 (the path backwards).
+            let side = k > 0.0 || keeps_side(e0, v0 * c, a0 * c * c);
+            if side && viol <= 0.0 && r <= 1.0001 {
+                chosen = Some(rho);
+                break;
+            }
+            // Otherwise: trade the peaks against σ leaving its range
+            // (1 % of σ outside counts as 40 % more σ̈), never crossing the target.
+            let score = r.max(1.0) + 40.0 * viol + 1e3 * back + if side { 0.0 } else { 1e3 };
+            if score < best.0 {
+                best = (score, rho);
+            }
+        }
+        let rho = chosen.unwrap_or(best.1);
+        let ramp_ns = if rho == 1.0 {
+            full_ns
+        } else {
+            to_i64(to_f32(full_ns) * rho).max(1)
+        };
+        let q = quintic(s0, v0, a0, k, to_f32(ramp_ns) * 1e-9);
+        if k > 0.0 && self.in_transition() && (1..24).any(|i| poly3(&q, i as f32 / 24.0).0 < -1e-4)
+        {
+            // Reversing a ramp near its end (a resume late in a hold) would
+            // run the path backwards: let the ramp end, then go on from rest.
+            self.pending = Some((target_q16, full_ns));
+            return;
+        }
+        self.c = q;
+        self.phase = if target_q16 == 0 {
+            Phase::Decel
+        } else {
+            Phase::Accel
+        };
+        self.t0_ns = t_ns;
+        self.s0_ns = now.s_ns;
+        self.ramp_ns = ramp_ns;
+        self.full_ns = full_ns;
+        self.target_q16 = target_q16;
+    }
+
+    /// Slow to rest from host time `t_ns` (hold, stop, fault).
     pub fn begin_decel(&mut self, t_ns: i64, ramp_ns: i64) {
-        let now = self.at(t_ns);
-        match self.phase {
-            Phase::Nominal | Phase::Accel => {
-                self.phase = Phase::Decel;
-                self.t0_ns = t_ns;
-                self.s0_ns = now.s_ns;
-                self.ramp_ns = ramp_ns.max(1);
-            }
-            Phase::Decel | Phase::Rest => {}
-        }
+        self.retarget(t_ns, 0, ramp_ns);
     }
 
-    /// Starts accelerating from rest at host time `t_ns`.
+    /// Accelerate to σ = 1 from host time `t_ns`.
     pub fn begin_accel(&mut self, t_ns: i64, ramp_ns: i64) {
-        let now = self.at(t_ns);
-        if self.phase == Phase::Rest {
-            self.phase = Phase::Accel;
-            self.t0_ns = t_ns;
-            self.s0_ns = now.s_ns;
-            self.ramp_ns = ramp_ns.max(1);
-        }
+        self.retarget(t_ns, UNIT_Q16, ramp_ns);
     }
 
-    /// Plan time still to be covered by a stop begun now (ns): T/2 from Nominal.
-    pub fn stop_distance_ns(ramp_ns: i64) -> i64 {
-        ramp_ns / 2
+    /// Plan time still covered by a stop over a nominal ramp `ramp_ns` begun
+    /// at constant σ ≤ max(1, `sigma_q16`/65 536) (ns): T·σ/2 with
+    /// T = ramp·max(σ, √σ).
+    pub fn stop_distance_ns(ramp_ns: i64, sigma_q16: u32) -> i64 {
+        let k = sigma_q16.max(UNIT_Q16) as i64;
+        // σ ≥ 1: T = ramp·σ, distance ramp·σ²/2 (no overflow below σ = 32).
+        (ramp_ns.saturating_mul(k) >> 16).saturating_mul(k) >> 17
     }
+}
+
+/// σ(u) over a transition of `t` s from σ₀, σ̇₀, σ̈₀ to k at rest.
+fn quintic(s0: f32, v0: f32, a0: f32, k: f32, t: f32) -> [f32; 6] {
+    let c1 = v0 * t;
+    let c2 = 0.5 * a0 * t * t;
+    let d = k - (s0 + c1 + c2);
+    let e1 = -(c1 + 2.0 * c2);
+    let e2 = -2.0 * c2;
+    [
+        s0,
+        c1,
+        c2,
+        10.0 * d - 4.0 * e1 + 0.5 * e2,
+        -15.0 * d + 7.0 * e1 - e2,
+        6.0 * d - 3.0 * e1 + 0.5 * e2,
+    ]
+}
+
+/// σ, σ' and σ'' (per u) at `u`.
+fn poly3(c: &[f32; 6], u: f32) -> (f32, f32, f32) {
+    (
+        c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (c[4] + u * c[5])))),
+        c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5]))),
+        2.0 * c[2] + u * (6.0 * c[3] + u * (12.0 * c[4] + u * 20.0 * c[5])),
+    )
+}
+
+/// Does (1 − u)³·b(u), b(u) = e + (3e + v)u + (6e + 3v + a/2)u², with
+/// e = σ₀ − k, v = σ̇₀T, a = σ̈₀T², keep the sign of e on [0, 1] (σ − k of
+/// a transition: it never crosses the target, so a hold never runs σ < 0)?
+fn keeps_side(e: f32, v: f32, a: f32) -> bool {
+    let sign = if e < 0.0 { -1.0 } else { 1.0 };
+    let (b0, b1, b2) = (
+        e * sign,
+        (3.0 * e + v) * sign,
+        (6.0 * e + 3.0 * v + 0.5 * a) * sign,
+    );
+    if b0 + b1 + b2 < 0.0 {
+        return false;
+    }
+    // Interior minimum of a convex b.
+    if b2 > 0.0 {
+        let u = -b1 / (2.0 * b2);
+        if u > 0.0 && u < 1.0 && b0 - b1 * b1 / (4.0 * b2) < 0.0 {
+            return false;
+        }
+    }
+    true
+}
+
+/// √x for x ≥ 0 without libm (Newton from a bit-level guess; a few
+/// instructions, only when a command retargets).
+fn sqrt(x: f32) -> f32 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let mut y = f32::from_bits((x.to_bits() >> 1) + 0x1fbd_1df5);
+    for _ in 0..3 {
+        y = 0.5 * (y + x / y);
+    }
+    y
 }
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::{eprintln, format};
+
+    const MS: i64 = 1_000_000;
+    const TICK: i64 = 100_000;
 
     #[test]
-    fn decel_reaches_rest_after_half_the_ramp() {
+    fn decel_from_nominal_is_the_smoothstep_and_rests_after_half_the_ramp() {
         let mut ts = TimeScaling::nominal(0, 0);
         let t = 1_000_000_000;
-        ts.begin_decel(500_000_000, t);
-        let a = ts.at(500_000_000);
-        assert_eq!(a.s_ns, 500_000_000);
+        ts.begin_decel(500 * MS, t);
+        assert_eq!(ts.ramp_ns, t);
+        let a = ts.at(500 * MS);
+        assert_eq!(a.s_ns, 500 * MS);
         assert_eq!(a.sigma, 1.0);
-        let b = ts.at(1_000_000_000);
+        let b = ts.at(1000 * MS);
         assert!((b.sigma - 0.5).abs() < 1e-6);
-        let c = ts.at(1_500_000_000 + 1);
+        assert!((b.sigma_d + 1.875).abs() < 1e-4, "{}", b.sigma_d);
+        let c = ts.at(1500 * MS + 1);
         assert_eq!(ts.phase, Phase::Rest);
-        assert_eq!(c.s_ns, 1_000_000_000);
-        // Monotone and continuous plan time through the ramp.
+        assert!((c.s_ns - 1000 * MS).abs() < 1000, "{}", c.s_ns);
         let mut ts = TimeScaling::nominal(0, 0);
         ts.begin_decel(0, t);
         let mut last = -1;
         for k in 0..=1000 {
-            let s = ts.at(k * 1_000_000).s_ns;
-            assert!(s >= last);
-            assert!(s - last.max(0) <= 1_000_001);
+            let s = ts.at(k * MS).s_ns;
+            // Monotone and continuous within the f32 rounding (< 1 µs).
+            assert!(s >= last - 1000, "tick {k}: {s} < {last}");
+            assert!(s - last.max(0) <= MS + 1000);
             last = s;
         }
-        assert!((last - 500_000_000).abs() < 100);
+        assert!((last - 500 * MS).abs() < 1000);
     }
 
     #[test]
     fn accel_after_rest_returns_to_nominal() {
         let mut ts = TimeScaling::nominal(0, 0);
-        ts.begin_decel(0, 400_000_000);
-        ts.at(400_000_001);
-        ts.begin_accel(1_000_000_000, 400_000_000);
-        let mid = ts.at(1_200_000_000);
+        ts.begin_decel(0, 400 * MS);
+        ts.at(400 * MS + 1);
+        ts.begin_accel(1000 * MS, 400 * MS);
+        assert_eq!(ts.ramp_ns, 400 * MS);
+        let mid = ts.at(1200 * MS);
         assert!((mid.sigma - 0.5).abs() < 1e-6);
-        let end = ts.at(2_000_000_000);
+        let end = ts.at(2000 * MS);
         assert_eq!(ts.phase, Phase::Nominal);
         // 200 ms (decel) + 200 ms (accel) of plan time + 600 ms at σ = 1.
-        assert!((end.s_ns - 1_000_000_000).abs() < 100, "{}", end.s_ns);
+        assert!((end.s_ns - 1000 * MS).abs() < 1000, "{}", end.s_ns);
     }
 
     #[test]
-    fn plan_time_is_monotone_and_exact_at_10_khz() {
-        for ramp in [1_000_000i64, 200_000_001, 2_000_000_000] {
-            for decel in [true, false] {
-                let mut last = 0;
-                for k in 0..=ramp / 100_000 + 1 {
-                    let s = ramp_distance(k * 100_000, ramp, decel);
-                    assert!(
-                        s >= last,
-                        "ramp {ramp} decel {decel} tick {k}: {s} < {last}"
-                    );
-                    last = s;
-                }
-                assert!((last - ramp / 2).abs() <= 1, "ramp {ramp}: ends at {last}");
-            }
-            // Decelerating and accelerating distances add up to the time elapsed.
-            for k in 0..=100 {
-                let dt = ramp * k / 100;
-                let sum = ramp_distance(dt, ramp, true) + ramp_distance(dt, ramp, false);
+    fn override_runs_at_the_fraction_and_back() {
+        let mut ts = TimeScaling::nominal(0, 0);
+        ts.retarget(0, UNIT_Q16 / 2, 400 * MS);
+        ts.at(2000 * MS);
+        assert_eq!(ts.phase, Phase::Nominal);
+        let a = ts.at(2000 * MS);
+        let b = ts.at(3000 * MS);
+        assert_eq!(b.sigma, 0.5);
+        assert_eq!(b.s_ns - a.s_ns, 500 * MS);
+        ts.retarget(3000 * MS, UNIT_Q16, 400 * MS);
+        ts.at(5000 * MS);
+        let c = ts.at(5000 * MS);
+        let d = ts.at(6000 * MS);
+        assert_eq!(d.s_ns - c.s_ns, 1000 * MS);
+    }
+
+    /// Runs `ts` at 10 kHz from `from` to `to`, checking σ, σ̇ and σ̈ against
+    /// their numerical derivatives (continuity: no step anywhere), the plan
+    /// time against ∫σ, and returns (peak |σ̇|, peak |σ̈|, min σ, max σ).
+    fn run(ts: &mut TimeScaling, from: i64, to: i64, ctx: &str) -> (f32, f32, f32, f32) {
+        run_with(ts, from, to, ctx, 20.0)
+    }
+
+    /// [`run`] with the largest change of σ̈ in one tick (a bound on σ⃛·dt).
+    fn run_with(
+        ts: &mut TimeScaling,
+        from: i64,
+        to: i64,
+        ctx: &str,
+        dd_step: f32,
+    ) -> (f32, f32, f32, f32) {
+        let dt = TICK as f32 * 1e-9;
+        let mut prev = ts.at(from);
+        let mut peaks = (0.0f32, 0.0f32, prev.sigma, prev.sigma);
+        let mut t = from + TICK;
+        while t <= to {
+            let n = ts.at(t);
+            let ctx = format!("{ctx} t {} ms", t / MS);
+            // ds ≈ (σ + σ')/2·dt within rounding and the curvature.
+            let ds = (n.s_ns - prev.s_ns) as f32 * 1e-9;
+            let mean = 0.5 * (n.sigma + prev.sigma) * dt;
+            // Plan time within its f32 rounding (< 1 µs; see the module doc).
+            assert!(
+                (ds - mean).abs() < 1e-6 + 0.02 * dt,
+                "{ctx}: ds {ds:e} vs {mean:e}"
+            );
+            // σ moves by about σ̇·dt, σ̇ by about σ̈·dt: no steps.
+            let dsig = n.sigma - prev.sigma;
+            let md = 0.5 * (n.sigma_d + prev.sigma_d) * dt;
+            assert!((dsig - md).abs() < 2e-4, "{ctx}: σ step {dsig} vs {md}");
+            let dd = n.sigma_d - prev.sigma_d;
+            let mdd = 0.5 * (n.sigma_dd + prev.sigma_dd) * dt;
+            assert!((dd - mdd).abs() < 2e-2, "{ctx}: σ̇ step {dd} vs {mdd}");
+            assert!(
+                (n.sigma_dd - prev.sigma_dd).abs() < dd_step,
+                "{ctx}: σ̈ step {} → {}",
+                prev.sigma_dd,
+                n.sigma_dd
+            );
+            peaks.0 = peaks.0.max(n.sigma_d.abs());
+            peaks.1 = peaks.1.max(n.sigma_dd.abs());
+            peaks.2 = peaks.2.min(n.sigma);
+            peaks.3 = peaks.3.max(n.sigma);
+            prev = n;
+            t += TICK;
+        }
+        peaks
+    }
+
+    /// Commands at random instants (seeded): hold during resume, resume
+    /// during hold, override during hold, stop during an override change.
+    /// σ reaches each target, stays within [−0.002, max of the targets +
+    /// 0.05] (a hold late in a resume ramp overshoots 1 by up to 4.5 %), and
+    /// |σ̇|, |σ̈| within the nominal ramp's peaks times the budget (1.0 from
+    /// constant σ; 1.05 and 1.8 in the middle of a transition; measured
+    /// 1.00 and 1.63).
+    #[test]
+    fn any_target_from_any_state_at_random_instants() {
+        let full = 400 * MS;
+        let tf = 0.4f32;
+        let (vmax, amax) = (PEAK_D1 / tf, PEAK_D2 / (tf * tf));
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let mut worst = (0.0f32, 0.0f32);
+        let mut over = 0.0f32;
+        let mut under = 0.0f32;
+        let cases: [(&str, u32, u32); 4] = [
+            ("hold during resume", UNIT_Q16, 0),
+            ("resume during hold", 0, UNIT_Q16),
+            ("override during hold", 0, UNIT_Q16 / 2),
+            ("stop during override change", UNIT_Q16 / 2, 0),
+        ];
+        for (name, first, second) in cases {
+            for trial in 0..200 {
+                // Start from the state before the first command.
+                let start = if first == 0 { UNIT_Q16 } else { 0 };
+                let start = if name.starts_with("stop") {
+                    UNIT_Q16
+                } else {
+                    start
+                };
+                let mut ts = TimeScaling::constant(0, 0, start);
+                ts.retarget(10 * MS, first, full);
+                let t1 = ts.ramp_ns;
+                let at =
+                    10 * MS + rng.random_range(0..=t1 / TICK) * TICK + rng.random_range(0..TICK);
+                let ctx = format!("{name} trial {trial} at {} µs", (at - 10 * MS) / 1000);
+                let p1 = run(&mut ts, 10 * MS, at - at % TICK, &ctx);
+                let before = ts.at(at);
+                ts.retarget(at, second, full);
+                // Continuous at the command's instant: σ, σ̇, σ̈ and s.
+                let after = ts.at(at);
+                assert_eq!(before.s_ns, after.s_ns, "{ctx}");
+                assert!((before.sigma - after.sigma).abs() < 1e-6, "{ctx}");
+                assert!((before.sigma_d - after.sigma_d).abs() < 1e-4, "{ctx}");
+                assert!((before.sigma_dd - after.sigma_dd).abs() < 1e-3, "{ctx}");
+                let end = at + ts.ramp_ns + 2 * full;
+                let p2 = run(&mut ts, at, end, &ctx);
+                let k = second as f32 / UNIT_Q16 as f32;
+                let fin = ts.at(end);
+                assert!(!ts.in_transition(), "{ctx}: still in transition");
+                assert_eq!(fin.sigma, k, "{ctx}");
+                let hi = [first, second, start].iter().max().copied().unwrap_or(0) as f32
+                    / UNIT_Q16 as f32;
+                under = under.min(p2.2);
+                over = over.max(p2.3 - hi);
+                assert!(p2.3 <= hi + 0.05, "{ctx}: σ {} > {hi}", p2.3);
+                assert!(p2.2 >= -0.002, "{ctx}: σ {} < 0", p2.2);
                 assert!(
-                    (sum - dt).abs() <= 1 + ramp / 1_000_000_000 * 16,
-                    "{sum} vs {dt}"
+                    p1.0 <= vmax * 1.001 && p1.1 <= amax * 1.001,
+                    "{ctx}: first {p1:?}"
                 );
+                let (rv, ra) = (p2.0 / vmax, p2.1 / amax);
+                assert!(rv <= 1.05 && ra <= 1.8, "{ctx}: σ̇ ×{rv}, σ̈ ×{ra}");
+                worst = (worst.0.max(rv), worst.1.max(ra));
             }
+        }
+        eprintln!(
+            "worst mid-transition |σ̇|, |σ̈| over the nominal ramp's peaks: {worst:?}; σ above the targets by {over}, min σ {under}"
+        );
+    }
+
+    #[test]
+    fn repeated_and_quick_commands() {
+        // A hold repeated during its ramp changes nothing.
+        let mut a = TimeScaling::nominal(0, 0);
+        a.begin_decel(0, 400 * MS);
+        let b = a;
+        a.begin_decel(100 * MS, 400 * MS);
+        assert_eq!(a.ramp_ns, b.ramp_ns);
+        assert_eq!(a.t0_ns, b.t0_ns);
+        // A quick stop during a stop re-plans shorter, continuously.
+        let before = a.at(150 * MS);
+        a.retarget(150 * MS, 0, 100 * MS);
+        let after = a.at(150 * MS);
+        assert_eq!(before.s_ns, after.s_ns);
+        assert_eq!(before.sigma, after.sigma);
+        assert!((before.sigma_dd - after.sigma_dd).abs() < 1e-3);
+        // 100 ms ramp: σ⃛ up to ~60/T³ = 6e4/s³, 6 per tick.
+        let (_, _, lo, _) = run_with(&mut a, 150 * MS, 600 * MS, "quick", 8.0);
+        assert!(lo >= -1e-4);
+        assert_eq!(a.phase, Phase::Rest);
+        assert!(a.t0_ns < 400 * MS, "quick stop ended at {}", a.t0_ns);
+        // A command dated before the phase began applies at its start.
+        let mut c = TimeScaling::nominal(1000 * MS, 5);
+        c.begin_decel(0, 400 * MS);
+        assert_eq!(c.t0_ns, 1000 * MS);
+    }
+
+    #[test]
+    fn stop_distance_covers_an_override() {
+        assert_eq!(TimeScaling::stop_distance_ns(400 * MS, UNIT_Q16), 200 * MS);
+        assert_eq!(
+            TimeScaling::stop_distance_ns(400 * MS, UNIT_Q16 / 2),
+            200 * MS
+        );
+        for k in [UNIT_Q16, UNIT_Q16 * 3 / 2, UNIT_Q16 * 2] {
+            let mut ts = TimeScaling::constant(0, 0, k);
+            ts.begin_decel(0, 400 * MS);
+            ts.at(10_000 * MS);
+            let d = ts.at(10_000 * MS).s_ns;
+            let bound = TimeScaling::stop_distance_ns(400 * MS, k);
+            assert!(d <= bound + 1000, "σ {k}: {d} > {bound}");
+        }
+    }
+
+    #[test]
+    fn sqrt_is_accurate() {
+        for i in 1..1000 {
+            let x = i as f32 * 0.003;
+            assert!((sqrt(x) - x.sqrt()).abs() < 1e-6 * x.sqrt().max(1.0));
         }
     }
 }

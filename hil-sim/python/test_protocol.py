@@ -62,7 +62,7 @@ def test_heartbeat_rate_and_contents(make_sim, bus, db):
         for m in hb:
             d = decode(db, m)
             assert m.dlc == 8
-            assert d["protocol_version"] == 2
+            assert d["protocol_version"] == 3
             assert STATES[d["state"]] == "Idle" and d["fault"] == 0
             assert d["config_crc"] == 0, "unconfigured at power-on"
             assert d["queue_depth"] == 0

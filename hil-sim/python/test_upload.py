@@ -98,7 +98,7 @@ def test_monitor_decodes_live_traffic(make_sim, bus):
     hb = [l for l in lines if l["message"] == "Heartbeat"]
     assert {l["node"] for l in hb} == {1, 2, 3}
     assert hb[0]["fields"]["state"] == {"code": 0, "name": "Idle"}
-    assert hb[0]["fields"]["protocol_version"] == 2
+    assert hb[0]["fields"]["protocol_version"] == 3
     code, out, err = run([TRIQUINT, "monitor", "--iface", IFACE, "--count", "6"])
     assert code == 0 and len(out.splitlines()) == 6, err
     assert "state=Idle(0)" in out

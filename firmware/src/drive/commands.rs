@@ -9,7 +9,10 @@ use triquint_shared::protocol::{
 
 use super::{Drive, StopReason};
 use crate::inbox::{CommandData, Prepared};
-use crate::scaling::Phase;
+use crate::scaling::UNIT_Q16;
+
+/// A command dated further back than this (µs) applies on receipt instead.
+pub const APPLY_LATE_MAX_US: i64 = 100_000;
 
 impl<const Q: usize> Drive<Q> {
     pub(super) fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
@@ -47,16 +50,25 @@ impl<const Q: usize> Drive<Q> {
             CommandCode::Start => self.start(c.arg, local_us),
             CommandCode::Stop | CommandCode::QuickStop => {
                 let quick = code == CommandCode::QuickStop;
-                match self.state {
-                    State::Running => {
-                        self.begin_stop(StopReason::Commanded, quick, local_us);
+                match (self.state, self.active) {
+                    (State::Running, _) => {
+                        let t = self.apply_ns(c.arg, local_us);
+                        self.begin_stop_at(StopReason::Commanded, quick, t);
                         FaultCode::None
                     }
-                    State::Homing => {
+                    (State::Stopping, Some(a)) => {
+                        // A quick stop during a stop: the shorter ramp, from here.
+                        if quick {
+                            let t = self.apply_ns(c.arg, local_us);
+                            self.scaling.retarget(t, 0, a.quick_stop_ns);
+                        }
+                        FaultCode::None
+                    }
+                    (State::Homing, _) => {
                         self.abort_homing();
                         FaultCode::None
                     }
-                    State::Armed => {
+                    (State::Armed, _) => {
                         self.state = State::Loaded;
                         self.start_ns = None;
                         FaultCode::None
@@ -75,24 +87,53 @@ impl<const Q: usize> Drive<Q> {
                     FaultCode::WrongState
                 }
             }
-            CommandCode::FeedHold => {
-                if self.state == State::Running && self.scaling.phase != Phase::Rest {
-                    self.begin_stop(StopReason::Hold, false, local_us);
+            CommandCode::FeedHold => match self.state {
+                State::Running => {
+                    if self.stop_reason != Some(StopReason::Hold) {
+                        let t = self.apply_ns(c.arg, local_us);
+                        self.begin_stop_at(StopReason::Hold, false, t);
+                    }
                     FaultCode::None
-                } else {
-                    FaultCode::WrongState
                 }
-            }
-            CommandCode::Resume => match (self.state, self.active) {
-                (State::Running, Some(a)) if self.stop_reason == Some(StopReason::Hold) => {
-                    let t = self.sync.host_ns(local_us).unwrap_or(0);
-                    self.scaling.at(t);
-                    self.scaling.begin_accel(t, a.stop_ns);
-                    self.stop_reason = None;
+                State::Idle | State::Loaded | State::Armed => {
+                    self.hold_latched = true;
                     FaultCode::None
                 }
                 _ => FaultCode::WrongState,
             },
+            CommandCode::Resume => match (self.state, self.active) {
+                (State::Running, Some(a)) => {
+                    if self.stop_reason == Some(StopReason::Hold) {
+                        let t = self.apply_ns(c.arg, local_us);
+                        self.scaling.retarget(t, self.override_q16, a.stop_ns);
+                        self.stop_reason = None;
+                    }
+                    FaultCode::None
+                }
+                (State::Idle | State::Loaded | State::Armed, _) => {
+                    self.hold_latched = false;
+                    FaultCode::None
+                }
+                _ => FaultCode::WrongState,
+            },
+            CommandCode::Override => {
+                let cap = self.override_cap_permille();
+                let pm = c.arg2 as u32;
+                let r = if pm == 0 || pm > cap {
+                    FaultCode::OverrideAboveCap
+                } else {
+                    self.override_q16 = (pm * UNIT_Q16 + 500) / 1000;
+                    if let (State::Running, None, Some(a)) =
+                        (self.state, self.stop_reason, self.active)
+                    {
+                        let t = self.apply_ns(c.arg, local_us);
+                        self.scaling.retarget(t, self.override_q16, a.stop_ns);
+                    }
+                    FaultCode::None
+                };
+                self.command_ack(c, r, cap);
+                return;
+            }
             CommandCode::ConfigCommit => {
                 let (r, crc) = match data {
                     CommandData::Commit { crc, config } => (self.commit(config), *crc),
@@ -123,6 +164,31 @@ impl<const Q: usize> Drive<Q> {
         self.command_ack(c, r, 0);
     }
 
+    /// Host time (ns) a hold, resume, stop or override with argument `arg`
+    /// (host time in µs, wrapping; 0 = on receipt) applies at: `arg` if it
+    /// is up to [`APPLY_LATE_MAX_US`] old (every node then computes the same
+    /// time-scaling, closed form from that instant), else now.
+    pub(super) fn apply_ns(&self, arg: u32, local_us: u64) -> i64 {
+        let Some(now) = self.sync.host_us(local_us) else {
+            return 0;
+        };
+        let d = arg.wrapping_sub(now as u32) as i32 as i64;
+        let t = if arg != 0 && d <= 0 && d >= -APPLY_LATE_MAX_US {
+            now + d
+        } else {
+            now
+        };
+        t * 1000
+    }
+
+    /// The configuration's override cap (per mille; 1000 without one).
+    pub fn override_cap_permille(&self) -> u32 {
+        match self.active {
+            Some(_) => (self.cfg.override_cap.clamp(1.0, 32.0) * 1000.0 + 0.5) as u32,
+            None => 1000,
+        }
+    }
+
     /// Runs a configuration the receive side prepared (Idle only).
     pub(super) fn commit(&mut self, config: &Result<Prepared, FaultCode>) -> FaultCode {
         if self.state != State::Idle {
@@ -135,6 +201,9 @@ impl<const Q: usize> Drive<Q> {
         self.cfg = p.cfg;
         self.model = p.model;
         self.active = Some(p.active);
+        // The override persists, within the new configuration's cap.
+        let cap = (self.override_cap_permille() * UNIT_Q16 + 500) / 1000;
+        self.override_q16 = self.override_q16.min(cap);
         FaultCode::None
     }
 

@@ -19,8 +19,16 @@ impl<const Q: usize> Drive<Q> {
             && host_ns >= t0
         {
             self.state = State::Running;
-            self.scaling = TimeScaling::nominal(t0, 0);
-            self.stop_reason = None;
+            // A latched hold starts at rest; otherwise at the override (the
+            // plan starts at rest, so any constant σ is continuous there).
+            let q16 = if self.hold_latched {
+                0
+            } else {
+                self.override_q16
+            };
+            self.scaling = TimeScaling::constant(t0, 0, q16);
+            self.stop_reason = self.hold_latched.then_some(StopReason::Hold);
+            self.hold_latched = false;
             self.stats.started_at_ns = Some(host_ns);
         }
     }
@@ -122,7 +130,8 @@ impl<const Q: usize> Drive<Q> {
                 return Some(m);
             }
             let ahead = self.queued_end_ns - sc.s_ns;
-            let need = TimeScaling::stop_distance_ns(a.stop_ns) + a.margin_ns;
+            let need =
+                TimeScaling::stop_distance_ns(a.stop_ns, self.scaling.target_q16()) + a.margin_ns;
             if !last_queued
                 && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
                 && ahead < need

@@ -8,7 +8,8 @@ use triquint_shared::protocol::{
     Heartbeat, HeartbeatExt, PROTOCOL_VERSION, Telemetry, TelemetryExt, flags,
 };
 
-use super::{Drive, StopReason};
+use super::Drive;
+use crate::scaling::UNIT_Q16;
 
 impl<const Q: usize> Drive<Q> {
     /// HeartbeatExt `flags`.
@@ -16,7 +17,8 @@ impl<const Q: usize> Drive<Q> {
         let bit = |on: bool, b: u8| if on { b } else { 0 };
         bit(self.sync.is_synced(now_us, sync_timeout_us), flags::SYNCED)
             | bit(self.homed, flags::HOMED)
-            | bit(self.stop_reason == Some(StopReason::Hold), flags::HELD)
+            | bit(self.is_held(), flags::HELD)
+            | bit(self.override_q16 != UNIT_Q16, flags::OVERRIDE)
             | bit(self.switch_active, flags::SWITCH)
             | bit(self.active.is_some(), flags::CONFIGURED)
     }

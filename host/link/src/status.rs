@@ -99,6 +99,9 @@ pub fn hint(code: FaultCode) -> &'static str {
         HomeSwitchNeverTriggered => {
             "no switch edge within the maximum travel: check the switch wiring, clear, home again"
         }
+        OverrideAboveCap => {
+            "override above the plan's cap (see the cap printed); give a smaller percentage"
+        }
     }
 }
 

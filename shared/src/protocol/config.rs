@@ -151,10 +151,12 @@ config_params! {
     51 axis_node_2 [""],
     /// Node id of the drive of axis 3.
     52 axis_node_3 [""],
+    /// Largest feed override σ (1 = 100 %) at which the plan, and a hold begun there, stay within the limits; Override above it is refused.
+    53 override_cap [""],
 }
 
 /// Number of configuration parameters.
-pub const PARAM_COUNT: usize = 53;
+pub const PARAM_COUNT: usize = 54;
 
 /// ConfigWrite: host → node n, one parameter per frame.
 pub const CONFIG_WRITE: MessageDef = MessageDef {
@@ -439,6 +441,7 @@ impl DriveConfig {
             axis_node_1: s.node_ids[0] as f32,
             axis_node_2: s.node_ids[1] as f32,
             axis_node_3: s.node_ids[2] as f32,
+            override_cap: 1.0,
         }
     }
 
@@ -482,6 +485,13 @@ impl DriveConfig {
                     rule: "finite",
                 });
             }
+        }
+        if !(1.0..=32.0).contains(&self.override_cap) {
+            return Err(ConfigError {
+                name: "override_cap",
+                value: self.override_cap,
+                rule: "1 to 32",
+            });
         }
         let positive: [(&'static str, f32); 20] = [
             ("homing_velocity", self.homing_velocity),

@@ -74,6 +74,8 @@ code_enum! {
         HomeSwitchActive = 20,
         /// Homing travelled `homing_max_travel` without a switch edge (dead switch or wrong direction).
         HomeSwitchNeverTriggered = 21,
+        /// Override refused: above the configuration's `override_cap` (the acknowledgement's value is the cap in per mille), or 0.
+        OverrideAboveCap = 22,
     }
 }
 
@@ -112,15 +114,15 @@ code_enum! {
         Arm = 1,
         /// Armed → Running at host time `arg` (µs, wrapping u32).
         Start = 2,
-        /// Stop along the path with the configured stop time, then Idle (queue flushed).
+        /// Stop along the path with the configured stop time, then Idle (queue flushed); from host time `arg` (µs, 0 = on receipt).
         Stop = 3,
-        /// Stop along the path with the quick-stop time, then Idle (queue flushed).
+        /// Stop along the path with the quick-stop time, then Idle (queue flushed); from host time `arg`.
         QuickStop = 4,
         /// Fault → Idle; the queue is flushed and sequence numbers restart at 0.
         ClearFault = 5,
-        /// Running: slow to rest on the path (same time-scaling as a stop) and wait.
+        /// Running: slow to rest on the path from host time `arg` (µs, 0 = on receipt) and wait; before Start: latched, the plan starts held.
         FeedHold = 6,
-        /// Running and held: accelerate back to the plan's speed.
+        /// Running and held (or holding): back to the override's speed from host time `arg`; before Start: clears a latched hold.
         Resume = 7,
         /// Activate the written parameters if their CRC-32 equals `arg`.
         ConfigCommit = 8,
@@ -130,13 +132,17 @@ code_enum! {
         ReadConfig = 10,
         /// Idle with a configuration: home this axis (state Homing, then Idle and homed).
         Home = 11,
+        /// Feed override: σ = `arg2`/1000 from host time `arg` (persists; a hold keeps it for the resume); refused above `override_cap`, the acknowledgement's value is the cap (per mille).
+        Override = 12,
     }
 }
 
-/// Protocol version carried in every heartbeat. Version 2: HeartbeatExt
-/// `flags` (was `sync_ok`), state Homing, command Home, 8-byte Command,
-/// node ids 1–15, homing parameters and fault codes.
-pub const PROTOCOL_VERSION: u8 = 2;
+/// Protocol version carried in every heartbeat. Version 3: command
+/// Override, hold/resume/stop applied at the host time in `arg`, fault code
+/// OverrideAboveCap, parameter `override_cap`, flag `override` in use.
+/// Version 2: HeartbeatExt `flags` (was `sync_ok`), state Homing, command
+/// Home, 8-byte Command, node ids 1–15, homing parameters and fault codes.
+pub const PROTOCOL_VERSION: u8 = 3;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {
@@ -146,7 +152,7 @@ pub mod flags {
     pub const HOMED: u8 = 1 << 1;
     /// Running and held at rest by feed hold.
     pub const HELD: u8 = 1 << 2;
-    /// A feed-rate override is active (reserved for a later command).
+    /// A feed-rate override other than 100 % is set.
     pub const OVERRIDE: u8 = 1 << 3;
     /// The limit switch input is active now.
     pub const SWITCH: u8 = 1 << 4;
@@ -157,7 +163,7 @@ pub mod flags {
         (SYNCED, "synced", "valid time sync"),
         (HOMED, "homed", "axis homed: position absolute"),
         (HELD, "held", "Running, held at rest by feed hold"),
-        (OVERRIDE, "override", "feed-rate override active (reserved)"),
+        (OVERRIDE, "override", "feed-rate override other than 100 %"),
         (SWITCH, "switch", "limit switch input active"),
         (CONFIGURED, "configured", "an active configuration"),
     ];
@@ -189,9 +195,9 @@ messages! {
         command: u8 @ 0 ["", 1.0, CommandCode],
         /// Echoed in the CommandAck.
         token: u8 @ 1 ["", 1.0],
-        /// Start: host time (µs); ConfigCommit: CRC-32; otherwise 0.
+        /// Start: host time (µs); FeedHold, Resume, Stop, QuickStop, Override: host time (µs) all nodes apply it at, 0 = on receipt; ConfigCommit: CRC-32; otherwise 0.
         arg: u32 @ 2 ["", 1.0],
-        /// Second argument for later commands (e.g. an override factor); 0 today.
+        /// Override: σ in per mille (1000 = 100 %); otherwise 0.
         arg2: u16 @ 6 ["", 1.0],
     }
     /// Acknowledgement of every segment, accepted or rejected.
@@ -219,7 +225,7 @@ messages! {
         result: u8 @ 2 ["", 1.0, FaultCode],
         /// State after the command.
         state: u8 @ 3 ["", 1.0, State],
-        /// ConfigCommit: CRC-32 the node computed; otherwise 0.
+        /// ConfigCommit: CRC-32 the node computed; Override: the cap (per mille); otherwise 0.
         value: u32 @ 4 ["", 1.0],
     }
     /// Periodic status of node n.
