@@ -173,7 +173,7 @@ impl<const Q: usize> Drive<Q> {
             return 0;
         };
         let d = arg.wrapping_sub(now as u32) as i32 as i64;
-        let t = if arg != 0 && d <= 0 && d >= -APPLY_LATE_MAX_US {
+        let t = if arg != 0 && (-APPLY_LATE_MAX_US..=0).contains(&d) {
             now + d
         } else {
             now

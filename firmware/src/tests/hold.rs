@@ -259,7 +259,7 @@ fn resume_during_hold_and_hold_during_resume_ramps() {
     let mut sig = Vec::new();
     for _ in 0..500 {
         r.tick();
-        sig.push(r.node.scaling().at(r.t as i64 * 1000 - 1000_000).sigma);
+        sig.push(r.node.scaling().at(r.t as i64 * 1000 - 1_000_000).sigma);
     }
     let max_step = sig
         .windows(2)
