@@ -171,8 +171,15 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
             break;
         }
     }
-    // Tracking and fault times from the first Running tick of any node.
-    let first_start = sim.nodes.iter().filter_map(|n| n.started_ns).min();
+    // Tracking and fault times from the start time the host commanded (the
+    // host's clock is true time here), as `simulate` measures them; without
+    // one (a burst or a replay started the drives), from the first Running
+    // tick of any node. The first tick lags the start by up to a tick
+    // period, which would read as tracking error of velocity × that lag.
+    let first_start = match session.start_us() {
+        0 => sim.nodes.iter().filter_map(|n| n.started_ns).min(),
+        us => Some(us * 1000),
+    };
     let mut report = run_report(
         &plan,
         &sim,
