@@ -471,7 +471,8 @@ impl<const Q: usize> Drive<Q> {
         // the bounds checks: no panic path in the tick).
         let i = a.axis.min(2);
         let mut r_own = reference.q[i];
-        if self.state == State::Homing {
+        // Homing, or slowing to rest from it after an Emergency (Stopping).
+        if self.homing.is_some() {
             r_own = self.homing_step(&a, q, edge, now_us);
         }
         let mut ff = 0.0;

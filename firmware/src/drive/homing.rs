@@ -4,7 +4,7 @@
 
 use triquint_shared::protocol::{FaultCode, State};
 
-use super::Drive;
+use super::{Drive, StopReason};
 use crate::active::Active;
 use crate::homing::{Homing, HomingEvent, HomingLimits};
 use crate::ns::{to_f32, to_i64};
@@ -35,6 +35,18 @@ impl<const Q: usize> Drive<Q> {
         if let Some(h) = self.homing.as_mut() {
             h.abort();
         }
+    }
+
+    /// An Emergency while homing: the axis slows to rest with the homing
+    /// ramp (as a plan stops along its path; holding at once would be a step
+    /// in velocity), Stopping meanwhile, then Fault. The Emergency goes out
+    /// at once, so peers stop together.
+    pub(super) fn fault_homing(&mut self, code: FaultCode) {
+        self.abort_homing();
+        self.state = State::Stopping;
+        self.stop_reason = Some(StopReason::Fault(code));
+        self.fault = code;
+        self.emergency(code);
     }
 
     /// One homing period: the reference of this tick (in this tick's frame).
@@ -73,7 +85,13 @@ impl<const Q: usize> Drive<Q> {
             HomingEvent::Aborted => {
                 self.hold_own = h.q;
                 self.homing = None;
-                self.state = State::Idle;
+                // At rest after a Stop (Idle) or an Emergency (Fault, its code kept).
+                if self.state == State::Stopping {
+                    self.stop_reason = None;
+                    self.state = State::Fault;
+                } else {
+                    self.state = State::Idle;
+                }
             }
             HomingEvent::Fault(code) => {
                 self.homing = Some(h);

@@ -17,7 +17,8 @@ impl<const Q: usize> Drive<Q> {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
             }
-            State::Loaded | State::Armed | State::Homing => self.fault_now(code),
+            State::Homing => self.fault_homing(code),
+            State::Loaded | State::Armed => self.fault_now(code),
             State::Idle if code == FaultCode::HostEmergency => self.fault_now(code),
             _ => {}
         }

@@ -405,10 +405,47 @@ fn home_is_urgent_and_peers_are_the_configured_drives() {
     // An Emergency of node 2 (another device) does not concern it...
     r.rx(Emergency::default().to_frame(2));
     assert_eq!(r.node.state(), State::Homing);
-    // ...one of its peer 13 does.
+    // ...one of its peer 13 does: its own Emergency at once, then it slows
+    // to rest with the homing ramp (Stopping) and faults.
     r.rx(Emergency::default().to_frame(13));
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_eq!(r.node.fault(), FaultCode::PeerEmergency);
+    assert_eq!(r.emergencies(), std::vec![FaultCode::PeerEmergency as u8]);
+    r.run(2_000);
     assert_eq!(r.node.state(), State::Fault);
     assert_eq!(r.node.fault(), FaultCode::PeerEmergency);
+    assert!(!r.node.is_homed());
     // Its frames carry its own id.
     assert!(r.sent.iter().any(|f| f.id == 0x700 + 12));
+}
+
+/// An Emergency mid-homing, at full homing speed: the reference slows to
+/// rest with bounded acceleration (no step in velocity), then Fault, not
+/// homed; a later Home starts again from there.
+#[test]
+fn an_emergency_while_homing_ramps_to_rest_then_faults() {
+    let mut r = Rig::new(1, [1, 2, 3]);
+    r.configure();
+    r.command(CommandCode::Home, 0);
+    r.run(2_000);
+    let v0 = r.node.homing().map(|h| h.v).unwrap_or_default();
+    assert!(v0.abs() > 0.02, "at homing speed: {v0}");
+    r.rx(Emergency::default().to_frame(0));
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_eq!(r.node.fault(), FaultCode::HostEmergency);
+    let dt = TICK as f32 * 1e-6;
+    let (mut v, mut ticks) = (v0, 0);
+    while let Some(h) = r.node.homing() {
+        // The homing ramp's acceleration limit (0.25 m/s²) per tick, and margin.
+        assert!((h.v - v).abs() <= 0.3 * dt, "velocity step {} → {}", v, h.v);
+        v = h.v;
+        r.tick();
+        ticks += 1;
+        assert!(ticks < 2_000, "still stopping");
+    }
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::HostEmergency);
+    assert!(!r.node.is_homed());
+    // About v0 / a_max (0.1 s) plus the jerk-limited corners, not at once.
+    assert!(ticks as f32 * dt > 0.05, "{ticks} ticks");
 }
