@@ -375,6 +375,9 @@ impl<const Q: usize> Drive<Q> {
     }
 
     /// Enters Fault at once (not moving): Emergency frame, hold where we are.
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
     fn fault_now(&mut self, code: FaultCode) {
         if let Some(h) = self.homing.take() {
             // Hold where the homing reference is.
@@ -386,6 +389,9 @@ impl<const Q: usize> Drive<Q> {
         self.emergency(code);
     }
 
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
     fn emergency(&mut self, code: FaultCode) {
         let plan_us = (self.plan_ns.max(0) / 1000) as u32;
         let e = Emergency {
@@ -406,6 +412,9 @@ impl<const Q: usize> Drive<Q> {
     }
 
     /// [`Drive::begin_stop`] from host time `t` (ns).
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
     fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64) {
         let Some(a) = self.active else {
             return;

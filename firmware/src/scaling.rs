@@ -197,47 +197,30 @@ impl TimeScaling {
             return;
         }
         let (s0, v0, a0) = (now.sigma, now.sigma_d, now.sigma_dd);
-        // σ stays between the values it has, had as a target and gets.
-        let prev = self.target_q16 as f32 * (1.0 / UNIT_Q16 as f32);
-        let hi = s0.max(k).max(prev) + 1e-3;
-        let lo = s0.min(k).min(prev).max(0.0) - 1e-3;
         let tf = to_f32(full_ns) * 1e-9;
-        let (vmax, amax) = (PEAK_D1 / tf, PEAK_D2 / (tf * tf));
         let ad = (k - s0).abs();
-        let base = if ad > 1.0 { ad } else { sqrt(ad) }.max(0.2);
-        let e0 = s0 - k;
-        let mut best = (f32::INFINITY, base);
+        // √1 = 1: a hold from or a resume to full speed needs no root.
+        let base = if ad >= 1.0 { ad } else { sqrt(ad) }.max(0.2);
         let mut chosen = None;
-        for f in CANDIDATES {
-            let rho = base * f;
-            let c = tf * rho;
-            let inv = 1.0 / c;
-            let q = quintic(s0, v0, a0, k, c);
-            // Peaks of σ̇ and σ̈ and the range of σ, sampled.
-            let (mut vp, mut ap) = (0.0f32, a0.abs());
-            let (mut viol, mut back) = (0.0f32, 0.0f32);
-            for u in [0.083_333_f32, 0.25, 0.416_667, 0.583_333, 0.75, 0.916_667] {
-                let (x, d1, d2) = poly3(&q, u);
-                vp = vp.max(d1.abs() * inv);
-                ap = ap.max(d2.abs() * inv * inv);
-                viol = viol.max(x - hi).max(lo - x);
-                back = back.max(-x);
-            }
-            let r = (vp / vmax).max(ap / amax);
-            // A hold or stop never runs σ below 0 (the path backwards).
-            let side = k > 0.0 || keeps_side(e0, v0 * c, a0 * c * c);
-            if side && viol <= 0.0 && r <= 1.0001 {
-                chosen = Some(rho);
-                break;
-            }
-            // Otherwise: trade the peaks against σ leaving its range
-            // (1 % of σ outside counts as 40 % more σ̈), never crossing the target.
-            let score = r.max(1.0) + 40.0 * viol + 1e3 * back + if side { 0.0 } else { 1e3 };
-            if score < best.0 {
-                best = (score, rho);
+        if v0 == 0.0 && a0 == 0.0 {
+            // From a constant σ the transition is σ = k + e₀(1 − S(u)),
+            // monotone, never crossing k, with exact peaks 1.875|e₀|/T and
+            // 5.77|e₀|/T²: the shortest candidate within them, in closed form
+            // (this runs in the tick that takes the command: the sampled
+            // search costs it ~5 000 instructions).
+            for f in CANDIDATES {
+                let rho = base * f;
+                if ad <= 1.0001 * rho && ad <= 1.0001 * rho * rho {
+                    chosen = Some(rho);
+                    break;
+                }
             }
         }
-        let rho = chosen.unwrap_or(best.1);
+        let prev = self.target_q16 as f32 * (1.0 / UNIT_Q16 as f32);
+        let rho = match chosen {
+            Some(rho) => rho,
+            None => sampled_rho(s0, v0, a0, k, prev, tf, base),
+        };
         let ramp_ns = if rho == 1.0 {
             full_ns
         } else {
@@ -282,6 +265,51 @@ impl TimeScaling {
         // σ ≥ 1: T = ramp·σ, distance ramp·σ²/2 (no overflow below σ = 32).
         (ramp_ns.saturating_mul(k) >> 16).saturating_mul(k) >> 17
     }
+}
+
+/// The transition's length (relative to the nominal ramp `tf` s) by the
+/// sampled search [`TimeScaling::retarget`] describes, from σ₀, σ̇₀, σ̈₀
+/// (`s0`, `v0`, `a0`) to `k`, `prev` the target it had. Out of line: only a
+/// change in the middle of another transition gets here.
+#[inline(never)]
+fn sampled_rho(s0: f32, v0: f32, a0: f32, k: f32, prev: f32, tf: f32, base: f32) -> f32 {
+    let e0 = s0 - k;
+    let mut best = (f32::INFINITY, base);
+    let mut chosen = None;
+    // σ stays between the values it has, had as a target and gets.
+    let hi = s0.max(k).max(prev) + 1e-3;
+    let lo = s0.min(k).min(prev).max(0.0) - 1e-3;
+    let (vmax, amax) = (PEAK_D1 / tf, PEAK_D2 / (tf * tf));
+    for f in CANDIDATES {
+        let rho = base * f;
+        let c = tf * rho;
+        let inv = 1.0 / c;
+        let q = quintic(s0, v0, a0, k, c);
+        // Peaks of σ̇ and σ̈ and the range of σ, sampled.
+        let (mut vp, mut ap) = (0.0f32, a0.abs());
+        let (mut viol, mut back) = (0.0f32, 0.0f32);
+        for u in [0.083_333_f32, 0.25, 0.416_667, 0.583_333, 0.75, 0.916_667] {
+            let (x, d1, d2) = poly3(&q, u);
+            vp = vp.max(d1.abs() * inv);
+            ap = ap.max(d2.abs() * inv * inv);
+            viol = viol.max(x - hi).max(lo - x);
+            back = back.max(-x);
+        }
+        let r = (vp / vmax).max(ap / amax);
+        // A hold or stop never runs σ below 0 (the path backwards).
+        let side = k > 0.0 || keeps_side(e0, v0 * c, a0 * c * c);
+        if side && viol <= 0.0 && r <= 1.0001 {
+            chosen = Some(rho);
+            break;
+        }
+        // Otherwise: trade the peaks against σ leaving its range
+        // (1 % of σ outside counts as 40 % more σ̈), never crossing the target.
+        let score = r.max(1.0) + 40.0 * viol + 1e3 * back + if side { 0.0 } else { 1e3 };
+        if score < best.0 {
+            best = (score, rho);
+        }
+    }
+    chosen.unwrap_or(best.1)
 }
 
 /// σ(u) over a transition of `t` s from σ₀, σ̇₀, σ̈₀ to k at rest.

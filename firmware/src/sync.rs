@@ -90,7 +90,23 @@ impl SyncEstimator {
 
     /// Host time (µs) at local time `local_us`, once one sample exists.
     pub fn host_us(&self, local_us: u64) -> Option<i64> {
-        self.host_ns(local_us).map(|ns| ns.div_euclid(1000))
+        // host_ns = (ha + dl)·1000 + c: floor(host_ns / 1000) is
+        // ha + dl + floor(c / 1000), exactly, with the rate correction c
+        // divided in i32 (one instruction) when it fits, as it does within
+        // minutes of a sample; not a 64-bit division (~150 instructions).
+        let (ha, la) = self.a?;
+        let dl = local_us as i64 - la as i64;
+        let c = self.correction_ns(dl.saturating_mul(1000));
+        let c_us = match i32::try_from(c) {
+            Ok(c) => i64::from(c.div_euclid(1000)),
+            Err(_) => c.div_euclid(1000),
+        };
+        Some(ha + dl + c_us)
+    }
+
+    /// The rate correction (ns) over `dl_ns` of local time.
+    fn correction_ns(&self, dl_ns: i64) -> i64 {
+        dl_ns.saturating_mul(self.ppb) / 1_000_000_000
     }
 
     /// Host time (ns) at local time `local_us`.
@@ -98,7 +114,7 @@ impl SyncEstimator {
         let (ha, la) = self.a?;
         let dl = local_us as i64 - la as i64;
         let dl_ns = dl.saturating_mul(1000);
-        Some(ha * 1000 + dl_ns + dl_ns.saturating_mul(self.ppb) / 1_000_000_000)
+        Some(ha * 1000 + dl_ns + self.correction_ns(dl_ns))
     }
 
     /// Synchronised: offset and rate known, a sync received no more than
@@ -149,6 +165,25 @@ mod tests {
         assert!((est - 2_950_000).abs() <= 2, "{est}");
         assert!((s.rate_ppb() + 150_000).abs() < 20_000, "{}", s.rate_ppb());
         assert!(s.lost(local(4_000_000.0) as u64, 500_000));
+    }
+
+    /// host_us is floor(host_ns / 1000) exactly, whatever the sample, rate
+    /// and instant (before and after the sample, rates of either sign).
+    #[test]
+    fn host_us_is_host_ns_in_whole_microseconds() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..50_000 {
+            let la: u64 = rng.random_range(0..1u64 << 40);
+            let s = SyncEstimator {
+                a: Some((rng.random_range(-(1i64 << 40)..1i64 << 40), la)),
+                ppb: rng.random_range(-2_000_000..2_000_000),
+                ..SyncEstimator::default()
+            };
+            let local = la.saturating_add_signed(rng.random_range(-(1i64 << 36)..1i64 << 36));
+            let ns = s.host_ns(local).unwrap();
+            assert_eq!(s.host_us(local), Some(ns.div_euclid(1000)), "{s:?} {local}");
+        }
     }
 
     /// Five syncs 100 ms apart with host time = local time − 7 µs.
