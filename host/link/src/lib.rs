@@ -9,6 +9,7 @@
 //!   of each node (`session/nodes.rs`);
 //! - [`configs`]: the drives' configurations for a plan, from its exact
 //!   maxima (`plan.max_abs`), or for the limits themselves;
+//! - [`override_cap`]: the largest feed override a plan allows;
 //! - [`status`]: what state each drive is in, from its heartbeats (the
 //!   model of `triquint status`, serialisable);
 //! - [`socketcan`]: a Linux SocketCAN interface as a port (the one SocketCAN
@@ -19,6 +20,7 @@
 //! simulator.
 
 pub mod configs;
+pub mod override_cap;
 pub mod session;
 pub mod socketcan;
 pub mod status;
