@@ -26,7 +26,9 @@ pub mod socketcan;
 pub mod status;
 
 pub use configs::DriveConfigs;
-pub use session::{FaultReport, NodeView, Outcome, Progress, Session, SessionOptions, UploadError};
+pub use session::{
+    FaultReport, Feed, NodeView, Outcome, Progress, Session, SessionOptions, UploadError,
+};
 pub use socketcan::{SocketCanError, SocketCanPort, SocketRx, open_host};
 pub use status::{Listener, MachineStatus, NodeStatus};
 
