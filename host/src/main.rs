@@ -74,9 +74,9 @@ fn run(cli: Cli) -> CliResult {
             cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
         }
         Command::Upload(a) => {
-            let (_, homing) = load_machine(cli.robot.as_deref())?;
+            let (robot, homing) = load_machine(cli.robot.as_deref())?;
             cli::same_robot(cli.robot.as_deref(), &a.plan)
-                .and_then(|()| cli::upload::run(a, &homing))
+                .and_then(|()| cli::upload::run(a, &robot, &homing))
         }
         Command::MoveTo(a) => {
             let (robot, homing) = load_machine(cli.robot.as_deref())?;

@@ -9,6 +9,7 @@ pub mod fk;
 pub mod hold;
 pub mod home;
 pub mod ik;
+pub mod keys;
 pub mod listen;
 pub mod monitor;
 pub mod move_to;

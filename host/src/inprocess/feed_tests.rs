@@ -37,11 +37,22 @@ struct Run {
 
 /// Runs `plan` from its start; `act(t_s, session)` is called every host
 /// poll once started and may send feed commands (returned with their time).
-fn run(plan: &Plan, mut act: impl FnMut(f64, &Session) -> Option<Feed>) -> Run {
-    let configs = DriveConfigs::for_plan(plan, &DriveSettings::default()).unwrap();
+fn run(plan: &Plan, act: impl FnMut(f64, &Session) -> Option<Feed>) -> Run {
     let q0 = plan.segments[0].quintic().eval(0.0).q;
     let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
-    let mut session = Session::new(plan, configs.nodes, SessionOptions::default()).unwrap();
+    run_on(&mut sim, plan, SessionOptions::default(), act)
+}
+
+/// [`run`] on a machine as it is (a second plan after a first).
+fn run_on(
+    sim: &mut Sim,
+    plan: &Plan,
+    opts: SessionOptions,
+    mut act: impl FnMut(f64, &Session) -> Option<Feed>,
+) -> Run {
+    let configs = DriveConfigs::for_plan(plan, &DriveSettings::default()).unwrap();
+    let mut session = Session::new(plan, configs.nodes, opts).unwrap();
+    let t_begin = sim.now_ns();
     let (mut trace, mut sent) = (Vec::new(), Vec::new());
     let mut polls = 0u64;
     let outcome = loop {
@@ -54,7 +65,7 @@ fn run(plan: &Plan, mut act: impl FnMut(f64, &Session) -> Option<Feed>) -> Run {
             sent.push((t_s, token, f));
         }
         let mut port = SimPort {
-            sim: &mut sim,
+            sim: &mut *sim,
             tx_queue: 32,
         };
         if let Some(o) = session.poll(&mut port).unwrap() {
@@ -70,7 +81,10 @@ fn run(plan: &Plan, mut act: impl FnMut(f64, &Session) -> Option<Feed>) -> Run {
             });
         }
         let t = sim.now_ns() + 100_000;
-        assert!(t < 120_000_000_000, "the run did not end within 120 s");
+        assert!(
+            t - t_begin < 120_000_000_000,
+            "the run did not end within 120 s"
+        );
         sim.run_until(t).unwrap();
     };
     let session_answers = sent
@@ -344,4 +358,55 @@ fn a_stop_mid_plan_ends_the_session_stopped() {
     let off = off_path(&plan, &r.trace, 1.4, 1.5 + ts + 0.2);
     assert!(off < 50e-6, "{off} m off the path");
     assert_within_limits(&plan, &r, 1.0, "stop");
+}
+
+/// `upload --approach` of Case II from the default power-on pose of
+/// `triquint-sim` (-90, 90, 680) mm and from the pose `home` leaves (every
+/// slider at the switch height less the back-off): the min-time approach
+/// of `move-to` completes, then the plan, both at the override set during
+/// the approach (50 %, carried as `upload` does).
+#[test]
+fn approach_then_case2_completes_from_the_power_on_and_home_poses() {
+    use triquint_shared::kinematics::Pose;
+    use triquint_shared::protocol::config::HomingSettings;
+    let plan = testplan::paper_case2().unwrap();
+    let m = plan.robot.model::<f64>();
+    let h = HomingSettings::default();
+    let homed = Vector3::from(h.switch_height).add_scalar(-h.backoff);
+    let power_on = Pose::from_cartesian(&m, Vector3::new(-0.09, 0.09, 0.68))
+        .unwrap()
+        .q;
+    for (name, q0) in [("power-on", power_on), ("homed", homed)] {
+        let start = Vector3::from(plan.via_points_m[0]);
+        let approach = crate::cli::move_to::plan_move(&plan.robot, q0, start)
+            .unwrap()
+            .expect("not at the start");
+        let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
+        let mut sent = false;
+        let a = run_on(&mut sim, &approach, SessionOptions::default(), |_, _| {
+            (!std::mem::replace(&mut sent, true)).then_some(Feed::Override(500))
+        });
+        assert_completed(&a, name);
+        let slow = a.trace.last().unwrap().t_s;
+        assert!(
+            slow > 1.8 * approach.total_time_s,
+            "{name}: approach at 50 % took {slow} s of {} s",
+            approach.total_time_s
+        );
+        let opts = SessionOptions {
+            feed_override: Some(500),
+            ..SessionOptions::default()
+        };
+        let r = run_on(&mut sim, &plan, opts, |_, _| None);
+        assert_completed(&r, name);
+        let took = r.trace.last().unwrap().t_s;
+        assert!(
+            (1.9..2.2).contains(&(took / plan.total_time_s)),
+            "{name}: the plan at 50 % took {took} s"
+        );
+        eprintln!(
+            "{name}: approach {:.3} s planned ({slow:.3} s at 50 %), Case II {took:.3} s at 50 %",
+            approach.total_time_s
+        );
+    }
 }

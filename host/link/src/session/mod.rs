@@ -542,7 +542,12 @@ impl Session {
         }
         match self.config.differing(&self.nodes) {
             None if self.opts.configure_only => self.set_phase(Phase::Done, now),
-            None => self.set_phase(Phase::Sync, now),
+            None => {
+                if let Some(pm) = self.opts.feed_override {
+                    self.feed(Feed::Override(pm));
+                }
+                self.set_phase(Phase::Sync, now)
+            }
             Some(i) => {
                 self.config.read_back(i, &mut self.out);
                 self.set_phase(Phase::ReadBack, now);
