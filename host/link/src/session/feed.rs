@@ -123,7 +123,9 @@ impl FeedState {
         }
         let stop =
             a.command == CommandCode::Stop as u8 || a.command == CommandCode::QuickStop as u8;
-        if stop && done && a.state == State::Stopping as u8 {
+        // Stopping from Running; Loaded: disarmed before Start.
+        let stopping = a.state == State::Stopping as u8 || a.state == State::Loaded as u8;
+        if stop && done && stopping {
             self.stopped = true;
         }
     }

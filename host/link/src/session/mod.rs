@@ -570,9 +570,12 @@ impl Session {
             let fastest = (self.plan_end_us as f64 / self.override_cap) as u64;
             since.max(self.start.start_us + fastest)
         };
+        // At rest: Idle or Fault; after a stop before Start, Loaded.
+        let stopped = self.feed.stopped;
         let settled = self.nodes.all(|v| {
             v.heartbeat_at.is_some_and(|t| t > earliest)
-                && matches!(v.state, Some(State::Idle) | Some(State::Fault))
+                && (matches!(v.state, Some(State::Idle) | Some(State::Fault))
+                    || (stopped && v.state == Some(State::Loaded)))
         });
         let silent = self.nodes.0.iter().find(|v| {
             v.heartbeat_at
