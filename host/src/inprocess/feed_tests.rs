@@ -410,3 +410,53 @@ fn approach_then_case2_completes_from_the_power_on_and_home_poses() {
         );
     }
 }
+
+/// Commands at seeded random moments (inside ramps too): hold, resume and
+/// overrides up to the cap, then a resume and 100 %: every drive takes
+/// every one, the plan completes with no fault, on its path, within the
+/// limits or the stop budget.
+#[test]
+fn commands_at_random_moments_each_taken_and_the_plan_completes() {
+    use rand::{RngExt, SeedableRng};
+    let plan = testplan::paper_case2().unwrap();
+    let cap_pm = (DriveConfigs::for_plan(&plan, &DriveSettings::default())
+        .unwrap()
+        .override_cap
+        * 1000.0)
+        .round() as u16;
+    for seed in [1u64, 2, 3] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut times: Vec<f64> = (0..6).map(|_| rng.random_range(0.1..4.0)).collect();
+        times.sort_by(f64::total_cmp);
+        let mut cmds: Vec<(f64, Feed)> = times
+            .iter()
+            .map(|t| {
+                let f = match rng.random_range(0..3) {
+                    0 => Feed::Hold,
+                    1 => Feed::Resume,
+                    _ => Feed::Override(rng.random_range(300..=cap_pm)),
+                };
+                (*t, f)
+            })
+            .collect();
+        cmds.push((4.5, Feed::Resume));
+        cmds.push((4.6, Feed::Override(1000)));
+        let mut next = 0;
+        let r = run(&plan, |t, _| {
+            let c = cmds.get(next).filter(|c| t >= c.0)?;
+            next += 1;
+            Some(c.1)
+        });
+        let what = format!("seed {seed}: {cmds:?}");
+        assert_completed(&r, &what);
+        for a in &r.session_answers {
+            assert!(
+                a.iter().all(|x| x.is_some_and(|x| x.0 == 0)),
+                "{what}: {a:?}"
+            );
+        }
+        let end = r.trace.last().unwrap().t_s;
+        assert!(off_path(&plan, &r.trace, 0.0, end) < 50e-6, "{what}");
+        assert_within_limits(&plan, &r, cap_pm as f64 / 1000.0, &what);
+    }
+}
