@@ -3,7 +3,8 @@
 //! stop along the path, a second Ctrl-C quick-stops. The terminal is put in
 //! non-canonical mode without echo or signals (so Ctrl-C arrives as a
 //! key, not SIGINT) and restored when the keys are dropped. When stdin is
-//! not a terminal there are no keys and Ctrl-C kills the process as before.
+//! not a terminal (or the process is in the background) there are no keys
+//! and Ctrl-C kills the process as before.
 
 use std::io::IsTerminal;
 
@@ -27,6 +28,12 @@ impl Keys {
     /// Key mode if stdin is a terminal, else `None`.
     pub fn open(override_pm: u16) -> Option<Self> {
         if !std::io::stdin().is_terminal() {
+            return None;
+        }
+        // In the background (`upload … &`) reading or setting the terminal
+        // would stop the process (SIGTTIN, SIGTTOU): no keys there.
+        // SAFETY: plain queries of this process and fd 0.
+        if unsafe { libc::tcgetpgrp(0) != libc::getpgrp() } {
             return None;
         }
         // SAFETY: termios is plain data; tcgetattr fills it for fd 0.

@@ -460,3 +460,39 @@ fn commands_at_random_moments_each_taken_and_the_plan_completes() {
         assert_within_limits(&plan, &r, cap_pm as f64 / 1000.0, &what);
     }
 }
+
+/// A stop asked for before Start (a key during the configuration): the
+/// session resets the drives and ends stopped; nothing moved.
+#[test]
+fn a_stop_before_start_ends_the_session_stopped_and_nothing_moves() {
+    let plan = testplan::paper_case2().unwrap();
+    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default()).unwrap();
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
+    let mut session = Session::new(&plan, configs.nodes, SessionOptions::default()).unwrap();
+    let mut polls = 0;
+    let outcome = loop {
+        polls += 1;
+        if polls == 2000 {
+            // 0.2 s in: configured, segments loading.
+            session.feed(Feed::Stop);
+        }
+        let mut port = SimPort {
+            sim: &mut sim,
+            tx_queue: 32,
+        };
+        if let Some(o) = session.poll(&mut port).unwrap() {
+            break o;
+        }
+        let t = sim.now_ns() + 100_000;
+        assert!(t < 10_000_000_000, "did not end");
+        sim.run_until(t).unwrap();
+    };
+    assert!(outcome.stopped && !outcome.completed && outcome.start_us == 0);
+    sim.run_until(sim.now_ns() + 300_000_000).unwrap();
+    assert!((sim.plant.q - q0).amax() < 20e-6, "moved");
+    for n in &sim.nodes {
+        assert_eq!(n.node.state(), triquint_shared::protocol::State::Idle);
+        assert_eq!(n.node.fault(), FaultCode::None);
+    }
+}

@@ -86,8 +86,11 @@ impl FeedState {
     /// Sends what was queued, ahead of everything, at host time `now`.
     pub fn send(&mut self, now: u64, out: &mut Outbox) {
         for (f, token) in self.pending.drain(..).rev() {
-            if let Feed::Override(pm) = f {
-                self.overrides.push((token, pm));
+            match f {
+                Feed::Override(pm) => self.overrides.push((token, pm)),
+                // Our own stop: the session ends stopped whatever the state.
+                Feed::Stop | Feed::QuickStop => self.stopped = true,
+                _ => {}
             }
             out.push_front(f.command(token, now).to_frame(0));
         }

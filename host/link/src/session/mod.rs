@@ -362,6 +362,12 @@ impl Session {
         self.feed.send(now, &mut self.out);
         self.clock.override_permille = self.feed.override_permille;
         self.clock.update(now, self.start.start_us, &self.nodes);
+        let before_start = !matches!(self.phase, Phase::Stream | Phase::Finish | Phase::Done);
+        if self.feed.stopped && before_start {
+            // Stopped before anything moved: every node back to Idle.
+            self.out.command(0, CommandCode::Reset, 0);
+            self.set_phase(Phase::Done, now);
+        }
         match self.phase {
             Phase::Discover => self.discover(now)?,
             Phase::Configure => {
