@@ -135,9 +135,28 @@ pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
             None => println!("node {}: no answer", ids[i]),
         }
     }
+    verdict(iface, ids, f, &sent.answers)?;
+    if let (Feed::Override(_), Some(a)) = (f, sent.answers.iter().flatten().next()) {
+        println!("cap of the configured plan: {} %", percent(a.value));
+    }
+    let latched = sent.answers.iter().flatten().all(|a| {
+        matches!(
+            State::from_u8(a.state),
+            Some(State::Idle | State::Loaded | State::Armed)
+        )
+    });
+    if latched && matches!(f, Feed::Hold | Feed::Override(_)) {
+        println!("no plan is running: kept, the next plan starts with it");
+    }
+    Ok(())
+}
+
+/// The exit status of the drives' `answers` to `f`: a refusal is 8 (with
+/// the cap for an override above it, with `clear` for a faulted drive), a
+/// silent drive 4, every drive done 0.
+pub fn verdict(iface: &str, ids: [u8; 3], f: Feed, answers: &[Option<CommandAck>; 3]) -> CliResult {
     let n = nodes_arg(ids);
-    let answered: Vec<(u8, CommandAck)> = sent
-        .answers
+    let answered: Vec<(u8, CommandAck)> = answers
         .iter()
         .enumerate()
         .filter_map(|(i, a)| a.map(|a| (ids[i], a)))
@@ -162,24 +181,12 @@ pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
             ),
         }));
     }
-    if let Some(i) = sent.answers.iter().position(Option::is_none) {
+    if let Some(i) = answers.iter().position(Option::is_none) {
         return Err(CliError::device(format!(
             "{iface}: node {} did not answer the command within {} ms",
             ids[i],
             RESEND_AFTER.as_millis() * (RESENDS as u128 + 1)
         )));
-    }
-    if let (Feed::Override(_), Some((_, a))) = (f, answered.first()) {
-        println!("cap of the configured plan: {} %", percent(a.value));
-    }
-    let latched = sent.answers.iter().flatten().all(|a| {
-        matches!(
-            State::from_u8(a.state),
-            Some(State::Idle | State::Loaded | State::Armed)
-        )
-    });
-    if latched && matches!(f, Feed::Hold | Feed::Override(_)) {
-        println!("no plan is running: kept, the next plan starts with it");
     }
     Ok(())
 }
@@ -191,5 +198,57 @@ fn verb(f: Feed) -> &'static str {
         Feed::Resume => "resume",
         Feed::Stop | Feed::QuickStop => "stop",
         Feed::Override(_) => "override",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use triquint_cli_common::exit::Status;
+
+    fn ack(command: Feed, result: FaultCode, state: State, value: u32) -> Option<CommandAck> {
+        Some(CommandAck {
+            command: command.code() as u8,
+            token: 0x81,
+            result: result as u8,
+            state: state as u8,
+            value,
+        })
+    }
+
+    #[test]
+    fn answers_give_the_exit_status_of_the_table() {
+        let ids = [1, 2, 3];
+        let ok = ack(Feed::Hold, FaultCode::None, State::Running, 0);
+        assert!(verdict("vcan0", ids, Feed::Hold, &[ok; 3]).is_ok());
+        // Above the cap: refused, with the cap.
+        let f = Feed::Override(1500);
+        let capped = ack(f, FaultCode::OverrideAboveCap, State::Running, 1177);
+        let e = verdict("vcan0", ids, f, &[capped; 3]).unwrap_err();
+        assert_eq!(e.status, Status::Refused);
+        assert!(
+            e.message.contains("150 %") && e.message.contains("117.7 %"),
+            "{e}"
+        );
+        // Faulted: refused, with what to run.
+        let faulted = ack(Feed::Hold, FaultCode::WrongState, State::Fault, 0);
+        let e = verdict("vcan0", [4, 5, 6], Feed::Hold, &[ok, faulted, ok]).unwrap_err();
+        assert_eq!(e.status, Status::Refused);
+        assert!(e.message.contains("node 5 is in Fault"), "{e}");
+        assert!(
+            e.message
+                .contains("triquint clear --iface vcan0 --nodes 4,5,6"),
+            "{e}"
+        );
+        // Silent: device.
+        let e = verdict("vcan0", ids, Feed::Stop, &[ok, ok, None]).unwrap_err();
+        assert_eq!(e.status, Status::Device);
+        assert!(e.message.contains("node 3 did not answer"), "{e}");
+    }
+
+    #[test]
+    fn percentages_print_short() {
+        assert_eq!(percent(1177), "117.7");
+        assert_eq!(percent(500), "50");
     }
 }
