@@ -496,3 +496,37 @@ fn a_stop_before_start_ends_the_session_stopped_and_nothing_moves() {
         assert_eq!(n.node.fault(), FaultCode::None);
     }
 }
+
+/// A hold while segments are still streaming: the queues fill and wait, nothing is
+/// retransmitted to exhaustion, no underrun on the resume; completes.
+/// (The spiral of the stress test, 12 times the queue.)
+#[test]
+fn a_hold_while_streaming_waits_with_full_queues_and_completes() {
+    let plan = testplan::spiral(
+        testplan::SPIRAL_POINTS,
+        testplan::SPIRAL_TURNS,
+        testplan::SPIRAL_TIME,
+    )
+    .unwrap();
+    let n = plan.segments.len();
+    assert!(n >= 10 * triquint_firmware::QUEUE_CAPACITY);
+    let (th, tr) = (0.3 * plan.total_time_s, 0.3 * plan.total_time_s + 6.0);
+    let mut step = 0;
+    let r = run(&plan, |t, s| match step {
+        0 if t >= th => {
+            step = 1;
+            assert!(s.progress().segments_acked < n, "still streaming");
+            Some(Feed::Hold)
+        }
+        1 if t >= tr => {
+            step = 2;
+            Some(Feed::Resume)
+        }
+        _ => None,
+    });
+    assert_completed(&r, "hold while streaming");
+    let late = r.trace.last().unwrap().t_s - plan.total_time_s;
+    assert!(late > tr - th, "ended {late} s late");
+    assert!(off_path(&plan, &r.trace, th, tr + 3.0) < 50e-6);
+    assert_within_limits(&plan, &r, 1.0, "spiral hold");
+}
