@@ -143,6 +143,30 @@ fn assert_within_limits(plan: &Plan, r: &Run, k: f64, what: &str) {
         l.jerk.max(k.powi(3) * j + 0.5 * l.jerk),
     ];
     let p = peaks(&r.trace, f64::MIN, f64::MAX);
+    // The plant itself, from its true joint positions at 1 ms: velocity
+    // by 5 ms differences within 2 % of the limit, acceleration by 20 ms
+    // second differences (the servo's torque ripple averaged out) within
+    // 10 % of the reference's budget.
+    let diff = |step: usize, k: usize| {
+        let mut peak = 0.0f64;
+        for w in r.trace.windows(2 * step + 1).step_by(step) {
+            let (a0, b0, c0) = (&w[0], &w[step], &w[2 * step]);
+            let h = b0.t_s - a0.t_s;
+            if h <= 0.0 || (c0.t_s - b0.t_s - h).abs() > 1e-6 {
+                continue;
+            }
+            let x = match k {
+                1 => (b0.q - a0.q) / h,
+                _ => (c0.q - 2.0 * b0.q + a0.q) / (h * h),
+            };
+            peak = peak.max(x.amax());
+        }
+        peak
+    };
+    let (pv, pa) = (diff(5, 1), diff(20, 2));
+    eprintln!("{what}: plant peaks v {pv:.4} m/s, a {pa:.4} m/s²; reference {p:?}");
+    assert!(pv <= budget[0] * 1.02, "{what}: plant velocity {pv}");
+    assert!(pa <= budget[1] * 1.1, "{what}: plant acceleration {pa}");
     for i in 0..3 {
         assert!(
             p[i] as f64 <= budget[i] * tol,
