@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use triquint_link::{CanPort, Feed, HostClock, Listener, SocketCanPort};
+use triquint_link::{CanPort, Feed, HostClock, Listener};
 use triquint_shared::protocol::{CommandAck, FaultCode, Msg, State, decode};
 
 use crate::cli::listen::{nodes_arg, open};
@@ -32,8 +32,9 @@ pub struct Sent {
     pub states_before: [Option<State>; 3],
 }
 
-/// Listens, then sends `f` to every drive of `ids` on `port`.
-pub fn send_feed(port: &mut SocketCanPort, ids: [u8; 3], f: Feed) -> CliResult<Sent> {
+/// Listens, then sends `f` to every drive of `ids` on `port` (SocketCAN;
+/// any port in tests).
+pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<Sent> {
     let mut listener = Listener::new(ids);
     let mut clock = HostClock::default();
     let t0 = Instant::now();
@@ -244,6 +245,129 @@ mod tests {
         let e = verdict("vcan0", ids, Feed::Stop, &[ok, ok, None]).unwrap_err();
         assert_eq!(e.status, Status::Device);
         assert!(e.message.contains("node 3 did not answer"), "{e}");
+    }
+
+    /// Three drives behind a fake port: heartbeats and two TimeSyncs of a
+    /// master whose clock reads 5 s more than ours; every Command answered,
+    /// except the first transmission to node 3 (lost: resent, same frame).
+    struct Drives {
+        now: u64,
+        rx: std::collections::VecDeque<triquint_link::Received>,
+        sent: Vec<triquint_shared::protocol::Command>,
+        drop_first: bool,
+    }
+
+    impl CanPort for Drives {
+        fn now_us(&mut self) -> u64 {
+            // Our clock: 200 ms, then 10 µs a reading.
+            self.now += 10;
+            self.now
+        }
+        fn send(
+            &mut self,
+            frame: &triquint_shared::protocol::Frame,
+        ) -> Result<bool, triquint_link::PortError> {
+            if let Ok((Msg::Command(c), 0)) = decode(frame) {
+                self.sent.push(c);
+                for node in [1u8, 2, 3] {
+                    if node == 3 && self.drop_first && self.sent.len() == 1 {
+                        continue;
+                    }
+                    let a = CommandAck {
+                        command: c.command,
+                        token: c.token,
+                        result: 0,
+                        state: State::Running as u8,
+                        value: 1177,
+                    };
+                    self.rx.push_back(triquint_link::Received {
+                        frame: a.to_frame(node),
+                        t_us: 0,
+                        own: false,
+                    });
+                }
+            }
+            Ok(true)
+        }
+        fn recv(&mut self) -> Result<Option<triquint_link::Received>, triquint_link::PortError> {
+            Ok(self.rx.pop_front())
+        }
+    }
+
+    fn drives(drop_first: bool) -> Drives {
+        use triquint_shared::protocol::{
+            Heartbeat, HeartbeatExt, PROTOCOL_VERSION, TimeSync, flags,
+        };
+        let rx = |frame, t_us| triquint_link::Received {
+            frame,
+            t_us,
+            own: false,
+        };
+        let mut q = std::collections::VecDeque::new();
+        q.push_back(rx(
+            TimeSync {
+                seq: 7,
+                prev_tx_us: 0,
+            }
+            .to_frame(0),
+            1_000,
+        ));
+        for node in [1u8, 2, 3] {
+            let h = Heartbeat {
+                state: State::Running as u8,
+                protocol_version: PROTOCOL_VERSION,
+                ..Heartbeat::default()
+            };
+            q.push_back(rx(h.to_frame(node), 50_000));
+            let e = HeartbeatExt {
+                flags: flags::SYNCED | flags::HOMED,
+                ..HeartbeatExt::default()
+            };
+            q.push_back(rx(e.to_frame(node), 50_000));
+        }
+        let s = TimeSync {
+            seq: 8,
+            prev_tx_us: 5_001_000,
+        };
+        q.push_back(rx(s.to_frame(0), 101_000));
+        Drives {
+            now: 200_000,
+            rx: q,
+            sent: Vec::new(),
+            drop_first,
+        }
+    }
+
+    #[test]
+    fn a_command_carries_the_masters_host_time_and_is_resent_until_answered() {
+        let mut d = drives(true);
+        let sent = send_feed(&mut d, [1, 2, 3], Feed::Override(500)).unwrap();
+        assert!(
+            sent.answers
+                .iter()
+                .all(|a| a.is_some_and(|a| a.result == 0))
+        );
+        assert_eq!(sent.states_before, [Some(State::Running); 3]);
+        // Sent twice (node 3 missed the first), the same frame both times.
+        assert_eq!(d.sent.len(), 2);
+        assert_eq!(d.sent[0], d.sent[1]);
+        let c = d.sent[0];
+        assert_eq!((c.command, c.arg2), (Feed::Override(500).code() as u8, 500));
+        // Our clock read 200.01 ms when it was sent: the master's 5 s more,
+        // dated 1 ms back.
+        let t = sent.host_us.unwrap();
+        assert_eq!((c.arg, t), (5_199_010, 5_199_010));
+        assert!(verdict("vcan0", [1, 2, 3], Feed::Override(500), &sent.answers).is_ok());
+    }
+
+    #[test]
+    fn without_time_sync_the_command_applies_on_receipt() {
+        let mut d = drives(false);
+        d.rx.retain(|r| !matches!(decode(&r.frame), Ok((Msg::TimeSync(_), _))));
+        let sent = send_feed(&mut d, [1, 2, 3], Feed::Hold).unwrap();
+        assert_eq!(sent.host_us, None);
+        assert_eq!(d.sent.len(), 1);
+        assert_eq!(d.sent[0].arg, 0, "on receipt");
     }
 
     #[test]
