@@ -554,3 +554,54 @@ fn a_hold_while_streaming_waits_with_full_queues_and_completes() {
     assert!(off_path(&plan, &r.trace, th, tr + 3.0) < 50e-6);
     assert_within_limits(&plan, &r, 1.0, "spiral hold");
 }
+
+/// A stop and an override not sent by the session (`triquint stop` in a
+/// second process, the web page): the session learns of the stop from the
+/// drives' answers and ends stopped; the override persists on the drives.
+#[test]
+fn a_stop_from_another_station_ends_the_session_stopped() {
+    use triquint_shared::protocol::{Command, CommandCode};
+    let plan = testplan::paper_case2().unwrap();
+    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default()).unwrap();
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
+    let mut session = Session::new(&plan, configs.nodes, SessionOptions::default()).unwrap();
+    let other = |code: CommandCode, arg2: u16| {
+        Command {
+            command: code as u8,
+            token: 0xC7,
+            arg: 0,
+            arg2,
+        }
+        .to_frame(0)
+    };
+    let (mut overridden, mut stopped) = (false, false);
+    let outcome = loop {
+        let start = session.start_us() * 1000;
+        let t = sim.now_ns();
+        if start > 0 && !overridden && t > start + 1_000_000_000 {
+            overridden = true;
+            sim.host_send(other(CommandCode::Override, 700));
+        }
+        if start > 0 && !stopped && t > start + 2_000_000_000 {
+            stopped = true;
+            sim.host_send(other(CommandCode::Stop, 0));
+        }
+        let mut port = SimPort {
+            sim: &mut sim,
+            tx_queue: 32,
+        };
+        if let Some(o) = session.poll(&mut port).unwrap() {
+            break o;
+        }
+        let t = sim.now_ns() + 100_000;
+        assert!(t < 20_000_000_000, "did not end");
+        sim.run_until(t).unwrap();
+    };
+    assert!(outcome.stopped && !outcome.completed, "{outcome:?}");
+    assert!(outcome.faults.is_empty(), "{outcome:?}");
+    for n in &sim.nodes {
+        assert_eq!(n.node.state(), triquint_shared::protocol::State::Idle);
+        assert_eq!(n.node.override_permille(), 700);
+    }
+}
