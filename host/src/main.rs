@@ -48,6 +48,14 @@ enum Command {
     Clear(cli::clear::ClearArgs),
     /// Send the host's emergency stop frame.
     Estop(cli::estop::EstopArgs),
+    /// Feed hold: a running plan slows to rest on its path and waits.
+    Hold(cli::hold::HoldArgs),
+    /// Resume a held plan along its path.
+    Resume(cli::resume::ResumeArgs),
+    /// Stop a running plan along its path (drives go Idle, no fault).
+    Stop(cli::stop::StopArgs),
+    /// Feed override in per cent of the planned speed (persists).
+    Override(cli::feed_override::OverrideArgs),
 }
 
 fn run(cli: Cli) -> CliResult {
@@ -66,9 +74,9 @@ fn run(cli: Cli) -> CliResult {
             cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
         }
         Command::Upload(a) => {
-            let (_, homing) = load_machine(cli.robot.as_deref())?;
+            let (robot, homing) = load_machine(cli.robot.as_deref())?;
             cli::same_robot(cli.robot.as_deref(), &a.plan)
-                .and_then(|()| cli::upload::run(a, &homing))
+                .and_then(|()| cli::upload::run(a, &robot, &homing))
         }
         Command::MoveTo(a) => {
             let (robot, homing) = load_machine(cli.robot.as_deref())?;
@@ -82,6 +90,10 @@ fn run(cli: Cli) -> CliResult {
         }
         Command::Clear(a) => cli::clear::run(a, &load_robot(cli.robot.as_deref())?),
         Command::Estop(a) => cli::estop::run(a),
+        Command::Hold(a) => cli::hold::run(a),
+        Command::Resume(a) => cli::resume::run(a),
+        Command::Stop(a) => cli::stop::run(a),
+        Command::Override(a) => cli::feed_override::run(a),
     }
 }
 

@@ -2,12 +2,15 @@
 //! every node, gains from the settings' bandwidth, and the stop ramps —
 //! controlled stop T_s and quick stop T_q — long enough to bring the
 //! largest velocity and acceleration of the motion to rest within the jerk
-//! budget (`stop_time`, docs/protocol.md, Stopping).
+//! budget (`stop_time`, docs/protocol.md, Stopping); for a plan, the feed
+//! override cap (`override_cap.rs`).
 
 use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::protocol::DriveConfig;
 use triquint_shared::protocol::config::{DriveSettings, stop_time};
 use triquint_shared::{Limits, Robot};
+
+use crate::override_cap::{Maxima, override_scaling};
 
 /// Why a plan's recorded maxima cannot size the stop ramps.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -24,6 +27,8 @@ pub struct DriveConfigs {
     pub nodes: [DriveConfig; 3],
     /// The controlled-stop ramp T_s every node is configured with (s).
     pub stop_time_s: f64,
+    /// The feed-override cap every node is configured with (σ, 1–32).
+    pub override_cap: f64,
 }
 
 impl DriveConfigs {
@@ -31,14 +36,19 @@ impl DriveConfigs {
     /// (`plan.max_abs`, continuous-time, re-verified by `triquint check`).
     pub fn for_plan(plan: &Plan, settings: &DriveSettings) -> Result<Self, ConfigError> {
         let [v, a, j] = largest(&plan.max_abs)?;
-        Ok(Self::from_maxima(
-            &plan.robot,
-            &plan.limits,
-            settings,
-            v,
-            a,
-            j,
-        ))
+        // The override cap, and the stop ramps sized for a stop from it.
+        let s = override_scaling(plan, Maxima { v, a, j });
+        let (robot, limits) = (&plan.robot, &plan.limits);
+        let (ts, tq) = (s.stop_time_s, s.quick_stop_time_s);
+        Ok(Self {
+            nodes: [0, 1, 2].map(|i| {
+                let mut c = DriveConfig::new(robot, limits, i, settings, ts, tq);
+                c.override_cap = s.cap as f32;
+                c
+            }),
+            stop_time_s: ts,
+            override_cap: s.cap,
+        })
     }
 
     /// For any motion within `limits` (before there is a plan, e.g. to
@@ -71,6 +81,8 @@ impl DriveConfigs {
         Self {
             nodes: [0, 1, 2].map(|i| DriveConfig::new(robot, limits, i, settings, ts, tq)),
             stop_time_s: ts,
+            // No plan to scale: no override above 100 %.
+            override_cap: 1.0,
         }
     }
 }

@@ -9,6 +9,8 @@
 //!   of each node (`session/nodes.rs`);
 //! - [`configs`]: the drives' configurations for a plan, from its exact
 //!   maxima (`plan.max_abs`), or for the limits themselves;
+//! - [`override_cap`]: the largest feed override a plan allows;
+//! - [`host_clock`]: the host time another process learns from TimeSync;
 //! - [`status`]: what state each drive is in, from its heartbeats (the
 //!   model of `triquint status`, serialisable);
 //! - [`socketcan`]: a Linux SocketCAN interface as a port (the one SocketCAN
@@ -19,12 +21,17 @@
 //! simulator.
 
 pub mod configs;
+pub mod host_clock;
+pub mod override_cap;
 pub mod session;
 pub mod socketcan;
 pub mod status;
 
 pub use configs::DriveConfigs;
-pub use session::{FaultReport, NodeView, Outcome, Progress, Session, SessionOptions, UploadError};
+pub use host_clock::HostClock;
+pub use session::{
+    FaultReport, Feed, NodeView, Outcome, Progress, Session, SessionOptions, UploadError,
+};
 pub use socketcan::{SocketCanError, SocketCanPort, SocketRx, open_host};
 pub use status::{Listener, MachineStatus, NodeStatus};
 

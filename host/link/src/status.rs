@@ -46,6 +46,11 @@ pub struct NodeStatus {
     pub synced: bool,
     pub configured: bool,
     pub switch_active: bool,
+    /// Feed hold: held at rest, slowing to it, or kept for the next plan.
+    pub held: bool,
+    /// A feed override other than 100 % is set.
+    #[serde(rename = "override")]
+    pub override_active: bool,
     pub bus_errors: BusErrors,
     /// Protocol version it reports (null: silent).
     pub protocol_version: Option<u8>,
@@ -206,6 +211,8 @@ impl Listener {
                     synced: v.sync_ok,
                     configured: v.flags & flags::CONFIGURED != 0,
                     switch_active: v.flags & flags::SWITCH != 0,
+                    held: v.flags & flags::HELD != 0,
+                    override_active: v.flags & flags::OVERRIDE != 0,
                     bus_errors: BusErrors {
                         tx: v.tx_errors,
                         rx: v.rx_errors,

@@ -3,17 +3,23 @@
 pub mod check;
 pub mod clear;
 pub mod estop;
+pub mod feed;
+pub mod feed_override;
 pub mod fk;
+pub mod hold;
 pub mod home;
 pub mod ik;
+pub mod keys;
 pub mod listen;
 pub mod monitor;
 pub mod move_to;
 pub mod plan;
 pub mod report;
+pub mod resume;
 pub mod send;
 pub mod simulate;
 pub mod status;
+pub mod stop;
 pub mod torque;
 pub mod upload;
 

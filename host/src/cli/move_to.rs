@@ -8,13 +8,14 @@ use std::time::Duration;
 use clap::Args;
 use nalgebra::Vector3;
 use triquint_link::{Listener, SocketCanPort};
-use triquint_planner::{Job, Objective, Options, plan};
+use triquint_planner::{Job, Objective, Options, Plan, plan};
 use triquint_shared::kinematics::Pose;
 use triquint_shared::protocol::config::HomingSettings;
 use triquint_shared::{Limits, Robot};
 
 use crate::cli::finite;
 use crate::cli::home::configure;
+use crate::cli::keys::Keys;
 use crate::cli::listen::{listen, open};
 use crate::cli::upload::{BusArgs, check_bus_args, report, run_plan};
 use crate::exit::{CliError, CliResult, plan_error};
@@ -68,36 +69,60 @@ pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
             triquint_planner::readable(target_mm.z)
         ))
     })?;
-    let limits = Limits::default();
     check_bus_args(&args.bus)?;
-    let ids = args.bus.ids()?;
-    let mut port = open(&args.bus.iface)?;
+    let q0 = reported_joints(robot, homing, &args.bus)?;
+    let Some(p) = plan_move(robot, q0, target)? else {
+        println!("already within 1 µm of the target on every axis");
+        return Ok(());
+    };
+    let mut keys = Keys::open(1000);
+    let summary = run_plan(&p, &args.bus, homing, false, keys.as_mut())?;
+    drop(keys);
+    report(&summary, &args.bus, args.json)
+}
+
+/// Where the drives on `bus` report the joints (m), configuring them first
+/// if they do not report a position; refused when one is not homed.
+pub fn reported_joints(
+    robot: &Robot,
+    homing: &HomingSettings,
+    bus: &BusArgs,
+) -> CliResult<Vector3<f64>> {
+    let ids = bus.ids()?;
+    let mut port = open(&bus.iface)?;
     let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
     if q.iter().any(Option::is_none) {
-        configure(robot, homing, &args.bus)?;
-        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(args.bus.timeout))?;
+        configure(robot, homing, bus)?;
+        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout))?;
     }
     drop(port);
     if let Some(i) = homed.iter().position(|h| !h) {
         let n = crate::cli::listen::nodes_arg(ids);
         return Err(CliError::refused(format!(
             "{}: node {} is not homed (its position is unknown): run `triquint home --iface {}{n}` first",
-            args.bus.iface, ids[i], args.bus.iface
+            bus.iface, ids[i], bus.iface
         )));
     }
-    let q0 = match q {
-        [Some(a), Some(b), Some(c)] => Vector3::new(a, b, c),
+    match q {
+        [Some(a), Some(b), Some(c)] => Ok(Vector3::new(a, b, c)),
         _ => {
             let node = q
                 .iter()
                 .position(Option::is_none)
                 .map_or(ids[0], |i| ids[i]);
-            return Err(CliError::device(format!(
+            Err(CliError::device(format!(
                 "{}: node {node}: no position (Telemetry) within {} s",
-                args.bus.iface, args.bus.timeout
-            )));
+                bus.iface, bus.timeout
+            )))
         }
-    };
+    }
+}
+
+/// The minimum-time, minimum-jerk move within the default limits from
+/// joints `q0` (m) to the platform at `target` (m); `None` when every axis
+/// is within 1 µm of it already.
+pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliResult<Option<Plan>> {
+    let m = robot.model::<f64>();
     let start = Pose::from_joints(&m, q0).map_err(|e| {
         CliError::device(format!(
             "the drives report joints {:?} m, which have no valid pose: {e}",
@@ -110,18 +135,17 @@ pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
         start.r.x * 1e3,
         start.r.y * 1e3,
         start.r.z * 1e3,
-        target_mm.x,
-        target_mm.y,
-        target_mm.z
+        target.x * 1e3,
+        target.y * 1e3,
+        target.z * 1e3
     );
     if (goal.q - q0).amax() < 1e-6 {
-        println!("already within 1 µm of the target on every axis");
-        return Ok(());
+        return Ok(None);
     }
     let job = Job::builder()
         .objective(Objective::MinTime)
         .robot(robot.clone())
-        .limits(limits)
+        .limits(Limits::default())
         .points_m([start.r.into(), target.into()])
         .build()
         .map_err(plan_error)?;
@@ -135,6 +159,5 @@ pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
         p.segments.len(),
         p.total_time_s
     );
-    let summary = run_plan(&p, &args.bus, homing, false)?;
-    report(&summary, &args.bus, args.json)
+    Ok(Some(p))
 }

@@ -60,8 +60,14 @@ pub fn print_text(s: &MachineStatus) {
                 n.fault.name, n.fault.code, n.fault.hint
             )
         };
+        let feed = match (n.held, n.override_active) {
+            (true, true) => ", held, override set",
+            (true, false) => ", held",
+            (false, true) => ", override set",
+            (false, false) => "",
+        };
         println!(
-            "axis {} (node {}): {}, {}, position {}, queue {}, {}{}",
+            "axis {} (node {}): {}, {}, position {}, queue {}, {}{}{}",
             n.axis,
             n.id,
             n.state.unwrap_or("?"),
@@ -69,6 +75,7 @@ pub fn print_text(s: &MachineStatus) {
             fmt_mm(n.joint_position_mm),
             n.queue_depth,
             if n.synced { "synced" } else { "not synced" },
+            feed,
             fault
         );
     }

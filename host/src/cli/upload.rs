@@ -9,14 +9,16 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use triquint_shared::Robot;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
 use triquint_shared::protocol::{FaultCode, State};
 
 use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, UploadError, open_host};
 
+use crate::cli::keys::Keys;
 use crate::cli::load_plan;
-use crate::exit::{CliError, CliResult};
+use crate::exit::{CliError, CliResult, Status};
 
 #[derive(Args, Debug)]
 pub struct UploadArgs {
@@ -31,6 +33,10 @@ pub struct UploadArgs {
     /// drive is refused: see `triquint status`, `triquint clear`).
     #[arg(long)]
     pub clear: bool,
+    /// First a minimum-time move (as `move-to`) from where the drives
+    /// report the platform to the plan's start, then the plan.
+    #[arg(long)]
+    pub approach: bool,
 }
 
 /// The bus options shared by `upload` and `move-to`.
@@ -64,6 +70,10 @@ impl BusArgs {
 #[derive(Clone, Debug, Serialize)]
 pub struct UploadSummary {
     pub completed: bool,
+    /// Stopped on request (a stop key, `triquint stop`): at rest on the path.
+    pub stopped: bool,
+    /// The override cap the drives were configured with (σ).
+    pub override_cap: f64,
     pub segments: usize,
     pub frames_sent: u64,
     pub segment_frames: u64,
@@ -143,12 +153,39 @@ fn mm(x: f64) -> String {
     }
 }
 
-/// Uploads and runs `plan` over `bus`, with a progress bar on a terminal.
+/// The progress line's message: phase, hold, override, stop, keys.
+fn progress_message(p: &triquint_link::Progress, keys: bool) -> String {
+    let mut m = p.phase.to_string();
+    if p.started {
+        m += &format!(
+            ", plan time {:.1}/{:.1} s",
+            p.plan_time_us as f64 * 1e-6,
+            p.plan_end_us as f64 * 1e-6
+        );
+    }
+    if p.stopped {
+        m += ", STOPPING";
+    } else if p.held {
+        m += ", HELD";
+    }
+    if let Some(pm) = p.override_permille.filter(|pm| *pm != 1000) {
+        m += &format!(", override {} %", crate::cli::feed::percent(pm));
+    }
+    if keys {
+        m += &format!("  [{}]", Keys::help());
+    }
+    m
+}
+
+/// Uploads and runs `plan` over `bus`, with a progress bar on a terminal;
+/// `keys`: hold, resume, override and stop from the keyboard, its
+/// override also sent before the start.
 pub fn run_plan(
     plan: &Plan,
     bus: &BusArgs,
     homing: &HomingSettings,
     clear: bool,
+    mut keys: Option<&mut Keys>,
 ) -> CliResult<UploadSummary> {
     check_bus_args(bus)?;
     let settings = DriveSettings {
@@ -157,13 +194,18 @@ pub fn run_plan(
         homing: homing.clone(),
         ..DriveSettings::default()
     };
-    let configs = DriveConfigs::for_plan(plan, &settings)
-        .map_err(CliError::bad_input)?
-        .nodes;
+    let configs = DriveConfigs::for_plan(plan, &settings).map_err(CliError::bad_input)?;
+    let override_cap = configs.override_cap;
+    let configs = configs.nodes;
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout * 1e6) as u64,
         clear_faults: clear,
+        // The override chosen by key (in an approach before this plan).
+        feed_override: keys
+            .as_ref()
+            .map(|k| k.override_pm)
+            .filter(|pm| *pm != 1000),
         ..SessionOptions::default()
     };
     let mut session = Session::new(plan, configs, opts).map_err(|e| upload_error(e, bus))?;
@@ -178,10 +220,16 @@ pub fn run_plan(
     let t0 = Instant::now();
     let mut acked_at: Option<f64> = None;
     let outcome: Outcome = loop {
+        if let Some(k) = keys.as_deref_mut() {
+            let cap_pm = (override_cap * 1000.0).round() as u16;
+            for f in k.poll(cap_pm) {
+                session.feed(f);
+            }
+        }
         let polled = session.poll(&mut port);
         let p = session.progress();
         bar.set_position(p.segments_acked as u64);
-        bar.set_message(p.phase);
+        bar.set_message(progress_message(&p, keys.is_some()));
         if acked_at.is_none() && p.segments_acked == p.segments {
             acked_at = Some(t0.elapsed().as_secs_f64());
         }
@@ -212,6 +260,8 @@ pub fn run_plan(
         .collect();
     Ok(UploadSummary {
         completed: outcome.completed,
+        stopped: outcome.stopped,
+        override_cap,
         segments: plan.segments.len(),
         frames_sent: outcome.frames_sent,
         segment_frames: outcome.segment_frames_sent,
@@ -260,14 +310,62 @@ pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
     if s.completed && s.faults.is_empty() {
         return Ok(());
     }
+    if s.stopped && s.faults.is_empty() {
+        return Err(CliError::new(
+            Status::Cancelled,
+            "stopped on request before the plan's end: at rest on its path, every drive Idle",
+        ));
+    }
     Err(CliError::motion_fault(match s.faults.first() {
         Some(f) => format!("node {} faulted: {} ({})", f.node, f.name, f.code),
         None => "the plan did not complete".to_string(),
     }))
 }
 
-pub fn run(args: &UploadArgs, homing: &HomingSettings) -> CliResult {
+pub fn run(args: &UploadArgs, robot: &Robot, homing: &HomingSettings) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let summary = run_plan(&plan, &args.bus, homing, args.clear)?;
+    check_bus_args(&args.bus)?;
+    let mut keys = Keys::open(1000);
+    if args.approach {
+        let start = plan.via_points_m.first().copied().ok_or_else(|| {
+            CliError::bad_input(format!(
+                "{}: the plan has no via-points",
+                args.plan.display()
+            ))
+        })?;
+        let approach = approach_plan(&plan, robot, homing, &args.bus, start)?;
+        if let Some(p) = approach {
+            eprintln!(
+                "approach: {} segments, {:.3} s, to the plan's start",
+                p.segments.len(),
+                p.total_time_s
+            );
+            let s = run_plan(&p, &args.bus, homing, args.clear, keys.as_mut())?;
+            if !(s.completed && s.faults.is_empty()) {
+                eprintln!("the approach did not complete; the plan is not run");
+                return report(&s, &args.bus, args.json);
+            }
+        }
+    }
+    let summary = run_plan(&plan, &args.bus, homing, args.clear, keys.as_mut())?;
+    drop(keys);
     report(&summary, &args.bus, args.json)
+}
+
+/// The minimum-time move (the planner of `move-to`) from where the drives
+/// report the platform to `start` (m); `None` if already there.
+fn approach_plan(
+    plan: &Plan,
+    robot: &Robot,
+    homing: &HomingSettings,
+    bus: &BusArgs,
+    start: [f64; 3],
+) -> CliResult<Option<Plan>> {
+    if *robot != plan.robot {
+        return Err(CliError::bad_input(
+            "--approach: the plan is for another robot than --robot's",
+        ));
+    }
+    let q0 = crate::cli::move_to::reported_joints(robot, homing, bus)?;
+    crate::cli::move_to::plan_move(robot, q0, start.into())
 }

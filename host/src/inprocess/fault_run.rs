@@ -81,6 +81,7 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     let DriveConfigs {
         nodes: configs,
         stop_time_s: stop_ramp_s,
+        ..
     } = DriveConfigs::for_plan(&plan, &settings).expect("plan maxima");
     let mut cfg = SimConfig {
         fd: sc.fd,

@@ -5,6 +5,8 @@
 //! (`measure.rs`).
 
 pub mod fault_run;
+#[cfg(test)]
+mod feed_tests;
 mod measure;
 pub mod simulate;
 #[cfg(test)]

@@ -93,6 +93,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
     let DriveConfigs {
         nodes: configs,
         stop_time_s: ts,
+        ..
     } = DriveConfigs::for_plan(plan, &settings)?;
     let mut sim_cfg = opts.sim.clone();
     sim_cfg.fd = opts.fd;

@@ -1,12 +1,12 @@
-//! The page's control buttons: feed hold, resume and stop for every drive
-//! (a Command to node 0), sent on the bus with the existing send helper.
-//! The hold/resume/override subcommands will share one sender after merge.
+//! The page's control buttons: feed hold, resume and stop for every drive,
+//! sent as `triquint hold | resume | stop` send them (`cli/feed.rs`: one
+//! Command to node 0 dated by the running upload's host time, resent until
+//! every drive answered; a refusal or a silent drive is an error).
 
-use std::sync::atomic::{AtomicU8, Ordering};
-
+use triquint_link::Feed;
 use triquint_shared::protocol::CommandCode;
 
-use crate::cli::send::send_command;
+use crate::cli::feed::{send_feed, verdict};
 
 /// A control request of the page.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,20 +28,23 @@ impl Action {
     }
 
     pub fn code(self) -> CommandCode {
+        self.feed().code()
+    }
+
+    pub fn feed(self) -> Feed {
         match self {
-            Self::Hold => CommandCode::FeedHold,
-            Self::Resume => CommandCode::Resume,
-            Self::Stop => CommandCode::Stop,
+            Self::Hold => Feed::Hold,
+            Self::Resume => Feed::Resume,
+            Self::Stop => Feed::Stop,
         }
     }
 }
 
-static TOKEN: AtomicU8 = AtomicU8::new(0x80);
-
-/// Sends `action` to every drive on `iface` (node 0: all nodes); the
+/// Sends `action` to the drives `ids` on `iface` (node 0: all nodes); the
 /// drives answer with CommandAck frames, seen on the page like any frame.
-pub fn send(iface: &str, action: Action) -> Result<(), String> {
+pub fn send(iface: &str, ids: [u8; 3], action: Action) -> Result<(), String> {
     let mut port = super::source::open_live(iface)?;
-    let token = TOKEN.fetch_add(1, Ordering::Relaxed);
-    send_command(&mut port, 0, action.code(), token).map_err(|e| e.to_string())
+    let f = action.feed();
+    let sent = send_feed(&mut port, ids, f).map_err(|e| e.to_string())?;
+    verdict(iface, ids, f, &sent.answers).map_err(|e| e.to_string())
 }

@@ -196,7 +196,8 @@ async fn control(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>, action
     let Some(iface) = app.iface.clone() else {
         return text(StatusCode::CONFLICT, "replaying a log: no bus to send to");
     };
-    match tokio::task::spawn_blocking(move || control::send(&iface, action)).await {
+    let ids = lock(&app.model).listener.nodes.0.map(|v| v.id);
+    match tokio::task::spawn_blocking(move || control::send(&iface, ids, action)).await {
         Ok(Ok(())) => json_resp(
             StatusCode::OK,
             &json!({ "sent": format!("{:?}", action.code()) }),

@@ -11,14 +11,17 @@
 
 mod configure;
 mod error;
+mod feed;
 pub mod nodes;
 mod options;
 mod outbox;
+mod plan_clock;
 mod start;
 mod stream;
 mod time_sync;
 
 pub use error::UploadError;
+pub use feed::Feed;
 pub use nodes::{CommandAnswer, NODES, NodeView};
 pub use options::SessionOptions;
 pub use start::{ARM_RESENDS, START_RETRY_US};
@@ -29,8 +32,10 @@ use triquint_shared::protocol::{
 };
 
 use self::configure::Configuration;
+use self::feed::FeedState;
 use self::nodes::Nodes;
 use self::outbox::Outbox;
+use self::plan_clock::PlanClock;
 use self::start::StartSequence;
 use self::stream::Stream;
 use self::time_sync::TimeSyncMaster;
@@ -47,6 +52,14 @@ pub struct Progress {
     pub started: bool,
     /// Plan duration (µs).
     pub plan_end_us: u64,
+    /// Plan time the drives have reached, as estimated from their reports (µs).
+    pub plan_time_us: u64,
+    /// A drive reports a feed hold.
+    pub held: bool,
+    /// The feed override acknowledged last (per mille; `None`: none seen).
+    pub override_permille: Option<u32>,
+    /// A stop was acknowledged: the plan ends early, at rest on its path.
+    pub stopped: bool,
 }
 
 /// A fault a node reported (Emergency frame or heartbeat).
@@ -62,6 +75,8 @@ pub struct FaultReport {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outcome {
     pub completed: bool,
+    /// Stopped on request (a Stop or QuickStop acknowledged) before its end.
+    pub stopped: bool,
     pub faults: Vec<FaultReport>,
     /// Host time (µs) of the start.
     pub start_us: u64,
@@ -102,6 +117,10 @@ pub struct Session {
     /// The plan's first via-point (m) and the joints there, for an Arm
     /// refused for distance.
     plan_start: Option<PlanStart>,
+    feed: FeedState,
+    clock: PlanClock,
+    /// The configured override cap (σ).
+    override_cap: f64,
 }
 
 /// Where a plan starts.
@@ -148,6 +167,7 @@ impl Session {
         opts: SessionOptions,
     ) -> Self {
         let stream = Stream::new(segments, opts.fd);
+        let override_cap = configs[0].override_cap.max(1.0) as f64;
         Self {
             plan_end_us: stream.plan_end_us(),
             opts,
@@ -162,7 +182,32 @@ impl Session {
             start: StartSequence::default(),
             faults: Vec::new(),
             plan_start: None,
+            feed: FeedState::default(),
+            clock: PlanClock::default(),
+            override_cap,
         }
+    }
+
+    /// Queues a feed command to every drive, sent at the next poll ahead of
+    /// everything else with that poll's host time; returns its token (see
+    /// [`Session::answers`]). Any time: before Start the drives latch a
+    /// hold or an override.
+    pub fn feed(&mut self, f: Feed) -> u8 {
+        self.feed.queue(f, &mut self.out)
+    }
+
+    /// Each drive's answer to the command with `token`, once it gave one.
+    pub fn answers(&self, token: u8) -> [Option<CommandAnswer>; NODES] {
+        self.feed.answers(token).unwrap_or_else(|| {
+            self.nodes
+                .0
+                .map(|v| v.last_answer.filter(|a| a.token == token))
+        })
+    }
+
+    /// The override cap the drives are configured with (σ).
+    pub fn override_cap(&self) -> f64 {
+        self.override_cap
     }
 
     pub fn faults(&self) -> &[FaultReport] {
@@ -202,6 +247,10 @@ impl Session {
             segments: self.stream.segments.len(),
             started: self.start.start_us != 0,
             plan_end_us: self.plan_end_us,
+            plan_time_us: self.clock.plan_us().min(self.plan_end_us),
+            held: self.clock.held,
+            override_permille: self.feed.override_permille,
+            stopped: self.feed.stopped,
         }
     }
 
@@ -229,6 +278,11 @@ impl Session {
         let Ok((msg, node)) = decode(&rx.frame) else {
             return Ok(());
         };
+        if let Msg::Command(c) = msg {
+            // Another station's command (a second process, the web page).
+            self.feed.seen(&c);
+            return Ok(());
+        }
         let Some(i) = self.nodes.index(node) else {
             return Ok(());
         };
@@ -240,6 +294,10 @@ impl Session {
                 // Emergency frame may be lost); before, a faulted node is
                 // refused or cleared in discovery.
                 let moving = matches!(self.phase, Phase::Arm | Phase::Stream | Phase::Finish);
+                // A stop whose acknowledgement was missed.
+                if moving && h.fault == 0 && h.state == State::Stopping as u8 {
+                    self.feed.stopped = true;
+                }
                 if moving && h.fault != 0 && !self.faults.iter().any(|f| f.node == node) {
                     self.faults.push(FaultReport {
                         node,
@@ -254,9 +312,16 @@ impl Session {
                 v.next_seq = a.next_seq;
                 v.depth = a.depth;
                 v.capacity = a.capacity;
-                self.stream.acknowledged(i, node, &a, rx.t_us)?;
+                // Once stopped, the drives refuse what is still on its way.
+                match self.stream.acknowledged(i, node, &a, rx.t_us) {
+                    Err(_) if self.feed.stopped => {}
+                    r => r?,
+                }
             }
-            Msg::CommandAck(a) => v.last_answer = Some(a.into()),
+            Msg::CommandAck(a) => {
+                v.last_answer = Some(a.into());
+                self.feed.answered(i, &a);
+            }
             Msg::Emergency(e) => {
                 self.faults.push(FaultReport {
                     node,
@@ -294,6 +359,15 @@ impl Session {
         // Time sync, fast until every node is synced.
         let synced = self.nodes.all(|v| v.sync_ok);
         self.sync.poll(now, synced, &self.opts, &mut self.out);
+        self.feed.send(now, &mut self.out);
+        self.clock.override_permille = self.feed.override_permille;
+        self.clock.update(now, self.start.start_us, &self.nodes);
+        let before_start = !matches!(self.phase, Phase::Stream | Phase::Finish | Phase::Done);
+        if self.feed.stopped && before_start {
+            // Stopped before anything moved: every node back to Idle.
+            self.out.command(0, CommandCode::Reset, 0);
+            self.set_phase(Phase::Done, now);
+        }
         match self.phase {
             Phase::Discover => self.discover(now)?,
             Phase::Configure => {
@@ -360,7 +434,7 @@ impl Session {
             }
             Phase::Stream => {
                 self.start.resend_start(now, &self.nodes, &mut self.out);
-                if !self.faults.is_empty() {
+                if !self.faults.is_empty() || self.feed.stopped {
                     self.set_phase(Phase::Finish, now);
                 } else {
                     self.stream
@@ -375,10 +449,13 @@ impl Session {
         }
         self.out.flush(port)?;
         if self.phase == Phase::Done && self.out.is_empty() {
-            let completed =
-                self.faults.is_empty() && self.nodes.all(|v| v.state == Some(State::Idle));
+            let stopped = self.feed.stopped;
+            let completed = !stopped
+                && self.faults.is_empty()
+                && self.nodes.all(|v| v.state == Some(State::Idle));
             return Ok(Some(Outcome {
                 completed,
+                stopped,
                 faults: self.faults.clone(),
                 start_us: self.start.start_us,
                 frames_sent: self.out.sent,
@@ -471,7 +548,12 @@ impl Session {
         }
         match self.config.differing(&self.nodes) {
             None if self.opts.configure_only => self.set_phase(Phase::Done, now),
-            None => self.set_phase(Phase::Sync, now),
+            None => {
+                if let Some(pm) = self.opts.feed_override {
+                    self.feed(Feed::Override(pm));
+                }
+                self.set_phase(Phase::Sync, now)
+            }
             Some(i) => {
                 self.config.read_back(i, &mut self.out);
                 self.set_phase(Phase::ReadBack, now);
@@ -480,22 +562,42 @@ impl Session {
         Ok(())
     }
 
-    /// After the plan's end: every node reports rest (Idle or Fault), or a
-    /// fault has had `finish_grace_us` to play out.
+    /// After the plan's end (or a stop): every node reports rest (Idle or
+    /// Fault), or a fault has had `finish_grace_us` to play out. The
+    /// deadline follows the plan time the drives reached (a hold stands
+    /// it still), and a node silent for `response_timeout_us` ends it.
     fn finish(&mut self, now: u64) -> Result<(), UploadError> {
-        let end = self.start.start_us + self.plan_end_us;
         let since = self.phase_since;
-        let settled = self.nodes.all(|v| {
-            v.heartbeat_at.is_some_and(|t| t > end.max(since))
-                && matches!(v.state, Some(State::Idle) | Some(State::Fault))
-        });
         let faulted = !self.faults.is_empty();
+        // Not before the plan can have ended (at the highest override).
+        let earliest = if faulted || self.feed.stopped {
+            since
+        } else {
+            let fastest = (self.plan_end_us as f64 / self.override_cap) as u64;
+            since.max(self.start.start_us + fastest)
+        };
+        // At rest: Idle or Fault; after a stop before Start, Loaded.
+        let stopped = self.feed.stopped;
+        let settled = self.nodes.all(|v| {
+            v.heartbeat_at.is_some_and(|t| t > earliest)
+                && (matches!(v.state, Some(State::Idle) | Some(State::Fault))
+                    || (stopped && v.state == Some(State::Loaded)))
+        });
+        let silent = self.nodes.0.iter().find(|v| {
+            v.heartbeat_at
+                .is_none_or(|t| now.saturating_sub(t) > self.opts.response_timeout_us)
+        });
         if settled || (faulted && now > since + self.opts.finish_grace_us) {
             self.set_phase(Phase::Done, now);
-        } else if now > end + self.opts.finish_grace_us {
+        } else if self.clock.plan_us() > self.plan_end_us + self.opts.finish_grace_us {
             return Err(UploadError::Timeout {
                 node: self.nodes.first(|v| !matches!(v.state, Some(State::Idle))),
                 what: "finishing the plan",
+            });
+        } else if let Some(v) = silent {
+            return Err(UploadError::Timeout {
+                node: v.id,
+                what: "finishing the plan (no heartbeat)",
             });
         }
         Ok(())

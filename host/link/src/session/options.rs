@@ -34,6 +34,10 @@ pub struct SessionOptions {
     /// Refuse to start when a node is not homed (every motion; not for
     /// configuring only).
     pub require_homed: bool,
+    /// A feed override (per mille) sent once the configuration is checked
+    /// (after its commit, which keeps an earlier override only within the
+    /// new cap): how `upload --approach` carries the override to the plan.
+    pub feed_override: Option<u16>,
 }
 
 impl Default for SessionOptions {
@@ -55,6 +59,7 @@ impl Default for SessionOptions {
             configure_only: false,
             clear_faults: false,
             require_homed: true,
+            feed_override: None,
         }
     }
 }

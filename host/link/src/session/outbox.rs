@@ -36,8 +36,14 @@ impl Outbox {
 
     /// Queues a command to `node` (0: every node) with a new token; returns it.
     pub fn command(&mut self, node: u8, code: CommandCode, arg: u32) -> u8 {
+        let token = self.next_token();
+        self.push_back(command_frame(node, code, token, arg));
+        token
+    }
+
+    /// A new command token.
+    pub fn next_token(&mut self) -> u8 {
         self.token = self.token.wrapping_add(1);
-        self.push_back(command_frame(node, code, self.token, arg));
         self.token
     }
 
