@@ -84,3 +84,29 @@ def test_feed_hold_resume_override_and_stop_from_another_process(make_sim, bus):
     s = status()
     assert all(n["state"] == "Idle" and n["fault"]["code"] == 0 for n in s["nodes"]), s
     sim.stop()
+
+
+def test_upload_approach_from_power_on_and_from_home(make_sim, bus):
+    """`upload --approach` runs the min-time move to the plan's start, then
+    the plan: from the simulator's default power-on pose, and from the pose
+    `home` leaves the platform in."""
+    sim = make_sim("approach")
+    sim.wait_heartbeats(bus)
+    code, out, err = run([TRIQUINT, "upload", plan_path(2), "--iface", IFACE, "--approach"],
+                         timeout=180)
+    assert code == 0, err
+    assert "node 1: Idle, fault None" in out, out
+    sim.stop()
+    sim = make_sim("approach-home", extra=["--unhomed"])
+    sim.wait_heartbeats(bus)
+    code, out, err = run([TRIQUINT, "home", "--iface", IFACE], timeout=120)
+    assert code == 0, err
+    code, out, err = run([TRIQUINT, "upload", plan_path(2), "--iface", IFACE, "--approach"],
+                         timeout=180)
+    assert code == 0, err
+    assert "node 1: Idle, fault None" in out, out
+    code, out, err = run([TRIQUINT, "status", "--iface", IFACE, "--json"])
+    assert code == 0, err
+    s = json.loads(out)
+    assert all(n["state"] == "Idle" and n["fault"]["code"] == 0 for n in s["nodes"]), s
+    sim.stop()

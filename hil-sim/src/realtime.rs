@@ -315,6 +315,7 @@ pub fn run(
                 rx: &rx,
                 next: 0,
                 clock: n.clock,
+                tick_ns: t,
                 error: None,
             };
             service(&mut n.node, &mut p);
