@@ -410,7 +410,7 @@ impl Problem {
     }
 
     /// (segment, u) pairs whose jerks must match: C3 at interior knots, zero at the ends.
-    fn jerk_conditions(&self) -> Vec<(KnotSide, Option<KnotSide>)> {
+    pub(crate) fn jerk_conditions(&self) -> Vec<(KnotSide, Option<KnotSide>)> {
         let nseg = self.nseg();
         let mut out = vec![((0, 0.0), None), ((nseg - 1, 1.0), None)];
         out.extend((1..nseg).map(|k| ((k - 1, 1.0), Some((k, 0.0)))));
@@ -445,7 +445,7 @@ impl Problem {
     /// Projects each joint's x onto the C3 / end-jerk equalities exactly
     /// (least change), with the conditions in knot order so that the
     /// normal matrix is banded ([`banded`](crate::banded)).
-    fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
+    pub(crate) fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
         let mut conds = self.jerk_conditions();
         // The knot each condition sits at: the ends, or the knot between its two sides.
         let knot = |c: &(KnotSide, Option<KnotSide>)| match c {
@@ -501,6 +501,21 @@ impl Problem {
 
     /// [`Problem::inner`] with at most `max_rounds` cutting-plane rounds.
     fn inner_rounds(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        // Jerk only: each joint's exact optimum without an interior-point solve.
+        if self.jerk_only
+            && self.watch.cancelled().is_none()
+            && let Some(x) = self.jerk_only_direct(h, x0)
+        {
+            let fig = self.figures(h, &x, self.torque_samples);
+            return Some(Solution {
+                h: h.to_vec(),
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: 0,
+            });
+        }
         let mut x = x0.clone();
         let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
         let mut solves = 0;
