@@ -516,6 +516,16 @@ impl Problem {
                 lp_solves: 0,
             });
         }
+        self.inner_lp(h, x0, max_rounds)
+    }
+
+    /// [`Problem::inner_rounds`] by interior-point solves only.
+    pub(crate) fn inner_lp(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+    ) -> Option<Solution> {
         let mut x = x0.clone();
         let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
         let mut solves = 0;
@@ -745,8 +755,12 @@ impl Problem {
 
     /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
     fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        // The relaxation's probe keeps the interior-point solve: its knot
+        // derivatives (the analytic centre of the non-binding joints') start
+        // the full problem's cutting planes, and the direct solve's
+        // (each joint at its own optimum) made min-time 1.3× slower.
         if !self.jerk_only
-            && let Some(r) = self.relaxed().inner(h, x0)
+            && let Some(r) = self.relaxed().inner_lp(h, x0, MAX_INNER_ROUNDS)
         {
             if let Some(sol) = self.accept_relaxed(&r) {
                 return Some(sol);
