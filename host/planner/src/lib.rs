@@ -42,6 +42,7 @@ mod check;
 mod error;
 pub mod evolution;
 mod extrema;
+mod jerk_only;
 mod job;
 #[cfg(feature = "toml")]
 mod job_file;

@@ -410,7 +410,7 @@ impl Problem {
     }
 
     /// (segment, u) pairs whose jerks must match: C3 at interior knots, zero at the ends.
-    fn jerk_conditions(&self) -> Vec<(KnotSide, Option<KnotSide>)> {
+    pub(crate) fn jerk_conditions(&self) -> Vec<(KnotSide, Option<KnotSide>)> {
         let nseg = self.nseg();
         let mut out = vec![((0, 0.0), None), ((nseg - 1, 1.0), None)];
         out.extend((1..nseg).map(|k| ((k - 1, 1.0), Some((k, 0.0)))));
@@ -445,7 +445,7 @@ impl Problem {
     /// Projects each joint's x onto the C3 / end-jerk equalities exactly
     /// (least change), with the conditions in knot order so that the
     /// normal matrix is banded ([`banded`](crate::banded)).
-    fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
+    pub(crate) fn project(&self, h: &[f64], x: &mut [Vec<f64>; 3]) {
         let mut conds = self.jerk_conditions();
         // The knot each condition sits at: the ends, or the knot between its two sides.
         let knot = |c: &(KnotSide, Option<KnotSide>)| match c {
@@ -501,6 +501,31 @@ impl Problem {
 
     /// [`Problem::inner`] with at most `max_rounds` cutting-plane rounds.
     fn inner_rounds(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        // Jerk only: each joint's exact optimum without an interior-point solve.
+        if self.jerk_only
+            && self.watch.cancelled().is_none()
+            && let Some(x) = self.jerk_only_direct(h, x0)
+        {
+            let fig = self.figures(h, &x, self.torque_samples);
+            return Some(Solution {
+                h: h.to_vec(),
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: 0,
+            });
+        }
+        self.inner_lp(h, x0, max_rounds)
+    }
+
+    /// [`Problem::inner_rounds`] by interior-point solves only.
+    pub(crate) fn inner_lp(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+    ) -> Option<Solution> {
         let mut x = x0.clone();
         let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
         let mut solves = 0;
@@ -730,8 +755,12 @@ impl Problem {
 
     /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
     fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        // The relaxation's probe keeps the interior-point solve: its knot
+        // derivatives (the analytic centre of the non-binding joints') start
+        // the full problem's cutting planes, and the direct solve's
+        // (each joint at its own optimum) made min-time 1.3× slower.
         if !self.jerk_only
-            && let Some(r) = self.relaxed().inner(h, x0)
+            && let Some(r) = self.relaxed().inner_lp(h, x0, MAX_INNER_ROUNDS)
         {
             if let Some(sol) = self.accept_relaxed(&r) {
                 return Some(sol);

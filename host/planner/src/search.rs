@@ -271,6 +271,27 @@ fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<Search
     for (sol, &i) in refined.iter().zip(&chosen) {
         lp_solves += sol.lp_solves - coarse[i].as_ref().map_or(0, |s| s.lp_solves);
     }
+    // The direct jerk-only solve puts every joint at its own optimum; the
+    // shapes' knot derivatives are re-solved by the interior-point method,
+    // whose non-binding joints sit central (their velocities and
+    // accelerations decide what the full problem and min-time make of them).
+    let refined: Vec<Solution> = if p.jerk_only {
+        refined
+            .into_iter()
+            .map(|s| match p.inner_lp(&s.h, &s.x, 1) {
+                Some(c) => {
+                    lp_solves += c.lp_solves;
+                    Solution {
+                        lp_solves: s.lp_solves + c.lp_solves,
+                        ..c
+                    }
+                }
+                None => s,
+            })
+            .collect()
+    } else {
+        refined
+    };
     // Best first; the sort is stable, so equal merits keep the starts' order.
     let mut shapes = refined;
     shapes.sort_by(|a, b| merit(a).total_cmp(&merit(b)));

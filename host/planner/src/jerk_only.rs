@@ -1,0 +1,298 @@
+//! The jerk-only inner problem at fixed intervals without an interior-point
+//! solve.
+//!
+//! With h fixed and only jerk limited, the three joints are independent:
+//! each is min s over its knot derivatives x_j subject to the C3 and
+//! end-jerk equalities E x_j = f and |J_k(u)| ≤ s on every segment, and the
+//! problem's optimum is the largest of the three. Per joint the equalities
+//! are eliminated once (x_j = x_p + N z, N an orthonormal basis of E's null
+//! space, n − 4 columns for n knots), which leaves a linear Chebyshev
+//! problem in (z, s): min s subject to ±(a_i·z + b_i) ≤ s at cut points
+//! (k, u). It is solved by a primal active-set method (dense, exact at its
+//! vertex), and cut points are added at each segment's exact maximum of
+//! |J_k| (a quadratic in u: at u = 0, 1 or its vertex) until the LP's s
+//! equals the exact maximum to 1e-12: the LP bound is a lower bound and the
+//! exact maximum of its point an upper bound, so the answer is certified.
+//! Anything unexpected (rank loss, no progress, too many iterations) returns
+//! None and the caller falls back to the interior-point solve.
+
+// Index loops mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::local::Problem;
+
+/// Largest number of knots solved here (dense algebra: beyond it the
+/// interior-point solve of the banded problem is the cheaper).
+pub(crate) const MAX_KNOTS: usize = 64;
+/// Relative gap between the LP bound and the exact maximum that ends the cuts.
+const GAP: f64 = 1e-12;
+/// Cutting-plane rounds at most.
+const ROUNDS: usize = 80;
+
+/// One cut of one joint: ±(a·z + b) ≤ s in the reduced variables.
+struct Row {
+    a: DVector<f64>,
+    b: f64,
+    sign: f64,
+}
+
+impl Problem {
+    /// Exact jerk-only optimum at fixed `h` per joint, from `x0` (whose
+    /// C3 projection is the starting point). None when it does not apply
+    /// or does not certify; the caller then solves the program as before.
+    pub(crate) fn jerk_only_direct(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<[Vec<f64>; 3]> {
+        let n = self.knots.len();
+        if !(4..=MAX_KNOTS).contains(&n) || !self.jerk_only {
+            return None;
+        }
+        let mut x = x0.clone();
+        self.project(h, &mut x);
+        let mut out: [Vec<f64>; 3] = Default::default();
+        for j in 0..3 {
+            out[j] = self.joint_direct(h, j, &x[j])?;
+        }
+        self.project(h, &mut out);
+        Some(out)
+    }
+
+    /// One joint's min-max jerk from the C3-feasible `xp`.
+    fn joint_direct(&self, h: &[f64], j: usize, xp: &[f64]) -> Option<Vec<f64>> {
+        let nv = self.knots.vars();
+        let nseg = self.knots.segments();
+        let zero = vec![0.0; nv];
+        // Jerk of joint j at (k, u): coefficients in x and the constant.
+        let form = |k: usize, u: f64| {
+            let f = self.knots.functional(&zero, j, k, u, 3, h[k]);
+            let mut a = DVector::zeros(nv);
+            for &(v, c) in f.dx() {
+                a[v] += c;
+            }
+            (a, f.value)
+        };
+        // Null space of E (the C3 and end-jerk rows), from the full QR of
+        // Eᵀ padded to a square matrix.
+        let conds = self.jerk_conditions();
+        let m = conds.len();
+        if nv < m {
+            return None;
+        }
+        let mut et = DMatrix::<f64>::zeros(nv, nv);
+        for (r, (a, b)) in conds.iter().enumerate() {
+            let (fa, _) = form(a.0, a.1);
+            let mut row = fa;
+            if let Some((k, u)) = b {
+                row -= form(*k, *u).0;
+            }
+            et.set_column(r, &row);
+        }
+        let scale = et.amax().max(f64::MIN_POSITIVE);
+        let qr = et.qr();
+        let r = qr.r();
+        for i in 0..m {
+            if r[(i, i)].abs() <= 1e-10 * scale {
+                return None;
+            }
+        }
+        let q = qr.q();
+        let d = nv - m;
+        let basis = q.columns(m, d).into_owned();
+        let xp = DVector::from_column_slice(xp);
+        let mut rows: Vec<Row> = Vec::new();
+        let cut_at = |k: usize, u: f64, rows: &mut Vec<Row>| {
+            let (a, c) = form(k, u);
+            let ar = basis.tr_mul(&a);
+            let b = a.dot(&xp) + c;
+            for sign in [1.0, -1.0] {
+                rows.push(Row {
+                    a: ar.clone(),
+                    b,
+                    sign,
+                });
+            }
+        };
+        // Knot jerks (u = 0 of every segment but the first, whose is zero)
+        // and each segment's middle.
+        for k in 0..nseg {
+            if k > 0 {
+                cut_at(k, 0.0, &mut rows);
+            }
+            cut_at(k, 0.5, &mut rows);
+        }
+        // The jerk quadratic of segment k at x: (J(0), c1, c2).
+        let quad = |k: usize, x: &DVector<f64>| {
+            let at = |u: f64| {
+                let (a, c) = form(k, u);
+                a.dot(x) + c
+            };
+            let (j0, jm, j1) = (at(0.0), at(0.5), at(1.0));
+            (
+                j0,
+                -3.0 * j0 + 4.0 * jm - j1,
+                2.0 * j0 - 4.0 * jm + 2.0 * j1,
+            )
+        };
+        // Exact max |J| on segment k, and its interior maximiser if any.
+        let seg_max = |k: usize, x: &DVector<f64>| {
+            let (j0, c1, c2) = quad(k, x);
+            let j1 = j0 + c1 + c2;
+            let mut best = (j0.abs().max(j1.abs()), None);
+            if c2 != 0.0 {
+                let u = -c1 / (2.0 * c2);
+                if u > 0.0 && u < 1.0 {
+                    let v = (j0 + c1 * u + c2 * u * u).abs();
+                    if v > best.0 {
+                        best = (v, Some(u));
+                    }
+                }
+            }
+            best
+        };
+        let mut z = DVector::zeros(d);
+        // Interior cut points added per segment, in order (for extrapolation).
+        let mut history: Vec<Vec<f64>> = vec![Vec::new(); nseg];
+        for _ in 0..ROUNDS {
+            let (z_lp, s_lp) = chebyshev(&rows, z)?;
+            z = z_lp;
+            let x = &xp + &basis * &z;
+            let mut worst: f64 = 0.0;
+            let mut new_cuts = Vec::new();
+            for k in 0..nseg {
+                let (v, u) = seg_max(k, &x);
+                worst = worst.max(v);
+                if let Some(u) = u
+                    && v > s_lp * (1.0 + 0.1 * GAP)
+                {
+                    new_cuts.push((k, u));
+                }
+            }
+            if worst <= s_lp * (1.0 + GAP) + 1e-300 {
+                return Some(x.iter().copied().collect());
+            }
+            if new_cuts.is_empty() {
+                return None;
+            }
+            for (k, u) in new_cuts {
+                cut_at(k, u, &mut rows);
+                // The maximiser of a binding segment converges only
+                // linearly (the LP's vertex bounces between the nearest
+                // cuts, the gap falling by about 4 a round): a cut at the
+                // Aitken extrapolation of its last three positions as well
+                // saves about a third of the rounds.
+                let past = &mut history[k];
+                past.push(u);
+                if let [.., u1, u2, u3] = past[..] {
+                    let (d1, d2) = (u2 - u1, u3 - u2);
+                    let u_lim = u3 - d2 * d2 / (d2 - d1);
+                    if u_lim.is_finite() && u_lim > 0.0 && u_lim < 1.0 && (u_lim - u3).abs() > 1e-15
+                    {
+                        cut_at(k, u_lim, &mut rows);
+                    }
+                }
+            }
+        }
+        None
+    }
+}
+
+/// min s subject to σ_i(a_i·z + b_i) ≤ s, from `z`: a primal active-set
+/// method. Returns (z, s) at an optimal vertex, or None.
+fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<(DVector<f64>, f64)> {
+    let d = z.len();
+    let dim = d + 1;
+    let m = rows.len();
+    // Constraint i as a row of G in (z, s): (σ a, −1) · y ≤ −σ b = g_i.
+    let mut gm = DMatrix::<f64>::zeros(m, dim);
+    let mut g = DVector::<f64>::zeros(m);
+    for (i, r) in rows.iter().enumerate() {
+        for c in 0..d {
+            gm[(i, c)] = r.sign * r.a[c];
+        }
+        gm[(i, d)] = -1.0;
+        g[i] = -r.sign * r.b;
+    }
+    let norms: Vec<f64> = (0..m).map(|i| gm.row(i).norm()).collect();
+    let mut y = DVector::zeros(dim);
+    y.rows_mut(0, d).copy_from(&z);
+    // s at the largest σ(a·z + b): feasible, and that row active.
+    let lhs = &gm * &y;
+    let (first, s0) = (0..m)
+        .map(|i| (i, lhs[i] - g[i]))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    y[d] = s0;
+    let mut active: Vec<usize> = vec![first];
+    let mut is_active = vec![false; m];
+    is_active[first] = true;
+    let mut cost = DVector::zeros(dim);
+    cost[d] = 1.0;
+    let mut last_dropped = None;
+    for _ in 0..(50 * dim + 50) {
+        let w = active.len();
+        let mut at = DMatrix::zeros(dim, w);
+        for (c, &i) in active.iter().enumerate() {
+            at.set_column(c, &gm.row(i).transpose());
+        }
+        let qr = at.qr();
+        let r = qr.r();
+        // The row just added nearly depends on the others (cuts a hair
+        // apart): it is set aside (is_active stays set, so the ratio test
+        // skips it); the exact check after the LP catches what that misses.
+        if (0..w).any(|i| r[(i, i)].abs() <= 1e-12 * norms[active[i]]) {
+            if w == 1 {
+                return None;
+            }
+            active.pop();
+            continue;
+        }
+        let q = qr.q();
+        // Steepest descent within the active face.
+        let p = -(&cost - &q * q.tr_mul(&cost));
+        let pn = p.norm();
+        if pn <= 1e-11 {
+            // Multipliers: Aᵀ λ = −c.
+            let rhs = -q.tr_mul(&cost);
+            let lambda = r.solve_upper_triangular(&rhs)?;
+            let (worst, lmin) = lambda
+                .iter()
+                .copied()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+            if lmin >= -1e-12 {
+                return Some((y.rows(0, d).into_owned(), y[d]));
+            }
+            let i = active.remove(worst);
+            is_active[i] = false;
+            last_dropped = Some(i);
+            continue;
+        }
+        // Ratio test over the inactive constraints.
+        let gp = &gm * &p;
+        let gy = &gm * &y;
+        let mut step: Option<(f64, f64, usize)> = None;
+        for i in 0..m {
+            if is_active[i] || Some(i) == last_dropped {
+                continue;
+            }
+            let ap = gp[i];
+            if ap <= 1e-12 * norms[i] * pn {
+                continue;
+            }
+            let alpha = (g[i] - gy[i]).max(0.0) / ap;
+            let steep = ap / norms[i];
+            let better = match step {
+                None => true,
+                Some((best, bs, _)) => alpha < best || (alpha == best && steep > bs),
+            };
+            if better {
+                step = Some((alpha, steep, i));
+            }
+        }
+        let (alpha, _, i) = step?;
+        y += &p * alpha;
+        active.push(i);
+        is_active[i] = true;
+        last_dropped = None;
+    }
+    None
+}
