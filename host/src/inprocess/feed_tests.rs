@@ -485,15 +485,39 @@ fn commands_at_random_moments_each_taken_and_the_plan_completes() {
     }
 }
 
+/// A session for `plan` on a new machine at the plan's start (for tests
+/// that drive the loop themselves, with [`step`]).
+fn session_at_start(plan: &Plan) -> (Sim, Session) {
+    let configs = DriveConfigs::for_plan(plan, &DriveSettings::default()).unwrap();
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let sim = Sim::new(&plan.robot, q0, SimConfig::default());
+    let session = Session::new(plan, configs.nodes, SessionOptions::default()).unwrap();
+    (sim, session)
+}
+
+/// One host poll, then 100 µs of the machine; the outcome once the session
+/// ends. Panics past `limit_ns` of machine time.
+fn step(sim: &mut Sim, session: &mut Session, limit_ns: u64) -> Option<Outcome> {
+    let mut port = SimPort {
+        sim: &mut *sim,
+        tx_queue: 32,
+    };
+    if let Some(o) = session.poll(&mut port).unwrap() {
+        return Some(o);
+    }
+    let t = sim.now_ns() + 100_000;
+    assert!(t < limit_ns, "did not end");
+    sim.run_until(t).unwrap();
+    None
+}
+
 /// A stop asked for before Start (a key during the configuration): the
 /// session resets the drives and ends stopped; nothing moved.
 #[test]
 fn a_stop_before_start_ends_the_session_stopped_and_nothing_moves() {
     let plan = testplan::paper_case2().unwrap();
-    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default()).unwrap();
     let q0 = plan.segments[0].quintic().eval(0.0).q;
-    let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
-    let mut session = Session::new(&plan, configs.nodes, SessionOptions::default()).unwrap();
+    let (mut sim, mut session) = session_at_start(&plan);
     let mut polls = 0;
     let outcome = loop {
         polls += 1;
@@ -501,16 +525,9 @@ fn a_stop_before_start_ends_the_session_stopped_and_nothing_moves() {
             // 0.2 s in: configured, segments loading.
             session.feed(Feed::Stop);
         }
-        let mut port = SimPort {
-            sim: &mut sim,
-            tx_queue: 32,
-        };
-        if let Some(o) = session.poll(&mut port).unwrap() {
+        if let Some(o) = step(&mut sim, &mut session, 10_000_000_000) {
             break o;
         }
-        let t = sim.now_ns() + 100_000;
-        assert!(t < 10_000_000_000, "did not end");
-        sim.run_until(t).unwrap();
     };
     assert!(outcome.stopped && !outcome.completed && outcome.start_us == 0);
     sim.run_until(sim.now_ns() + 300_000_000).unwrap();
@@ -562,10 +579,7 @@ fn a_hold_while_streaming_waits_with_full_queues_and_completes() {
 fn a_stop_from_another_station_ends_the_session_stopped() {
     use triquint_shared::protocol::{Command, CommandCode};
     let plan = testplan::paper_case2().unwrap();
-    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default()).unwrap();
-    let q0 = plan.segments[0].quintic().eval(0.0).q;
-    let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
-    let mut session = Session::new(&plan, configs.nodes, SessionOptions::default()).unwrap();
+    let (mut sim, mut session) = session_at_start(&plan);
     let other = |code: CommandCode, arg2: u16| {
         Command {
             command: code as u8,
@@ -587,16 +601,9 @@ fn a_stop_from_another_station_ends_the_session_stopped() {
             stopped = true;
             sim.host_send(other(CommandCode::Stop, 0));
         }
-        let mut port = SimPort {
-            sim: &mut sim,
-            tx_queue: 32,
-        };
-        if let Some(o) = session.poll(&mut port).unwrap() {
+        if let Some(o) = step(&mut sim, &mut session, 20_000_000_000) {
             break o;
         }
-        let t = sim.now_ns() + 100_000;
-        assert!(t < 20_000_000_000, "did not end");
-        sim.run_until(t).unwrap();
     };
     assert!(outcome.stopped && !outcome.completed, "{outcome:?}");
     assert!(outcome.faults.is_empty(), "{outcome:?}");
