@@ -229,6 +229,9 @@ struct Recorder {
     now: u64,
     sync_seq: u8,
     next_sync: u64,
+    /// Token of the last command (each command its own: a repeat of the
+    /// last one within the repeat window is answered, not executed).
+    token: u8,
     /// Seeded encoder noise.
     noise: ChaCha8Rng,
     cpm: f64,
@@ -265,11 +268,16 @@ impl Recorder {
     }
 
     fn command(&mut self, c: CommandCode, arg: u32) {
+        self.command2(c, arg, 0);
+    }
+
+    fn command2(&mut self, c: CommandCode, arg: u32, arg2: u16) {
+        self.token = self.token.wrapping_add(1);
         self.rx(Command {
             command: c as u8,
-            token: 7,
+            token: self.token,
             arg,
-            arg2: 0,
+            arg2,
         }
         .to_frame(0));
     }
@@ -338,7 +346,8 @@ impl Recorder {
 
 /// Golden frames: node 2 configured over CAN at 10 kHz, the first part of
 /// Case I uploaded (classic frames before the start, CAN-FD while running),
-/// armed, started, held, resumed and stopped. Returns the states visited.
+/// armed, started, held, resumed, held, resumed and overridden in the
+/// middle of ramps, and stopped in one. Returns the states visited.
 fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     let plan = load_plan("case1-spline");
     let settings = DriveSettings {
@@ -355,6 +364,7 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         now: 1_000_000,
         sync_seq: 0,
         next_sync: 1_000_000,
+        token: 0,
         noise: ChaCha8Rng::seed_from_u64(12345),
         cpm: cfg.counts_per_metre as f64,
         ticks: 0,
@@ -393,13 +403,31 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     }
     r.command(CommandCode::FeedHold, 0);
     r.run_us(250_000);
+    // Commands in the middle of a transition (200 ms ramps): a hold at 20 %
+    // of the resume ramp, a resume at 30 % of that hold's ramp, an override
+    // to 50 % in that resume ramp, back to 100 % and a stop in that change.
+    let run = |r: &mut Recorder, next: &mut usize, us: u64| {
+        for _ in 0..us / TICK_US {
+            r.top_up(&segs, next);
+            r.tick();
+        }
+    };
     r.command(CommandCode::Resume, 0);
-    for _ in 0..3_000 {
-        r.top_up(&segs, &mut next);
-        r.tick();
-    }
+    run(&mut r, &mut next, 40_000);
+    assert!(r.node.scaling().in_transition(), "not mid-transition");
+    r.command(CommandCode::FeedHold, 0);
+    run(&mut r, &mut next, 60_000);
+    assert!(r.node.scaling().in_transition(), "not mid-transition");
+    r.command(CommandCode::Resume, 0);
+    run(&mut r, &mut next, 100_000);
+    assert!(r.node.scaling().in_transition(), "not mid-transition");
+    r.command2(CommandCode::Override, 0, 500);
+    run(&mut r, &mut next, 400_000);
+    r.command2(CommandCode::Override, 0, 1000);
+    run(&mut r, &mut next, 50_000);
+    assert!(r.node.scaling().in_transition(), "not mid-transition");
     r.command(CommandCode::Stop, 0);
-    r.run_us(250_000);
+    r.run_us(1_000_000);
     r.out.u8(b'Z');
     let ticks = r.ticks;
     (r.out, r.states, ticks)

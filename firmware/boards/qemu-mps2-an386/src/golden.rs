@@ -117,6 +117,10 @@ pub struct Figures {
     pub running_sum: u64,
     pub running_max: u32,
     pub ramp_max: u32,
+    /// Ticks that took a command (hold, resume, override, stop) while the
+    /// time-scaling was in a transition.
+    pub command_mid_ticks: u32,
+    pub command_mid_max: u32,
     pub idle_max: u32,
     /// Ticks in which the queue front advanced to the next segment.
     pub switch_ticks: u32,
@@ -267,6 +271,11 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                 let counts = r.u32()? as i32 as i64;
                 let before = (n.state(), n.queue_depth(), n.scaling_phase());
                 let segment_waiting = matches!(inbox.peek(), Some(Item::Segment(_)));
+                let command_mid = n.scaling().in_transition()
+                    && inbox
+                        .iter()
+                        .take(2)
+                        .any(|i| matches!(i, Item::Command { .. }));
                 let seq = n.next_seq();
                 let ((), k) = cnt.instructions(|| {
                     triquint_control_tick(n, inbox, now, &mut Counts(counts), &mut motor)
@@ -286,6 +295,10 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                 check_tx(&mut r, n)?;
                 fig.ticks += 1;
                 fig.worst_tick = fig.worst_tick.max(k);
+                if command_mid {
+                    fig.command_mid_ticks += 1;
+                    fig.command_mid_max = fig.command_mid_max.max(k);
+                }
                 if segment_waiting {
                     fig.take_segment_max = fig.take_segment_max.max(k);
                 }
@@ -307,7 +320,7 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                             fig.running_ticks += 1;
                             fig.running_sum += k as u64;
                             fig.running_max = fig.running_max.max(k);
-                        } else {
+                        } else if !command_mid {
                             fig.ramp_max = fig.ramp_max.max(k);
                         }
                     }

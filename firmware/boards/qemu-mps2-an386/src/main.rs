@@ -61,8 +61,13 @@ fn main() -> ! {
                 f.running_ticks
             );
             hprintln!(
-                "  tick, stop/hold/resume ramps                   max {:5}",
+                "  tick, stop/hold/resume ramps (no command)      max {:5}",
                 f.ramp_max
+            );
+            hprintln!(
+                "  tick taking a command mid-transition           max {:5}  ({} ticks)",
+                f.command_mid_max,
+                f.command_mid_ticks
             );
             hprintln!(
                 "  tick, segment switch                           max {:5}  ({} ticks)",
@@ -111,6 +116,9 @@ fn main() -> ! {
                 false
             } else if f.switch_take_ticks == 0 {
                 hprintln!("FAIL: no segment switch took a new segment: worst case not measured");
+                false
+            } else if f.command_mid_ticks == 0 {
+                hprintln!("FAIL: no tick took a command mid-transition: worst case not measured");
                 false
             } else if f.worst_tick > BUDGET {
                 hprintln!(
