@@ -28,7 +28,7 @@ use crate::homing::Homing;
 use crate::inbox::{Item, Source, Status, TAKE_PER_TICK};
 use crate::law::{self, Gains, LawState};
 use crate::ns::to_f32;
-use crate::scaling::{Phase, TimeScaling, UNIT_Q16};
+use crate::scaling::{Phase, Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
@@ -73,6 +73,7 @@ pub struct Stats {
 }
 
 /// The control side of one drive node, with a segment queue of capacity `Q`.
+#[derive(Clone)]
 pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     node_id: u8,
     state: State,
@@ -226,6 +227,8 @@ impl<const Q: usize> Drive<Q> {
             flushes: self.flushes,
             // Only a node with no motion pending may follow a new host time base.
             may_rebase: matches!(self.state, State::Idle | State::Fault),
+            scaling: self.scaling,
+            override_q16: self.override_q16,
         }
     }
     /// Is the axis position absolute?
@@ -332,9 +335,14 @@ impl<const Q: usize> Drive<Q> {
     pub fn take(&mut self, item: &Item) {
         match *item {
             Item::Sync(s) => self.sync = s,
-            Item::Emergency { code, node, rx_us } => {
+            Item::Emergency {
+                code,
+                node,
+                rx_us,
+                ref ready,
+            } => {
                 if node == 0 || self.is_peer(node) {
-                    self.on_emergency(code, rx_us)
+                    self.on_emergency(code, rx_us, ready.as_ref())
                 }
             }
             Item::PeerHeartbeat {
@@ -408,20 +416,21 @@ impl<const Q: usize> Drive<Q> {
     /// reason directly.
     fn begin_stop(&mut self, reason: StopReason, quick: bool, local_us: u64) {
         let t = self.sync.host_ns(local_us).unwrap_or(0);
-        self.begin_stop_at(reason, quick, t);
+        self.begin_stop_at(reason, quick, t, None);
     }
 
-    /// [`Drive::begin_stop`] from host time `t` (ns).
+    /// [`Drive::begin_stop`] from host time `t` (ns), with the slow-down the
+    /// receive side sized if it did.
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
-    fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64) {
+    fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64, ready: Option<&Retarget>) {
         let Some(a) = self.active else {
             return;
         };
         if self.state == State::Running {
             let ramp = if quick { a.quick_stop_ns } else { a.stop_ns };
-            self.scaling.begin_decel(t, ramp);
+            self.scaling.retarget_ready(t, 0, ramp, ready);
             self.stop_reason = Some(reason);
             if reason != StopReason::Hold {
                 self.state = State::Stopping;

@@ -12,6 +12,7 @@ use triquint_shared::protocol::{
 use triquint_shared::quintic::JointMotion;
 
 use crate::active::Active;
+use crate::scaling::{Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
@@ -35,8 +36,8 @@ pub type Inbox = heapless::spsc::Queue<Item, INBOX_SLOTS>;
 pub const RESERVED_SLOTS: usize = 3;
 
 /// What the receive side needs to know of the node, published by the tick
-/// (`Drive::status`); a board shares it through atomics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// (`Drive::status`); a board shares it in a critical section.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Status {
     /// CRC of the running configuration (0: none).
     pub config_crc: u32,
@@ -44,6 +45,28 @@ pub struct Status {
     pub flushes: u32,
     /// No motion pending (Idle or Fault): the time sync may take a new host time base.
     pub may_rebase: bool,
+    /// The time-scaling and the override a resume returns to: the receive
+    /// side sizes a hold, resume, override or stop in the middle of a
+    /// transition ahead of the tick ([`Retarget`]).
+    pub scaling: TimeScaling,
+    pub override_q16: u32,
+}
+
+impl Status {
+    /// A node just started: nothing configured, at σ = 1.
+    pub const INITIAL: Status = Status {
+        config_crc: 0,
+        flushes: 0,
+        may_rebase: true,
+        scaling: TimeScaling::nominal(0, 0),
+        override_q16: UNIT_Q16,
+    };
+}
+
+impl Default for Status {
+    fn default() -> Self {
+        Self::INITIAL
+    }
 }
 
 /// The producer end of the inbox, as [`offer`] needs it.
@@ -162,6 +185,19 @@ pub enum CommandData {
         crc: u32,
         config: Result<Prepared, FaultCode>,
     },
+    /// FeedHold, Resume, Override, Stop or QuickStop in the middle of a
+    /// transition: the new transition, sized by the receive side.
+    Scaling(Retarget),
+}
+
+impl CommandData {
+    /// The prepared time-scaling change, if any.
+    pub fn retarget(&self) -> Option<&Retarget> {
+        match self {
+            CommandData::Scaling(r) => Some(r),
+            _ => None,
+        }
+    }
 }
 
 /// One finished item for the tick. Local receive times in µs.
@@ -179,6 +215,8 @@ pub enum Item {
         /// The sender (0: the host).
         node: u8,
         rx_us: u64,
+        /// The stop it causes when Running in a transition, sized ahead.
+        ready: Option<Retarget>,
     },
     PeerHeartbeat {
         node: u8,

@@ -16,6 +16,7 @@ use triquint_shared::protocol::contract::{
 use crate::active::Active;
 use crate::hal::RxFrame;
 use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Status};
+use crate::scaling::{Retarget, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
@@ -103,6 +104,11 @@ impl Receiver {
                 },
                 node,
                 rx_us,
+                // The stop it causes when Running (dated on receipt).
+                ready: self.ramps(&status).and_then(|(stop, _)| {
+                    let t = self.sync.host_ns(rx_us).unwrap_or(0);
+                    Retarget::prepare(&status.scaling, t, 0, stop)
+                }),
             }),
             Msg::Heartbeat(heartbeat) if node != self.node_id => Some(Item::PeerHeartbeat {
                 node,
@@ -112,7 +118,7 @@ impl Receiver {
             Msg::Command(c) if for_me => Some(Item::Command {
                 command: c,
                 rx_us,
-                data: self.command_data(&c),
+                data: self.command_data(&c, rx_us, &status),
             }),
             Msg::ConfigWrite { index, value } if for_me => {
                 if let Some(slot) = self.written.get_mut(index as usize) {
@@ -127,12 +133,49 @@ impl Receiver {
         }
     }
 
-    fn command_data(&mut self, c: &Command) -> CommandData {
-        match c.command() {
+    fn command_data(&mut self, c: &Command, rx_us: u64, status: &Status) -> CommandData {
+        let code = c.command();
+        match code {
             Ok(CommandCode::ReadConfig) => CommandData::Values(self.written),
             Ok(CommandCode::ConfigCommit) => self.prepare(c.arg),
+            Ok(
+                CommandCode::FeedHold
+                | CommandCode::Resume
+                | CommandCode::Override
+                | CommandCode::Stop
+                | CommandCode::QuickStop,
+            ) if status.scaling.in_transition() => {
+                // The change of σ the drive makes of it if it acts on it
+                // (see `Drive::on_command`): sized here, not in the tick.
+                let Some((stop, quick)) = self.ramps(status) else {
+                    return CommandData::None;
+                };
+                let (k, full) = match code {
+                    Ok(CommandCode::Resume) => (status.override_q16, stop),
+                    Ok(CommandCode::Override) => ((c.arg2 as u32 * UNIT_Q16 + 500) / 1000, stop),
+                    Ok(CommandCode::QuickStop) => (0, quick),
+                    _ => (0, stop),
+                };
+                let t = self.sync.apply_ns(c.arg, rx_us);
+                match Retarget::prepare(&status.scaling, t, k, full) {
+                    Some(r) => CommandData::Scaling(r),
+                    None => CommandData::None,
+                }
+            }
             _ => CommandData::None,
         }
+    }
+
+    /// Stop and quick-stop ramps (ns) of the running configuration.
+    fn ramps(&self, status: &Status) -> Option<(i64, i64)> {
+        let crc = status.config_crc;
+        let (_, cfg) = self
+            .configs
+            .iter()
+            .flatten()
+            .find(|(c, _)| *c == crc && crc != 0)?;
+        let a = Active::new(cfg, crc);
+        Some((a.stop_ns, a.quick_stop_ns))
     }
 
     /// A commit of the written values if their CRC is `want`: every parameter

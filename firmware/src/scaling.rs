@@ -52,6 +52,50 @@ const PEAK_D2: f32 = 5.773_503;
 /// Transition durations tried, relative to the one from rest (shortest first).
 const CANDIDATES: [f32; 9] = [0.2, 0.3, 0.45, 0.65, 1.0, 1.4, 2.0, 2.8, 4.0];
 
+/// A [`TimeScaling::retarget`] the receive side ran ahead of the tick, on a
+/// copy of the time-scaling the tick published ([`crate::inbox::Status`]).
+///
+/// Why there: from a constant σ a transition is sized in closed form, but
+/// in the middle of another one the sampled search costs ~7 500
+/// instructions, more than twice the tick's whole budget (3 000, QEMU),
+/// while the receive side already spends ~25 000 on a segment. Deferring or
+/// spreading the search over ticks would have to date the new transition
+/// later, identically on every node; here nothing moves: the tick adopts
+/// the result only if its state and the command's instant, target and ramp
+/// are exactly those it was computed from, so it is bit for bit what the
+/// tick would have computed (same inputs, same code). Otherwise (another
+/// command or a stop in between, a fault of the drive itself) the tick
+/// computes it, correct but over the budget in that rare tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Retarget {
+    pub from: TimeScaling,
+    pub t_ns: i64,
+    pub target_q16: u32,
+    pub full_ns: i64,
+    pub to: TimeScaling,
+}
+
+impl Retarget {
+    /// `from.retarget(t_ns, target_q16, full_ns)` ahead of time; `None` at a
+    /// constant σ (closed form, cheap in the tick).
+    // Never inlined: the receive side's, never the tick's code.
+    #[inline(never)]
+    pub fn prepare(from: &TimeScaling, t_ns: i64, target_q16: u32, full_ns: i64) -> Option<Self> {
+        if !from.in_transition() {
+            return None;
+        }
+        let mut to = *from;
+        to.retarget(t_ns, target_q16, full_ns);
+        Some(Self {
+            from: *from,
+            t_ns,
+            target_q16,
+            full_ns,
+            to,
+        })
+    }
+}
+
 /// Time-scaling state, anchored at host time t₀ and plan time s₀.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeScaling {
@@ -73,12 +117,12 @@ pub struct TimeScaling {
 
 impl TimeScaling {
     /// σ = 1 from host time `t0_ns`, plan time `s0_ns`.
-    pub fn nominal(t0_ns: i64, s0_ns: i64) -> Self {
+    pub const fn nominal(t0_ns: i64, s0_ns: i64) -> Self {
         Self::constant(t0_ns, s0_ns, UNIT_Q16)
     }
 
     /// σ = `q16`/65 536 from host time `t0_ns`, plan time `s0_ns` (at rest if 0).
-    pub fn constant(t0_ns: i64, s0_ns: i64, q16: u32) -> Self {
+    pub const fn constant(t0_ns: i64, s0_ns: i64, q16: u32) -> Self {
         Self {
             phase: if q16 == 0 {
                 Phase::Rest
@@ -245,6 +289,26 @@ impl TimeScaling {
         self.ramp_ns = ramp_ns;
         self.full_ns = full_ns;
         self.target_q16 = target_q16;
+    }
+
+    /// [`TimeScaling::retarget`], or the result `ready` the receive side
+    /// computed if it was computed from this very state and arguments.
+    pub fn retarget_ready(
+        &mut self,
+        t_ns: i64,
+        target_q16: u32,
+        full_ns: i64,
+        ready: Option<&Retarget>,
+    ) {
+        match ready {
+            Some(r)
+                if r.from == *self
+                    && (r.t_ns, r.target_q16, r.full_ns) == (t_ns, target_q16, full_ns) =>
+            {
+                *self = r.to
+            }
+            _ => self.retarget(t_ns, target_q16, full_ns),
+        }
     }
 
     /// Slow to rest from host time `t_ns` (hold, stop, fault).

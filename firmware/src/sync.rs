@@ -1,6 +1,9 @@
 //! Host time from TimeSync frames: offset and rate from pairs (host transmit
 //! time of sync k, local receive time of sync k), all integer arithmetic.
 
+/// A command dated further back than this (µs) applies on receipt instead.
+pub const APPLY_LATE_MAX_US: i64 = 100_000;
+
 /// Time-sync estimator of one node.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SyncEstimator {
@@ -107,6 +110,24 @@ impl SyncEstimator {
     /// The rate correction (ns) over `dl_ns` of local time.
     fn correction_ns(&self, dl_ns: i64) -> i64 {
         dl_ns.saturating_mul(self.ppb) / 1_000_000_000
+    }
+
+    /// Host time (ns) a hold, resume, stop or override with argument `arg`
+    /// (host time in µs, wrapping; 0 = on receipt) received at local time
+    /// `local_us` applies at: `arg` if it is up to [`APPLY_LATE_MAX_US`] old
+    /// (every node then computes the same time-scaling, closed form from
+    /// that instant), else then; 0 without a time base.
+    pub fn apply_ns(&self, arg: u32, local_us: u64) -> i64 {
+        let Some(now) = self.host_us(local_us) else {
+            return 0;
+        };
+        let d = arg.wrapping_sub(now as u32) as i32 as i64;
+        let t = if arg != 0 && (-APPLY_LATE_MAX_US..=0).contains(&d) {
+            now + d
+        } else {
+            now
+        };
+        t * 1000
     }
 
     /// Host time (ns) at local time `local_us`.

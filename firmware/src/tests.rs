@@ -673,6 +673,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
         code: FaultCode::HostEmergency,
         node: 0,
         rx_us: r.t,
+        ready: None,
     };
     assert!(emergency.is_urgent());
     assert!(!inbox.is_full());
@@ -722,4 +723,128 @@ fn only_stop_quick_stop_clear_fault_and_emergency_are_urgent() {
         assert!(!cmd(c).is_urgent(), "{c:?}");
     }
     assert!(!Item::PartIgnored(Reject::Duplicate).is_urgent());
+}
+
+/// A resume, hold, override, stop or peer emergency in the middle of a
+/// transition is sized by the receive side (the sampled search is over the
+/// tick's budget); the drive takes that result, which is exactly what it
+/// would have computed itself, and only when it was computed from its own
+/// state: a stale one is computed again.
+#[test]
+fn mid_transition_changes_are_sized_by_the_receive_side() {
+    use crate::inbox::{CommandData, Item};
+    use crate::scaling::{Retarget, TimeScaling};
+    let segs = segments(4, 0.3);
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(200);
+    assert_eq!(r.command(CommandCode::FeedHold, 0), 0);
+    // 100 ms into the 400 ms hold ramp.
+    r.run(100);
+    let cmd = |c: CommandCode, arg2: u16| Command {
+        command: c as u8,
+        token: 200 + c as u8,
+        arg: 0,
+        arg2,
+    };
+    let cases = [
+        (cmd(CommandCode::Resume, 0), true),
+        (cmd(CommandCode::Override, 500), false),
+        (cmd(CommandCode::Stop, 0), false),
+        (cmd(CommandCode::QuickStop, 0), false),
+    ];
+    for (c, resume_first) in cases {
+        let mut r2 = Rig::loaded(&segs);
+        r2.start();
+        r2.run(200);
+        assert_eq!(r2.command(CommandCode::FeedHold, 0), 0);
+        r2.run(100);
+        if !resume_first {
+            // From the middle of the resume ramp instead.
+            r2.run(400);
+            assert_eq!(r2.command(CommandCode::Resume, 0), 0);
+            r2.run(100);
+        }
+        let before = r2.node.drive.scaling();
+        assert!(before.in_transition(), "{c:?}");
+        let rx = RxFrame {
+            frame: c.to_frame(0),
+            timestamp_us: r2.t,
+        };
+        let item = r2
+            .node
+            .receiver
+            .on_frame(&rx, r2.node.drive.status())
+            .unwrap();
+        let Item::Command {
+            data: CommandData::Scaling(p),
+            rx_us,
+            ..
+        } = item
+        else {
+            panic!("{c:?}: not sized by the receive side: {item:?}");
+        };
+        assert_eq!(p.from, before, "{c:?}");
+        let mut own = before;
+        own.retarget(p.t_ns, p.target_q16, p.full_ns);
+        assert_eq!(p.to, own, "{c:?}: not what the tick computes");
+        assert_ne!(p.to, before, "{c:?}: no change");
+        // The drive takes it (a marked copy, to see it is the one taken).
+        let mut marked = p;
+        marked.to.s0_ns += 1;
+        let mut d = r2.node.drive.clone();
+        d.take(&Item::Command {
+            command: c,
+            rx_us,
+            data: CommandData::Scaling(marked),
+        });
+        assert_eq!(
+            d.scaling(),
+            marked.to,
+            "{c:?}: the prepared change not taken"
+        );
+        // Stale (the drive's state moved on): computed again, the same.
+        let mut stale = marked;
+        stale.from.t0_ns -= 1;
+        let mut d = r2.node.drive.clone();
+        d.take(&Item::Command {
+            command: c,
+            rx_us,
+            data: CommandData::Scaling(stale),
+        });
+        assert_eq!(d.scaling(), own, "{c:?}: a stale preparation taken");
+        assert_ne!(d.scaling(), marked.to);
+    }
+    // A peer's emergency in a resume ramp: the stop is prepared as well.
+    r.run(400);
+    assert_eq!(r.command(CommandCode::Resume, 0), 0);
+    r.run(100);
+    let before = r.node.drive.scaling();
+    let rx = RxFrame {
+        frame: Emergency {
+            code: FaultCode::FollowingError as u8,
+            state: State::Stopping as u8,
+            segment: 0,
+            plan_time_us: 0,
+        }
+        .to_frame(3),
+        timestamp_us: r.t,
+    };
+    let item = r
+        .node
+        .receiver
+        .on_frame(&rx, r.node.drive.status())
+        .unwrap();
+    let Item::Emergency { ready: Some(p), .. } = item else {
+        panic!("emergency not sized: {item:?}");
+    };
+    assert_eq!(p.from, before);
+    assert_eq!(
+        Retarget::prepare(&TimeScaling::nominal(0, 0), 0, 0, 1),
+        None
+    );
+    r.node.drive.take(&item);
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_ne!(p.to, before);
+    assert_eq!(r.node.drive.scaling(), p.to);
 }

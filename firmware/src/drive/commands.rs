@@ -10,9 +10,8 @@ use triquint_shared::protocol::{
 use super::{Drive, StopReason};
 use crate::inbox::{CommandData, Prepared};
 use crate::scaling::UNIT_Q16;
-
-/// A command dated further back than this (µs) applies on receipt instead.
-pub const APPLY_LATE_MAX_US: i64 = 100_000;
+#[cfg(doc)]
+use crate::sync::SyncEstimator;
 
 impl<const Q: usize> Drive<Q> {
     pub(super) fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
@@ -53,14 +52,15 @@ impl<const Q: usize> Drive<Q> {
                 match (self.state, self.active) {
                     (State::Running, _) => {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.begin_stop_at(StopReason::Commanded, quick, t);
+                        self.begin_stop_at(StopReason::Commanded, quick, t, data.retarget());
                         FaultCode::None
                     }
                     (State::Stopping, Some(a)) => {
                         // A quick stop during a stop: the shorter ramp, from here.
                         if quick {
                             let t = self.apply_ns(c.arg, local_us);
-                            self.scaling.retarget(t, 0, a.quick_stop_ns);
+                            let r = data.retarget();
+                            self.scaling.retarget_ready(t, 0, a.quick_stop_ns, r);
                         }
                         FaultCode::None
                     }
@@ -91,7 +91,7 @@ impl<const Q: usize> Drive<Q> {
                 State::Running => {
                     if self.stop_reason != Some(StopReason::Hold) {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.begin_stop_at(StopReason::Hold, false, t);
+                        self.begin_stop_at(StopReason::Hold, false, t, data.retarget());
                     }
                     FaultCode::None
                 }
@@ -105,7 +105,8 @@ impl<const Q: usize> Drive<Q> {
                 (State::Running, Some(a)) => {
                     if self.stop_reason == Some(StopReason::Hold) {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.scaling.retarget(t, self.override_q16, a.stop_ns);
+                        let (k, r) = (self.override_q16, data.retarget());
+                        self.scaling.retarget_ready(t, k, a.stop_ns, r);
                         self.stop_reason = None;
                     }
                     FaultCode::None
@@ -127,7 +128,8 @@ impl<const Q: usize> Drive<Q> {
                         (self.state, self.stop_reason, self.active)
                     {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.scaling.retarget(t, self.override_q16, a.stop_ns);
+                        let (k, r) = (self.override_q16, data.retarget());
+                        self.scaling.retarget_ready(t, k, a.stop_ns, r);
                     }
                     FaultCode::None
                 };
@@ -164,21 +166,10 @@ impl<const Q: usize> Drive<Q> {
         self.command_ack(c, r, 0);
     }
 
-    /// Host time (ns) a hold, resume, stop or override with argument `arg`
-    /// (host time in µs, wrapping; 0 = on receipt) applies at: `arg` if it
-    /// is up to [`APPLY_LATE_MAX_US`] old (every node then computes the same
-    /// time-scaling, closed form from that instant), else now.
+    /// Host time (ns) a command with argument `arg` applies at
+    /// ([`SyncEstimator::apply_ns`]).
     pub(super) fn apply_ns(&self, arg: u32, local_us: u64) -> i64 {
-        let Some(now) = self.sync.host_us(local_us) else {
-            return 0;
-        };
-        let d = arg.wrapping_sub(now as u32) as i32 as i64;
-        let t = if arg != 0 && (-APPLY_LATE_MAX_US..=0).contains(&d) {
-            now + d
-        } else {
-            now
-        };
-        t * 1000
+        self.sync.apply_ns(arg, local_us)
     }
 
     /// The configuration's override cap (per mille; 1000 without one).

@@ -8,11 +8,20 @@ use triquint_shared::protocol::{FaultCode, Heartbeat, State};
 
 use super::{Drive, StopReason};
 use crate::active::Active;
+use crate::scaling::Retarget;
 
 impl<const Q: usize> Drive<Q> {
-    pub(super) fn on_emergency(&mut self, code: FaultCode, local_us: u64) {
+    pub(super) fn on_emergency(
+        &mut self,
+        code: FaultCode,
+        local_us: u64,
+        ready: Option<&Retarget>,
+    ) {
         match self.state {
-            State::Running => self.begin_stop(StopReason::Fault(code), false, local_us),
+            State::Running => {
+                let t = self.sync.host_ns(local_us).unwrap_or(0);
+                self.begin_stop_at(StopReason::Fault(code), false, t, ready)
+            }
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
@@ -39,9 +48,9 @@ impl<const Q: usize> Drive<Q> {
         }
         let peer = h.state().ok();
         if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
-            self.on_emergency(FaultCode::PeerEmergency, rx_us);
+            self.on_emergency(FaultCode::PeerEmergency, rx_us, None);
         } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
-            self.on_emergency(FaultCode::PeerLost, rx_us);
+            self.on_emergency(FaultCode::PeerLost, rx_us, None);
         }
     }
 

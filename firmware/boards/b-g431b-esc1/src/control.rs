@@ -38,11 +38,7 @@ pub type Kept = ([f32; PARAM_COUNT], u32);
 /// Committed configuration the storage task should keep in flash.
 pub static TO_STORE: Mutex<RefCell<Option<Kept>>> = Mutex::new(RefCell::new(None));
 /// What the receive side needs to know of the drive, published every tick.
-pub static STATUS: Mutex<Cell<Status>> = Mutex::new(Cell::new(Status {
-    config_crc: 0,
-    flushes: 0,
-    may_rebase: true,
-}));
+pub static STATUS: Mutex<Cell<Status>> = Mutex::new(Cell::new(Status::INITIAL));
 /// Ticks run, for the heartbeat LED and debugging.
 pub static TICKS: AtomicU32 = AtomicU32::new(0);
 
