@@ -53,7 +53,7 @@ const PEAK_D2: f32 = 5.773_503;
 const CANDIDATES: [f32; 9] = [0.2, 0.3, 0.45, 0.65, 1.0, 1.4, 2.0, 2.8, 4.0];
 
 /// A [`TimeScaling::retarget`] the receive side ran ahead of the tick, on a
-/// copy of the time-scaling the tick published ([`crate::inbox::Status`]).
+/// copy of the time-scaling the tick published (`inbox::Status`).
 ///
 /// Why there: from a constant σ a transition is sized in closed form, but
 /// in the middle of another one the sampled search costs ~7 500
