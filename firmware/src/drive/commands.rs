@@ -45,7 +45,14 @@ impl<const Q: usize> Drive<Q> {
             return;
         };
         let r = match code {
-            CommandCode::Arm => self.arm(local_us),
+            CommandCode::Arm => {
+                // With the override the plan starts at: set before the upload
+                // (another process), the host learns it here.
+                let r = self.arm(local_us);
+                let pm = self.override_permille();
+                self.command_ack(c, r, pm);
+                return;
+            }
             CommandCode::Start => self.start(c.arg, local_us),
             CommandCode::Stop | CommandCode::QuickStop => {
                 let quick = code == CommandCode::QuickStop;

@@ -22,6 +22,8 @@ pub struct Keys {
     pub override_pm: u16,
     /// Ctrl-C and `s` presses that stopped.
     stops: u32,
+    /// The drives' override as last learnt from the session.
+    learnt: Option<u32>,
 }
 
 impl Keys {
@@ -55,7 +57,20 @@ impl Keys {
             held: false,
             override_pm,
             stops: 0,
+            learnt: None,
         })
+    }
+
+    /// The override the drives hold, as the session knows it (`None`: not
+    /// known): `+`/`-` step from it. Taken when it changes, so a key
+    /// pressed before its own acknowledgement is not undone by the old value.
+    pub fn learn(&mut self, drives_pm: Option<u32>) {
+        if drives_pm != self.learnt {
+            self.learnt = drives_pm;
+            if let Some(pm) = drives_pm.and_then(|pm| u16::try_from(pm).ok()) {
+                self.override_pm = pm.max(1);
+            }
+        }
     }
 
     /// The commands for the keys pressed since the last call; `cap_pm` is
@@ -124,6 +139,7 @@ mod tests {
             held: false,
             override_pm: 1000,
             stops: 0,
+            learnt: None,
         }
     }
 
@@ -145,6 +161,27 @@ mod tests {
         assert_eq!(k.key(3, cap), Some(Feed::Stop));
         assert_eq!(k.key(3, cap), Some(Feed::QuickStop));
         // Never dropped for real here: nothing to restore.
+        std::mem::forget(k);
+    }
+
+    #[test]
+    fn override_keys_step_from_the_override_the_drives_hold() {
+        let mut k = keys();
+        let cap = 1500;
+        // Set to 50 % before the upload (another process), learnt at Arm.
+        k.learn(Some(500));
+        assert_eq!(k.key(b'+', cap), Some(Feed::Override(600)));
+        // Pressed again before the drives acknowledged 60 %: the learnt
+        // value, unchanged, does not undo it.
+        k.learn(Some(500));
+        assert_eq!(k.key(b'+', cap), Some(Feed::Override(700)));
+        k.learn(Some(700));
+        // Changed by another process during the upload.
+        k.learn(Some(300));
+        assert_eq!(k.key(b'-', cap), Some(Feed::Override(200)));
+        // Not known (a drive older than the Arm answer): as it was.
+        k.learn(None);
+        assert_eq!(k.key(b'+', cap), Some(Feed::Override(300)));
         std::mem::forget(k);
     }
 }

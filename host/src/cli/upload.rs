@@ -222,6 +222,9 @@ pub fn run_plan(
     let outcome: Outcome = loop {
         if let Some(k) = keys.as_deref_mut() {
             let cap_pm = (override_cap * 1000.0).round() as u16;
+            // `+`/`-` step from the override the drives hold (one set before
+            // the upload is reported in their answer to Arm).
+            k.learn(session.progress().override_permille);
             for f in k.poll(cap_pm) {
                 session.feed(f);
             }

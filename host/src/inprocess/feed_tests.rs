@@ -612,3 +612,49 @@ fn a_stop_from_another_station_ends_the_session_stopped() {
         assert_eq!(n.node.override_permille(), 700);
     }
 }
+
+/// An override set before the upload (`triquint override 70` from another
+/// process) is learnt from the drives' answers to Arm: the session's plan
+/// time, which its deadline follows, advances at 70 %, not at the slowest
+/// override (0.1 %), and the progress line (and the `+`/`-` keys) have it.
+#[test]
+fn an_override_set_before_the_upload_is_learnt_from_the_answer_to_arm() {
+    use triquint_shared::protocol::{Command, CommandCode};
+    let plan = testplan::paper_case2().unwrap();
+    let (mut sim, mut session) = session_at_start(&plan);
+    let before = Command {
+        command: CommandCode::Override as u8,
+        token: 0xC9,
+        arg: 0,
+        arg2: 700,
+    };
+    sim.host_send(before.to_frame(0));
+    sim.run_until(sim.now_ns() + 5_000_000).unwrap();
+    for n in &sim.nodes {
+        assert_eq!(n.node.override_permille(), 700, "not set before the upload");
+    }
+    let mut checked = 0;
+    let outcome = loop {
+        let start = session.start_us() * 1000;
+        let t = sim.now_ns();
+        if start > 0 && t > start + (1 + checked) * 1_000_000_000 && checked < 3 {
+            checked += 1;
+            let p = session.progress();
+            assert_eq!(p.override_permille, Some(700), "not learnt");
+            let drives_us = sim.nodes[0].node.plan_ns() / 1000;
+            let host_us = p.plan_time_us as i64;
+            assert!(
+                (host_us - drives_us).abs() < 20_000,
+                "host's plan time {host_us} µs, the drives' {drives_us} µs"
+            );
+        }
+        if let Some(o) = step(&mut sim, &mut session, 120_000_000_000) {
+            break o;
+        }
+    };
+    assert_eq!(checked, 3);
+    assert!(
+        outcome.completed && outcome.faults.is_empty(),
+        "{outcome:?}"
+    );
+}

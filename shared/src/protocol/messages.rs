@@ -225,7 +225,7 @@ messages! {
         result: u8 @ 2 ["", 1.0, FaultCode],
         /// State after the command.
         state: u8 @ 3 ["", 1.0, State],
-        /// ConfigCommit: CRC-32 the node computed; Override: the cap (per mille); otherwise 0.
+        /// ConfigCommit: CRC-32 the node computed; Override: the cap (per mille); Arm: the feed override the plan starts at (per mille); otherwise 0.
         value: u32 @ 4 ["", 1.0],
     }
     /// Periodic status of node n.

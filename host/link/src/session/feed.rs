@@ -62,7 +62,8 @@ pub(crate) struct FeedState {
     pending: Vec<(Feed, u8)>,
     /// Override commands seen (own or another station's): token, per mille.
     overrides: Vec<(u8, u16)>,
-    /// An acknowledged override (per mille).
+    /// The override the drives hold (per mille): acknowledged to an
+    /// Override, or reported in the answer to Arm.
     pub override_permille: Option<u32>,
     /// A drive acknowledged a stop (or reported Stopping without a fault).
     pub stopped: bool,
@@ -119,6 +120,12 @@ impl FeedState {
             *slot = Some((*a).into());
         }
         let done = a.result == FaultCode::None as u8;
+        // Arm's answer carries the override the plan starts at: one set
+        // before this session (another process) is known from here on.
+        // 0: a drive older than that answer.
+        if a.command == CommandCode::Arm as u8 && done && a.value > 0 {
+            self.override_permille = Some(a.value);
+        }
         if a.command == CommandCode::Override as u8 && done {
             if let Some((_, pm)) = self.overrides.iter().rev().find(|(t, _)| *t == a.token) {
                 self.override_permille = Some(*pm as u32);

@@ -56,7 +56,8 @@ pub struct Progress {
     pub plan_time_us: u64,
     /// A drive reports a feed hold.
     pub held: bool,
-    /// The feed override acknowledged last (per mille; `None`: none seen).
+    /// The feed override the drives hold (per mille): acknowledged last,
+    /// or reported in the answer to Arm; `None`: not known.
     pub override_permille: Option<u32>,
     /// A stop was acknowledged: the plan ends early, at rest on its path.
     pub stopped: bool,

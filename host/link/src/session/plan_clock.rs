@@ -8,8 +8,8 @@ use triquint_shared::protocol::flags;
 
 use super::nodes::Nodes;
 
-/// Rate assumed for an override a drive reports without the host having
-/// seen the command that set it (set before this session): the slowest
+/// Rate assumed for an override a drive reports without the host knowing
+/// its value (a drive whose answer to Arm does not carry it): the slowest
 /// the drives take (1 per mille), so the deadline errs late, never early;
 /// a drive that falls silent still ends the session.
 const UNKNOWN_OVERRIDE: f64 = 0.001;
@@ -20,7 +20,7 @@ pub(crate) struct PlanClock {
     plan_us: f64,
     /// Host time of the last update (µs; 0 before the start).
     last_us: u64,
-    /// The latest override seen acknowledged (per mille).
+    /// The override the drives hold (per mille; acknowledged, or from Arm).
     pub override_permille: Option<u32>,
     /// Whether any drive reported a hold at the last update.
     pub held: bool,
