@@ -105,6 +105,15 @@ fn segments(n: usize, h: f64) -> Vec<WireSegment> {
 }
 
 impl Rig {
+    /// The receive side's item for `frame`, received now (the tick is not run).
+    fn receive(&mut self, frame: Frame) -> Option<crate::inbox::Item> {
+        let rx = RxFrame {
+            frame,
+            timestamp_us: self.t,
+        };
+        self.node.receiver.on_frame(&rx, self.node.drive.status())
+    }
+
     fn new() -> Self {
         Self::with_stop_time(0.4)
     }
@@ -633,11 +642,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
     let (mut queued, mut refused) = (0, 0);
     for s in &segs[CAP..] {
         for f in s.frames(false) {
-            let rx = RxFrame {
-                frame: f,
-                timestamp_us: r.t,
-            };
-            if let Some(item) = r.node.receiver.on_frame(&rx, r.node.drive.status()) {
+            if let Some(item) = r.receive(f) {
                 assert!(matches!(item, Item::Segment(_)));
                 match offer(&mut inbox, item) {
                     Ok(()) => queued += 1,
@@ -654,15 +659,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
         arg: 0,
         arg2: 0,
     };
-    let rx = RxFrame {
-        frame: stop.to_frame(2),
-        timestamp_us: r.t,
-    };
-    let item = r
-        .node
-        .receiver
-        .on_frame(&rx, r.node.drive.status())
-        .unwrap();
+    let item = r.receive(stop.to_frame(2)).unwrap();
     assert!(item.is_urgent());
     assert!(
         offer(&mut inbox, item).is_ok(),
@@ -767,15 +764,7 @@ fn mid_transition_changes_are_sized_by_the_receive_side() {
         }
         let before = r2.node.drive.scaling();
         assert!(before.in_transition(), "{c:?}");
-        let rx = RxFrame {
-            frame: c.to_frame(0),
-            timestamp_us: r2.t,
-        };
-        let item = r2
-            .node
-            .receiver
-            .on_frame(&rx, r2.node.drive.status())
-            .unwrap();
+        let item = r2.receive(c.to_frame(0)).unwrap();
         let Item::Command {
             data: CommandData::Scaling(p),
             rx_us,
@@ -820,21 +809,13 @@ fn mid_transition_changes_are_sized_by_the_receive_side() {
     assert_eq!(r.command(CommandCode::Resume, 0), 0);
     r.run(100);
     let before = r.node.drive.scaling();
-    let rx = RxFrame {
-        frame: Emergency {
-            code: FaultCode::FollowingError as u8,
-            state: State::Stopping as u8,
-            segment: 0,
-            plan_time_us: 0,
-        }
-        .to_frame(3),
-        timestamp_us: r.t,
+    let peer = Emergency {
+        code: FaultCode::FollowingError as u8,
+        state: State::Stopping as u8,
+        segment: 0,
+        plan_time_us: 0,
     };
-    let item = r
-        .node
-        .receiver
-        .on_frame(&rx, r.node.drive.status())
-        .unwrap();
+    let item = r.receive(peer.to_frame(3)).unwrap();
     let Item::Emergency { ready: Some(p), .. } = item else {
         panic!("emergency not sized: {item:?}");
     };
