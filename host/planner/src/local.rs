@@ -753,6 +753,24 @@ impl Problem {
         self.inner_at(h, x0, MAX_INNER_ROUNDS)
     }
 
+    /// [`Problem::inner_via_relaxation`] for a final plan: the relaxation's
+    /// direct solve (each joint at its own exact min-max jerk, no
+    /// interior-point solve) when it meets every limit. Only at the end:
+    /// the search and the descent start better from the interior-point
+    /// solve's central knot derivatives (see [`Problem::inner_at`]).
+    pub(crate) fn inner_final(&self, h: &[f64], x0: &[Vec<f64>; 3]) -> Option<Solution> {
+        if !self.jerk_only
+            && self.watch.cancelled().is_none()
+            && let Some(x) = self.relaxed().jerk_only_direct(h, x0)
+        {
+            let full = self.evaluate(h, &x);
+            if full.violation == 0.0 {
+                return Some(full);
+            }
+        }
+        self.inner_via_relaxation(h, x0)
+    }
+
     /// [`Problem::inner_via_relaxation`] with at most `max_rounds` cutting-plane rounds.
     fn inner_at(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
         // The relaxation's probe keeps the interior-point solve: its knot

@@ -295,7 +295,7 @@ fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solution> {
                 .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
                 .collect();
         let f = fine(p, h.iter().sum());
-        f.inner_via_relaxation(&h, &crate::search::scaled_x(&s.x, alpha))
+        f.inner_final(&h, &crate::search::scaled_x(&s.x, alpha))
     };
     let ok = |x: &Solution| meets_every_limit(p, x);
     let mut lo = 1.0;

@@ -339,6 +339,10 @@ pub struct MinTimeFailure {
     pub best: Option<Box<Solution>>,
 }
 
+/// Relative distance from the relaxation's shortest time within which a
+/// time-scaled shape is taken to meet it (the scaling is bisected to 1e-9).
+const LOWER_BOUND_MET: f64 = 1e-8;
+
 /// Shortest total time with a plan meeting every limit, and a plan there.
 /// It does not depend on the job's total-time limit, so a job's verdict
 /// and its shortest time agree whatever bound is asked.
@@ -388,6 +392,12 @@ pub fn min_time(
     // took twice the time and ended at the same plan (Case II, the 10- and
     // 20-point closed curves).
     if let Some(start) = shortest_start {
+        // It meets every limit at the relaxation's own shortest time, a
+        // lower bound of this problem's: no descent can shorten it (a
+        // point-to-point move, where only jerk binds, skips six LPs).
+        if total_of(&start) <= t_low * (1.0 + LOWER_BOUND_MET) {
+            return Ok((start, probe));
+        }
         let best = template.descend_time(&start);
         return Ok((best, probe));
     }
