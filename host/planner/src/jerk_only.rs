@@ -11,7 +11,7 @@
 //! (k, u). It is solved by a primal active-set method (dense, exact at its
 //! vertex), and cut points are added at each segment's exact maximum of
 //! |J_k| (a quadratic in u: at u = 0, 1 or its vertex) until the LP's s
-//! equals the exact maximum to 1e-12: the LP bound is a lower bound and the
+//! equals the exact maximum to 1e-9: the LP bound is a lower bound and the
 //! exact maximum of its point an upper bound, so the answer is certified.
 //! Anything unexpected (rank loss, no progress, too many iterations) returns
 //! None and the caller falls back to the interior-point solve.
@@ -26,8 +26,11 @@ use crate::local::Problem;
 /// Largest number of knots solved here (dense algebra: beyond it the
 /// interior-point solve of the banded problem is the cheaper).
 pub(crate) const MAX_KNOTS: usize = 64;
-/// Relative gap between the LP bound and the exact maximum that ends the cuts.
-const GAP: f64 = 1e-12;
+/// Relative gap between the LP bound and the exact maximum that ends the
+/// cuts: the interior-point solves' accuracy. The gap falls about fourfold a
+/// round, so 1e-12 cost a fifth more instructions on Case II (same
+/// intervals, maxima within 4e-11).
+const GAP: f64 = 1e-9;
 /// Cutting-plane rounds at most.
 const ROUNDS: usize = 80;
 
