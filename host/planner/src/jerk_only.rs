@@ -35,10 +35,11 @@ const GAP: f64 = 1e-9;
 const ROUNDS: usize = 80;
 
 /// One cut of one joint: ±(a·z + b) ≤ s in the reduced variables.
+/// As a row of G in y = (z, s): (±a, −1) · y ≤ ∓b = rhs.
 struct Row {
-    a: DVector<f64>,
-    b: f64,
-    sign: f64,
+    g: DVector<f64>,
+    rhs: f64,
+    norm: f64,
 }
 
 impl Problem {
@@ -103,18 +104,22 @@ impl Problem {
         let basis = q.columns(m, d).into_owned();
         let xp = DVector::from_column_slice(xp);
         let mut rows: Vec<Row> = Vec::new();
-        let cut_at = |k: usize, u: f64, rows: &mut Vec<Row>| {
-            let (a, c) = form(k, u);
-            let ar = basis.tr_mul(&a);
-            let b = a.dot(&xp) + c;
-            for sign in [1.0, -1.0] {
-                rows.push(Row {
-                    a: ar.clone(),
-                    b,
-                    sign,
-                });
-            }
-        };
+        let cut_at =
+            |k: usize, u: f64, rows: &mut Vec<Row>| {
+                let (a, c) = form(k, u);
+                let ar = basis.tr_mul(&a);
+                let b = a.dot(&xp) + c;
+                for sign in [1.0, -1.0] {
+                    let g = DVector::from_fn(ar.len() + 1, |c, _| {
+                        if c < ar.len() { sign * ar[c] } else { -1.0 }
+                    });
+                    rows.push(Row {
+                        norm: g.norm(),
+                        g,
+                        rhs: -sign * b,
+                    });
+                }
+            };
         // Knot jerks (u = 0 of every segment but the first, whose is zero)
         // and each segment's middle.
         for k in 0..nseg {
@@ -155,8 +160,17 @@ impl Problem {
         let mut z = DVector::zeros(d);
         // Interior cut points added per segment, in order (for extrapolation).
         let mut history: Vec<Vec<f64>> = vec![Vec::new(); nseg];
+        // The optimal vertex's rows: after a round's new cuts, the dual
+        // simplex restarts from it (a few pivots, where the primal method
+        // walks up from one active row again).
+        let mut vertex: Option<Vec<usize>> = None;
         for _ in 0..ROUNDS {
-            let (z_lp, s_lp) = chebyshev(&rows, z)?;
+            let warm = vertex.take().and_then(|b| dual_simplex(&rows, b));
+            let (z_lp, s_lp, at) = match warm {
+                Some(w) => w,
+                None => chebyshev(&rows, z)?,
+            };
+            vertex = at;
             z = z_lp;
             let x = &xp + &basis * &z;
             let mut worst: f64 = 0.0;
@@ -199,23 +213,73 @@ impl Problem {
     }
 }
 
+/// An optimal (z, s), and the rows of its vertex when it is one.
+type Optimum = (DVector<f64>, f64, Option<Vec<usize>>);
+
+/// min s subject to σ_i(a_i·z + b_i) ≤ s by the dual simplex method from
+/// `basis`, the rows of an optimal vertex before rows were added: its
+/// multipliers stay feasible (≥ 0, summing to one), the most violated row
+/// enters and the ratio test picks the row that leaves. s at any such
+/// basis is a lower bound, so the exact check after the LP still
+/// certifies. None on anything unexpected (the caller solves from scratch).
+fn dual_simplex(rows: &[Row], mut basis: Vec<usize>) -> Option<Optimum> {
+    let dim = rows.first()?.g.len();
+    if basis.len() != dim {
+        return None;
+    }
+    let mut cost = DVector::zeros(dim);
+    cost[dim - 1] = 1.0;
+    for _ in 0..(4 * dim + 20) {
+        let gb = DMatrix::from_fn(dim, dim, |r, c| rows[basis[r]].g[c]);
+        let y = gb
+            .clone()
+            .lu()
+            .solve(&DVector::from_fn(dim, |r, _| rows[basis[r]].rhs))?;
+        let gbt = gb.transpose().lu();
+        let lambda = gbt.solve(&-&cost)?;
+        if lambda.iter().any(|&l| l.is_nan() || l < -1e-12) {
+            return None;
+        }
+        let scale = y.amax().max(1e-300);
+        let mut enter: Option<(usize, f64)> = None;
+        for (i, row) in rows.iter().enumerate() {
+            if basis.contains(&i) {
+                continue;
+            }
+            let v = (row.g.dot(&y) - row.rhs) / row.norm;
+            if v > 1e-14 * scale && enter.is_none_or(|e| v > e.1) {
+                enter = Some((i, v));
+            }
+        }
+        let Some((r, _)) = enter else {
+            let d = dim - 1;
+            return Some((y.rows(0, d).into_owned(), y[d], Some(basis)));
+        };
+        // λ_B − t w with G_Bᵀ w = G_rᵀ: the first multiplier to reach zero leaves.
+        let w = gbt.solve(&rows[r].g)?;
+        let mut leave: Option<(usize, f64)> = None;
+        for k in 0..dim {
+            if w[k] > 1e-12 * w.amax() {
+                let t = lambda[k].max(0.0) / w[k];
+                if leave.is_none_or(|l| t < l.1) {
+                    leave = Some((k, t));
+                }
+            }
+        }
+        basis[leave?.0] = r;
+    }
+    None
+}
+
 /// min s subject to σ_i(a_i·z + b_i) ≤ s, from `z`: a primal active-set
 /// method. Returns (z, s) at an optimal vertex, or None.
-fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<(DVector<f64>, f64)> {
+fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<Optimum> {
     let d = z.len();
     let dim = d + 1;
     let m = rows.len();
-    // Constraint i as a row of G in (z, s): (σ a, −1) · y ≤ −σ b = g_i.
-    let mut gm = DMatrix::<f64>::zeros(m, dim);
-    let mut g = DVector::<f64>::zeros(m);
-    for (i, r) in rows.iter().enumerate() {
-        for c in 0..d {
-            gm[(i, c)] = r.sign * r.a[c];
-        }
-        gm[(i, d)] = -1.0;
-        g[i] = -r.sign * r.b;
-    }
-    let norms: Vec<f64> = (0..m).map(|i| gm.row(i).norm()).collect();
+    let gm = DMatrix::<f64>::from_fn(m, dim, |i, c| rows[i].g[c]);
+    let g = DVector::<f64>::from_fn(m, |i, _| rows[i].rhs);
+    let norms: Vec<f64> = rows.iter().map(|r| r.norm).collect();
     let mut y = DVector::zeros(dim);
     y.rows_mut(0, d).copy_from(&z);
     // s at the largest σ(a·z + b): feasible, and that row active.
@@ -262,7 +326,8 @@ fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<(DVector<f64>, f64)> {
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
             if lmin >= -1e-12 {
-                return Some((y.rows(0, d).into_owned(), y[d]));
+                let vertex = (w == dim).then_some(active);
+                return Some((y.rows(0, d).into_owned(), y[d], vertex));
             }
             let i = active.remove(worst);
             is_active[i] = false;
