@@ -364,3 +364,78 @@ fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<Optimum> {
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+    use std::sync::Arc;
+
+    use super::*;
+    use crate::Job;
+    use crate::search::SplitMix;
+    use crate::watch::Watch;
+
+    /// ±(a·z + b) ≤ s for random a, b in d reduced variables.
+    fn random_rows(rng: &mut SplitMix, d: usize, pairs: usize, rows: &mut Vec<Row>) {
+        for _ in 0..pairs {
+            let a = DVector::from_fn(d, |_, _| 2.0 * rng.next_f64() - 1.0);
+            let b = 2.0 * rng.next_f64() - 1.0;
+            for sign in [1.0, -1.0] {
+                let g = DVector::from_fn(d + 1, |c, _| if c < d { sign * a[c] } else { -1.0 });
+                rows.push(Row {
+                    norm: g.norm(),
+                    g,
+                    rhs: -sign * b,
+                });
+            }
+        }
+    }
+
+    #[test]
+    fn the_dual_simplex_after_new_rows_equals_a_cold_solve() {
+        let mut rng = SplitMix(7);
+        for case in 0..40 {
+            let d = 2 + case % 7;
+            let mut rows = Vec::new();
+            random_rows(&mut rng, d, 2 * d + 2, &mut rows);
+            let (_, s0, vertex) = chebyshev(&rows, DVector::zeros(d)).unwrap();
+            let vertex = vertex.expect("a vertex");
+            random_rows(&mut rng, d, 1 + case % 4, &mut rows);
+            let (z_warm, s_warm, _) = dual_simplex(&rows, vertex).expect("warm solve");
+            let (_, s_cold, _) = chebyshev(&rows, DVector::zeros(d)).unwrap();
+            assert!(s_warm >= s0 - 1e-12, "case {case}: rows added, bound fell");
+            assert!(
+                (s_warm - s_cold).abs() <= 1e-10 * s_cold.abs().max(1.0),
+                "case {case}: warm {s_warm} cold {s_cold}"
+            );
+            let y = DVector::from_fn(d + 1, |c, _| if c < d { z_warm[c] } else { s_warm });
+            for r in &rows {
+                assert!(
+                    r.g.dot(&y) - r.rhs <= 1e-10 * r.norm,
+                    "case {case}: infeasible"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_direct_solve_equals_the_interior_point_solve_on_case_2() {
+        let job = Job::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper-case2.toml"),
+        )
+        .unwrap();
+        let p = crate::planning::job_problem(&job, &Arc::new(Watch::new(None)))
+            .unwrap()
+            .relaxed();
+        let n = p.knots.segments();
+        // Uneven intervals, so that interior jerk maxima need their cuts.
+        let h: Vec<f64> = (0..n).map(|k| 0.3 + 0.05 * (k % 3) as f64).collect();
+        let direct = p.jerk_only_direct(&h, &p.zero_x()).expect("direct solve");
+        let exact = p.evaluate(&h, &direct).jerk;
+        let ipm = p.inner_lp(&h, &p.zero_x(), 25).unwrap().jerk;
+        assert!(
+            (exact - ipm).abs() <= 1e-8 * ipm,
+            "direct {exact} interior point {ipm}"
+        );
+    }
+}
