@@ -16,7 +16,7 @@ use triquint_shared::protocol::contract::{
 use crate::active::Active;
 use crate::hal::RxFrame;
 use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Status};
-use crate::scaling::{Retarget, UNIT_Q16};
+use crate::scaling::{Retarget, q16_from_permille};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
@@ -152,7 +152,7 @@ impl Receiver {
                 };
                 let (k, full) = match code {
                     Ok(CommandCode::Resume) => (status.override_q16, stop),
-                    Ok(CommandCode::Override) => ((c.arg2 as u32 * UNIT_Q16 + 500) / 1000, stop),
+                    Ok(CommandCode::Override) => (q16_from_permille(c.arg2 as u32), stop),
                     Ok(CommandCode::QuickStop) => (0, quick),
                     _ => (0, stop),
                 };

@@ -46,6 +46,12 @@ pub struct Scaled {
 /// σ = 1 in the fixed-point unit of a constant rate (1/65 536).
 pub const UNIT_Q16: u32 = 1 << 16;
 
+/// A rate in per mille (the wire's override and cap) in [`UNIT_Q16`],
+/// rounded to nearest.
+pub const fn q16_from_permille(pm: u32) -> u32 {
+    (pm * UNIT_Q16 + 500) / 1000
+}
+
 /// Peak |σ'| of the smoothstep (15/8) and peak |σ''| (10/√3).
 const PEAK_D1: f32 = 1.875;
 const PEAK_D2: f32 = 5.773_503;

@@ -9,7 +9,7 @@ use triquint_shared::protocol::{
 
 use super::{Drive, StopReason};
 use crate::inbox::{CommandData, Prepared};
-use crate::scaling::UNIT_Q16;
+use crate::scaling::q16_from_permille;
 #[cfg(doc)]
 use crate::sync::SyncEstimator;
 
@@ -130,7 +130,7 @@ impl<const Q: usize> Drive<Q> {
                 let r = if pm == 0 || pm > cap {
                     FaultCode::OverrideAboveCap
                 } else {
-                    self.override_q16 = (pm * UNIT_Q16 + 500) / 1000;
+                    self.override_q16 = q16_from_permille(pm);
                     if let (State::Running, None, Some(a)) =
                         (self.state, self.stop_reason, self.active)
                     {
@@ -200,7 +200,7 @@ impl<const Q: usize> Drive<Q> {
         self.model = p.model;
         self.active = Some(p.active);
         // The override persists, within the new configuration's cap.
-        let cap = (self.override_cap_permille() * UNIT_Q16 + 500) / 1000;
+        let cap = q16_from_permille(self.override_cap_permille());
         self.override_q16 = self.override_q16.min(cap);
         FaultCode::None
     }
