@@ -51,6 +51,12 @@ impl DriveConfigs {
         })
     }
 
+    /// [`DriveConfigs::override_cap`] in per mille, as the drives' answers
+    /// and the `+`/`-` keys count it.
+    pub fn override_cap_permille(&self) -> u16 {
+        (self.override_cap * 1000.0).round() as u16
+    }
+
     /// For any motion within `limits` (before there is a plan, e.g. to
     /// configure drives so they report their position): the limits
     /// themselves as the maxima.

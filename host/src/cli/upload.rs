@@ -196,6 +196,7 @@ pub fn run_plan(
     };
     let configs = DriveConfigs::for_plan(plan, &settings).map_err(CliError::bad_input)?;
     let override_cap = configs.override_cap;
+    let cap_pm = configs.override_cap_permille();
     let configs = configs.nodes;
     let opts = SessionOptions {
         fd: bus.fd,
@@ -221,7 +222,6 @@ pub fn run_plan(
     let mut acked_at: Option<f64> = None;
     let outcome: Outcome = loop {
         if let Some(k) = keys.as_deref_mut() {
-            let cap_pm = (override_cap * 1000.0).round() as u16;
             // `+`/`-` step from the override the drives hold (one set before
             // the upload is reported in their answer to Arm).
             k.learn(session.progress().override_permille);

@@ -323,11 +323,9 @@ fn override_50_percent_and_back_to_100_completes() {
 #[test]
 fn override_above_the_cap_is_refused_with_the_cap() {
     let plan = testplan::paper_case2().unwrap();
-    let cap_pm = (DriveConfigs::for_plan(&plan, &DriveSettings::default())
+    let cap_pm = DriveConfigs::for_plan(&plan, &DriveSettings::default())
         .unwrap()
-        .override_cap
-        * 1000.0)
-        .round() as u16;
+        .override_cap_permille();
     assert!(cap_pm > 1000, "Case II leaves headroom: cap {cap_pm}");
     let mut step = 0;
     let r = run(&plan, |t, _| match step {
@@ -443,11 +441,9 @@ fn approach_then_case2_completes_from_the_power_on_and_home_poses() {
 fn commands_at_random_moments_each_taken_and_the_plan_completes() {
     use rand::{RngExt, SeedableRng};
     let plan = testplan::paper_case2().unwrap();
-    let cap_pm = (DriveConfigs::for_plan(&plan, &DriveSettings::default())
+    let cap_pm = DriveConfigs::for_plan(&plan, &DriveSettings::default())
         .unwrap()
-        .override_cap
-        * 1000.0)
-        .round() as u16;
+        .override_cap_permille();
     for seed in [1u64, 2, 3] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let mut times: Vec<f64> = (0..6).map(|_| rng.random_range(0.1..4.0)).collect();
