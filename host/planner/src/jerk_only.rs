@@ -42,6 +42,19 @@ struct Row {
     norm: f64,
 }
 
+impl Row {
+    /// sign·(a·z + b) ≤ s.
+    fn new(a: &DVector<f64>, b: f64, sign: f64) -> Row {
+        let d = a.len();
+        let g = DVector::from_fn(d + 1, |c, _| if c < d { sign * a[c] } else { -1.0 });
+        Row {
+            norm: g.norm(),
+            g,
+            rhs: -sign * b,
+        }
+    }
+}
+
 impl Problem {
     /// Exact jerk-only optimum at fixed `h` per joint, from `x0` (whose
     /// C3 projection is the starting point). None when it does not apply
@@ -104,22 +117,12 @@ impl Problem {
         let basis = q.columns(m, d).into_owned();
         let xp = DVector::from_column_slice(xp);
         let mut rows: Vec<Row> = Vec::new();
-        let cut_at =
-            |k: usize, u: f64, rows: &mut Vec<Row>| {
-                let (a, c) = form(k, u);
-                let ar = basis.tr_mul(&a);
-                let b = a.dot(&xp) + c;
-                for sign in [1.0, -1.0] {
-                    let g = DVector::from_fn(ar.len() + 1, |c, _| {
-                        if c < ar.len() { sign * ar[c] } else { -1.0 }
-                    });
-                    rows.push(Row {
-                        norm: g.norm(),
-                        g,
-                        rhs: -sign * b,
-                    });
-                }
-            };
+        let cut_at = |k: usize, u: f64, rows: &mut Vec<Row>| {
+            let (a, c) = form(k, u);
+            let ar = basis.tr_mul(&a);
+            let b = a.dot(&xp) + c;
+            rows.extend([1.0, -1.0].map(|sign| Row::new(&ar, b, sign)));
+        };
         // Knot jerks (u = 0 of every segment but the first, whose is zero)
         // and each segment's middle.
         for k in 0..nseg {
@@ -380,14 +383,7 @@ mod tests {
         for _ in 0..pairs {
             let a = DVector::from_fn(d, |_, _| 2.0 * rng.next_f64() - 1.0);
             let b = 2.0 * rng.next_f64() - 1.0;
-            for sign in [1.0, -1.0] {
-                let g = DVector::from_fn(d + 1, |c, _| if c < d { sign * a[c] } else { -1.0 });
-                rows.push(Row {
-                    norm: g.norm(),
-                    g,
-                    rhs: -sign * b,
-                });
-            }
+            rows.extend([1.0, -1.0].map(|sign| Row::new(&a, b, sign)));
         }
     }
 
