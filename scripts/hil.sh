@@ -71,7 +71,7 @@ step "VM: boot, vcan0, pytest (emulated CPU: 1-5 min)"
 kernel=/boot/vmlinuz-$(ls /lib/modules | sort -V | tail -1)
 set +e
 # No '> file' redirection: QEMU reopens stdout/stderr; pipe instead.
-timeout "${HIL_TIMEOUT:-480}" "$VNG" --force-9p --run "$kernel" --user root --disable-kvm \
+timeout "${HIL_TIMEOUT:-900}" "$VNG" --force-9p --run "$kernel" --user root --disable-kvm \
     --memory 1G --cpus 2 --rwdir "$OUT" --exec "$OUT/in-vm.sh" 2>&1 | tee "$OUT/vm.log"
 status=${PIPESTATUS[0]}
 set -e
