@@ -96,9 +96,11 @@ pub enum PlanError {
         reason: String,
     },
     /// A valid job that no plan satisfies: `limit` binds. `reached` is the
-    /// best value of the binding quantity the planner found (above
-    /// `limit_value`); `shortest_total_time` is the shortest total time at
-    /// which every limit holds, when there is one within reach.
+    /// binding quantity's value (above `limit_value`) in the planner's
+    /// closest plan: when the total time is shorter than
+    /// `shortest_total_time`, the shortest plan time-scaled to it;
+    /// `shortest_total_time` is the shortest total time at which every
+    /// limit holds, when there is one within reach.
     #[error("{}", infeasible_message(*limit, *limit_value, *reached, *shortest_total_time))]
     Infeasible {
         limit: Limit,
