@@ -206,6 +206,17 @@ pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult
 }
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
+    multistart_with(p, starts, opts, p.knots.len() > REFINED_AGREEMENT_KNOTS)
+}
+
+/// [`multistart`]; `refined_agreement` lets two refined results that
+/// agree end the starts.
+pub(crate) fn multistart_with(
+    p: &Problem,
+    starts: &[Vec<f64>],
+    opts: &Options,
+    refined_agreement: bool,
+) -> Option<SearchResult> {
     let merit = |s: &Solution| s.merit(p.weight);
     // Starts that reached the same point (same intervals, same merit) are
     // one basin: only the first of them is refined.
@@ -271,9 +282,7 @@ fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<Search
         if agreeing >= AGREEING {
             break;
         }
-        if p.knots.len() > REFINED_AGREEMENT_KNOTS
-            && let [a, b, ..] = order[..]
-        {
+        if refined_agreement && let [a, b, ..] = order[..] {
             refine_missing(&coarse, &mut refined, &[a, b]);
             if let (Some(ra), Some(rb)) = (&refined[a], &refined[b])
                 && same(ra, rb)

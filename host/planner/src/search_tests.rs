@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use crate::evolution::{EvolutionOptions, differential_evolution};
 use crate::local::{Problem, Solution};
-use crate::search::{global, start_points};
+use crate::search::{global, multistart_with, start_points};
 use crate::watch::Watch;
 use crate::{Job, Options, Plan, check, plan};
 
@@ -229,5 +229,44 @@ points = [[-86, 83.66, 597.66], [-43, 97.74, 654.74], [0, 84.85, 684.85],
         de.best <= best.jerk * 1.01,
         "differential evolution stalled at {}",
         de.best
+    );
+}
+
+#[test]
+fn refined_agreement_keeps_the_optimum_of_every_start() {
+    // The speed figures' closed curve (examples/scaling_paths.rs) with 100
+    // via-points, above the knots where refined agreement applies; its
+    // jerk-only relaxation, as the search runs it first.
+    let n = 100;
+    let points: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let t = 2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64;
+            [
+                90.0 * t.sin(),
+                70.0 * (2.0 * t).sin(),
+                600.0 + 60.0 * (3.0 * t + 0.3).sin(),
+            ]
+        })
+        .collect();
+    let job = Job::builder()
+        .points_mm(points)
+        .total_time(0.25 * (n - 1) as f64)
+        .build()
+        .unwrap();
+    let p = job_problem(&job).unwrap().relaxed();
+    let o = opts(8);
+    let starts = start_points(&p, o.starts, o.seed);
+    let early = multistart_with(&p, &starts, &o, true).unwrap();
+    let all = multistart_with(&p, &starts, &o, false).unwrap();
+    eprintln!(
+        "refined agreement: {} starts, {} LPs, max jerk {:.9}; every start: {} starts, {} LPs, {:.9}",
+        early.starts, early.lp_solves, early.best.jerk, all.starts, all.lp_solves, all.best.jerk
+    );
+    assert!(early.starts < all.starts, "the starts did not end early");
+    assert!(
+        early.best.merit(p.weight) <= all.best.merit(p.weight) * (1.0 + 1e-6),
+        "{} > {}",
+        early.best.jerk,
+        all.best.jerk
     );
 }
