@@ -49,6 +49,10 @@ const MAX_INNER_ROUNDS: usize = 25;
 /// Cutting-plane rounds when judging a trust-region step (its figures are
 /// exact whatever the count; more rounds only improve x).
 const STEP_ROUNDS: usize = 6;
+/// Jerk (m/s³) below which a program's jerk rows are scaled to 1 (see
+/// [`Problem::build`]). Not at 1: a point-to-point move's relaxation
+/// (0.6 m/s³) then took 26 LPs instead of 19 to the same plan.
+const SMALL_JERK: f64 = 0.1;
 /// Accuracy of the inner solves. Tighter asks for more than the interior
 /// point method delivers on these degenerate problems (most solves then end
 /// "almost solved", less accurate than this).
@@ -280,8 +284,28 @@ impl Problem {
     }
 
     /// Builds the LP at (h, x) with these cuts; `trust` = Some(Δ) lets h move by
-    /// at most Δ·h_k (linearised), None keeps h fixed.
-    fn build(&self, h: &[f64], x: &[Vec<f64>; 3], cuts: &[Cut], trust: Option<f64>) -> Lp {
+    /// at most Δ·h_k (linearised), None keeps h fixed. `jerk` is the size of
+    /// the jerks about there (m/s³): below [`SMALL_JERK`] the jerk rows and
+    /// the cost are divided by it. The solver's gap and residual tests are
+    /// absolute below 1 (its relative measures have a floor of 1), so at a
+    /// jerk of 1e-4 they were 1e-4 of it, and the trust-region steps stalled
+    /// on that noise (the 200-point closed curve ended 1.5 % above its
+    /// optimum).
+    /// Scaling a row with its right-hand side, or a cone's rows together,
+    /// keeps the feasible set; scaling the cost keeps the optimum.
+    fn build(
+        &self,
+        h: &[f64],
+        x: &[Vec<f64>; 3],
+        cuts: &[Cut],
+        trust: Option<f64>,
+        jerk: f64,
+    ) -> Lp {
+        let k_j = if jerk < SMALL_JERK {
+            1.0 / jerk.max(1e-12)
+        } else {
+            1.0
+        };
         let nv = self.nv();
         let nseg = self.nseg();
         let dh0 = 3 * nv;
@@ -289,8 +313,8 @@ impl Problem {
         let sigma = s_col + 1;
         let lambda0 = sigma + 1;
         let mut lp = Lp::new(lambda0 + 6 * nseg);
-        lp.cost[s_col] = 1.0;
-        lp.cost[sigma] = self.weight;
+        lp.cost[s_col] = k_j;
+        lp.cost[sigma] = self.weight * k_j;
         let dh_col = |k: usize| trust.map(|_| dh0 + k);
 
         // C3 at interior knots and zero jerk at both ends.
@@ -302,7 +326,7 @@ impl Problem {
                         continue;
                     }
                     let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
-                    row.add(scale, &f, &x[j], j * nv, dh_col(k));
+                    row.add(scale * k_j, &f, &x[j], j * nv, dh_col(k));
                 }
                 lp.equal(&row.terms, -row.constant);
             }
@@ -317,7 +341,7 @@ impl Problem {
                 let at = |u: f64| {
                     let mut row = RowBuilder::default();
                     let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
-                    row.add(1.0, &f, &x[j], j * nv, dh_col(k));
+                    row.add(k_j, &f, &x[j], j * nv, dh_col(k));
                     row
                 };
                 let (j0, jm, j1) = (at(0.0), at(0.5), at(1.0));
@@ -329,7 +353,7 @@ impl Problem {
                     let lam = lambda0 + 6 * k + 2 * j + n;
                     lp.at_most(&[(lam, -1.0)], 0.0);
                     // p(u) = s − sign·J(u): p0 = s − sign c0, p1 = −sign c1, p2 = −sign c2.
-                    let p0 = RowBuilder::combine(&[(-sign, &c0)]).plus(s_col, 1.0);
+                    let p0 = RowBuilder::combine(&[(-sign, &c0)]).plus(s_col, k_j);
                     let p1 = RowBuilder::combine(&[(-sign, &c1)]);
                     let p2 = RowBuilder::combine(&[(-sign, &c2)]);
                     let t = RowBuilder::combine(&[(1.0, &p0), (1.0, &p2)]).plus(lam, 1.0);
@@ -380,8 +404,9 @@ impl Problem {
                 let mut terms: Vec<(usize, f64)> =
                     row.terms.iter().map(|&(c, v)| (c, sign * v)).collect();
                 if cut.q == Quantity::Jerk {
-                    terms.push((s_col, -1.0));
-                    lp.at_most(&terms, -sign * row.constant);
+                    terms.iter_mut().for_each(|t| t.1 *= k_j);
+                    terms.push((s_col, -k_j));
+                    lp.at_most(&terms, -sign * row.constant * k_j);
                 } else {
                     let lim = self.limit(cut.q);
                     terms.push((sigma, -lim));
@@ -527,10 +552,12 @@ impl Problem {
         max_rounds: usize,
     ) -> Option<Solution> {
         let mut x = x0.clone();
-        let mut cuts = self.figures(h, &x, self.torque_samples).cuts;
+        let first = self.figures(h, &x, self.torque_samples);
+        let mut jerk = first.jerk;
+        let mut cuts = first.cuts;
         let mut solves = 0;
         for _ in 0..max_rounds {
-            let mut lp = self.build(h, &x, &cuts, None);
+            let mut lp = self.build(h, &x, &cuts, None, jerk);
             lp.tolerance = INNER_TOL;
             let sol = self.solve(&lp).ok()?;
             solves += 1;
@@ -540,6 +567,7 @@ impl Problem {
             x = self.unpack(&sol);
             self.project(h, &mut x);
             let fig = self.figures(h, &x, self.torque_samples);
+            jerk = fig.jerk;
             let moved = x
                 .iter()
                 .zip(&prev)
@@ -601,7 +629,7 @@ impl Problem {
                 break;
             }
             let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
-            let mut lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta));
+            let mut lp = self.build(&cur.h, &cur.x, &fig.cuts, Some(delta), cur.jerk);
             // A step only needs to be good, not exact: the merit is exact
             // (so no iterative refinement of the KKT solves either).
             lp.tolerance = 1e-8;
@@ -683,7 +711,7 @@ impl Problem {
         // exactly and its new extrema cut, so the step does not promise
         // what is only true at the old extrema.
         for round in 1..=STEP_ROUNDS as u64 {
-            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta));
+            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta), cur.jerk);
             lp.tolerance = 1e-8;
             lp.refine = false;
             // Relative time against relative violation: making up a
