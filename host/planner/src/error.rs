@@ -125,7 +125,7 @@ fn infeasible_message(limit: Limit, value: f64, reached: f64, shortest: Option<f
     let mut m = match limit {
         Limit::TotalTime => format!("infeasible: total_time {} s is too short", readable(value)),
         _ => format!(
-            "infeasible: the {name} limit {} {unit} binds (best reached {} {unit})",
+            "infeasible: the {name} limit {} {unit} binds (reached {} {unit})",
             readable(value),
             readable(reached)
         ),

@@ -86,9 +86,10 @@ pub fn errors(py: Python<'_>) -> PyResult<&Errors> {
                 &[&b],
                 "A valid job that no plan satisfies. `limit` ('velocity', \
                  'acceleration', 'jerk', 'torque' or 'total_time') binds; \
-                 `limit_value` is its value and `reached` the best the planner found \
-                 (SI); `shortest_total_time` (s) is the shortest total time that meets \
-                 every limit, or None.",
+                 `limit_value` is its value and `reached` its value in the planner's \
+                 closest plan (SI; when the total time is too short, the shortest plan \
+                 time-scaled to it); `shortest_total_time` (s) is the shortest total \
+                 time that meets every limit, or None.",
             )?,
             cancelled: make_type(
                 py,
