@@ -231,9 +231,9 @@ pub(crate) fn multistart_with(
     // Coarse searches in fixed batches (the plan must not depend on the
     // thread count), stopping once the best point so far has been reached
     // from enough starts: more starts would only find it again. Coarse
-    // results a little apart may still be one basin (the 100-point closed
-    // curve: the first two starts end 1.3e-4 apart in merit, and refined
-    // 1e-8 apart), so on large jobs the two best are refined and compared
+    // results a little apart may still be one basin (the 200-point closed
+    // curve: the first two starts end 2.6e-3 apart in merit, and refined
+    // 6e-7 apart), so on large jobs the two best are refined and compared
     // when they do not agree: refined results that agree end the starts.
     let mut coarse: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
     let mut refined: Vec<Option<Solution>> = Vec::with_capacity(starts.len());

@@ -234,12 +234,11 @@ points = [[-86, 83.66, 597.66], [-43, 97.74, 654.74], [0, 84.85, 684.85],
 
 #[test]
 fn refined_agreement_keeps_the_optimum_of_every_start() {
-    // The speed figures' closed curve (examples/scaling_paths.rs) with 200
-    // via-points, above the knots where refined agreement applies (its
-    // first two coarse results are 2.6e-3 apart in merit, refined 6e-7, at
-    // the reference time); its
-    // jerk-only relaxation, as the search runs it first. Four starts, so
-    // that the search without the refined agreement runs two more.
+    // The jerk-only relaxation (searched first) of the speed figures'
+    // closed curve (examples/scaling_paths.rs) with 200 via-points, above
+    // the knots where refined agreement applies: its first two coarse
+    // results are 2.6e-3 apart in merit, refined 6e-7. Four starts, so that
+    // the search without the refined agreement runs two more.
     let n = 200;
     let points: Vec<[f64; 3]> = (0..n)
         .map(|i| {
