@@ -220,8 +220,10 @@ pub(crate) fn multistart_with(
     let merit = |s: &Solution| s.merit(p.weight);
     // Starts that reached the same point (same intervals, same merit) are
     // one basin: only the first of them is refined.
+    let same_merit =
+        |a: &Solution, b: &Solution| (merit(a) - merit(b)).abs() <= AGREE * merit(a).abs();
     let same = |a: &Solution, b: &Solution| {
-        (merit(a) - merit(b)).abs() <= AGREE * merit(a).abs()
+        same_merit(a, b)
             && a.h
                 .iter()
                 .zip(&b.h)
@@ -289,7 +291,7 @@ pub(crate) fn multistart_with(
             // at the optimum (the 400-point curve's two refined results
             // agree to 1.6e-6 in merit, not to 1e-4 in every interval).
             if let (Some(ra), Some(rb)) = (&refined[a], &refined[b])
-                && (merit(ra) - merit(rb)).abs() <= AGREE * merit(ra).abs()
+                && same_merit(ra, rb)
             {
                 break;
             }
