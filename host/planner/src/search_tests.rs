@@ -285,7 +285,7 @@ fn a_limit_binding_at_the_optimum_survives_rounding() {
     // optimum. Rounded to whole microseconds and re-solved, acceleration
     // was 1.1e-10 over, and the plan fell back to the shortest one, at the
     // jerk limit (4.99993 m/s³ from the job file; b0eb6e5 planned 4.81468).
-    // The points as that job file holds them (to the micrometre): the
+    // The points as that job file holds them (to the nanometre): the
     // miss depends on them.
     let job = closed_curve(24, 5.75);
     let points: Vec<[f64; 3]> = job
