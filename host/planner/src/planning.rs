@@ -298,7 +298,8 @@ pub(crate) fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option
     // A limit other than jerk that binds at the optimum is met only to the
     // solves' accuracy (the 24-point closed curve at 5.75 s: acceleration
     // 1.1e-10 over, and the plan fell back to the shortest one, 4 % more
-    // jerk): re-solved with those limits a hair inside.
+    // jerk; tests/regression/lissajous-24-fast.toml does the same without
+    // this): re-solved with those limits a hair inside.
     let inside = with_margin(&f, ROUNDING_MARGIN);
     let exact = inside.inner_via_relaxation(&h, &exact.x)?;
     let exact = f.evaluate(&exact.h, &exact.x);
