@@ -104,8 +104,9 @@ const AGREE: f64 = 1e-4;
 const BATCH: usize = 2;
 /// Starts that must agree on the best point before the rest are skipped.
 const AGREEING: usize = 2;
-/// Above this many knots two coarse results that do not agree are refined
-/// and compared before more starts run. Below it starts are cheap and the
+/// Above this many knots (and on the full problem, at any size) two coarse
+/// results that do not agree are refined and compared before more starts
+/// run. Below it the jerk-only relaxation's starts are cheap and the
 /// further starts' shapes help min-time (the 20-point closed curve's
 /// shortest time was 1.5e-5 longer without them).
 const REFINED_AGREEMENT_KNOTS: usize = 64;
@@ -206,7 +207,13 @@ pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult
 }
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
-    multistart_with(p, starts, opts, p.knots.len() > REFINED_AGREEMENT_KNOTS)
+    // Where a limit other than jerk binds, a coarse search costs hundreds
+    // of solves: the refined agreement spares the further starts (the
+    // 16-point closed curve at 0.4 s a segment: 16.3 → 6.5 s, the same
+    // plan; the 24-point one at 0.25 s (`lissajous-24-fast`): 17.5 → 5.2 s,
+    // 1.5e-5 more jerk, 3.7e-4 less than b0eb6e5's).
+    let refined_agreement = p.knots.len() > REFINED_AGREEMENT_KNOTS || !p.jerk_only;
+    multistart_with(p, starts, opts, refined_agreement)
 }
 
 /// [`multistart`]; `refined_agreement` lets two refined results that
