@@ -645,7 +645,9 @@ impl Problem {
             // 5.75 s took 2 500 LPs to 4.81297 m/s³, now 1 546 to 4.81231).
             // With jerk alone there are no cuts: one round.
             let mut step_cuts = fig.cuts.clone();
-            let mut result = Err(LpFailure::Cancelled);
+            // The last round's program solution, its intervals and its
+            // knot derivatives on C3 there.
+            let mut step = None;
             for _ in 0..STEP_ROUNDS {
                 let mut lp = self.build(&cur.h, &cur.x, &step_cuts, Some(delta), cur.jerk);
                 // A step only needs to be good, not exact: the merit is exact
@@ -653,23 +655,20 @@ impl Problem {
                 lp.tolerance = 1e-8;
                 lp.refine = false;
                 solves += 1;
-                result = self.solve(&lp);
-                let Ok(sol) = &result else { break };
-                let h: Vec<f64> = (0..nseg)
-                    .map(|k| (cur.h[k] + sol[3 * nv + k]).max(self.h_min))
-                    .collect();
-                let mut x = self.unpack(sol);
-                self.project(&h, &mut x);
+                let Ok(sol) = self.solve(&lp) else { break };
+                let (h, x) = self.step_point(&cur.h, &sol);
                 let before = step_cuts.len();
                 add_new_cuts(
                     &mut step_cuts,
                     &self.figures(&h, &x, self.torque_samples).cuts,
                 );
-                if step_cuts.len() == before {
+                let settled = step_cuts.len() == before;
+                step = Some((sol, h, x));
+                if settled {
                     break;
                 }
             }
-            let Ok(sol) = result else {
+            let Some((sol, h_new, x_new)) = step else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -683,14 +682,9 @@ impl Problem {
             if gain <= 1e-9 * merit {
                 break;
             }
-            let h_new: Vec<f64> = (0..nseg)
-                .map(|k| (cur.h[k] + sol[3 * nv + k]).max(self.h_min))
-                .collect();
             // The step is judged on the exact inner optimum at the new
             // intervals: x re-optimised, not the LP's x projected back onto C3
             // (that evaluation understates the gain and keeps steps tiny).
-            let mut x_new = self.unpack(&sol);
-            self.project(&h_new, &mut x_new);
             let Some(cand) = self.inner_at(&h_new, &x_new, STEP_ROUNDS) else {
                 delta *= 0.25;
                 if delta < 1e-7 {
@@ -739,6 +733,21 @@ impl Problem {
         cur
     }
 
+    /// The point of a step program's solution `sol` from intervals `h`: the
+    /// new intervals (at least h_min) and the knot derivatives projected
+    /// onto C3 there.
+    fn step_point(&self, h: &[f64], sol: &[f64]) -> (Vec<f64>, [Vec<f64>; 3]) {
+        let dh0 = 3 * self.nv();
+        let h: Vec<f64> = h
+            .iter()
+            .enumerate()
+            .map(|(k, hk)| (hk + sol[dh0 + k]).max(self.h_min))
+            .collect();
+        let mut x = self.unpack(sol);
+        self.project(&h, &mut x);
+        (h, x)
+    }
+
     /// One step of the minimum-time descent ([`crate::time_descent`]) from
     /// `cur`: the LP linearised in h at `cur` (h moving by at most Δ·h_k),
     /// minimising Σh with the jerk capped at its limit and every limit
@@ -770,11 +779,7 @@ impl Problem {
             }
             lp.at_most(&[(s_col, 1.0), (sigma, -jerk)], jerk);
             let sol = self.solve(&lp)?;
-            let h: Vec<f64> = (0..nseg)
-                .map(|k| (cur.h[k] + sol[dh0 + k]).max(self.h_min))
-                .collect();
-            let mut x = self.unpack(&sol);
-            self.project(&h, &mut x);
+            let (h, x) = self.step_point(&cur.h, &sol);
             let before = cuts.len();
             add_new_cuts(&mut cuts, &self.figures(&h, &x, self.torque_samples).cuts);
             out = Some(TimeStep {
