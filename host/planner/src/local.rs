@@ -111,6 +111,23 @@ pub(crate) struct TimeStep {
     pub solves: u64,
 }
 
+/// The cutting-plane rounds of one step program ([`Problem::step_rounds`]).
+struct StepRounds {
+    /// The last solved round.
+    last: Option<StepPoint>,
+    solves: u64,
+    /// The failure that ended the rounds, if one did.
+    failed: Option<LpFailure>,
+}
+
+/// A solved step program: its solution, its intervals, and its knot
+/// derivatives on C3 there.
+struct StepPoint {
+    sol: Vec<f64>,
+    h: Vec<f64>,
+    x: [Vec<f64>; 3],
+}
+
 /// (segment, normalised time) of one side of a jerk condition.
 type KnotSide = (usize, f64);
 
@@ -636,39 +653,19 @@ impl Problem {
             if done(&cur) {
                 break;
             }
-            let fig = self.figures(&cur.h, &cur.x, self.torque_samples);
-            // Cutting planes as in the descent's steps: the step's point is
-            // checked exactly and its new extrema cut, so the model does not
-            // promise what holds only at the old extrema (where a limit
-            // other than jerk binds, steps were rejected, the region fell
-            // to 1e-4 and the search crawled: the 24-point closed curve at
-            // 5.75 s took 2 500 LPs to 4.81297 m/s³, now 1 546 to 4.81231).
-            // With jerk alone there are no cuts: one round.
-            let mut step_cuts = fig.cuts.clone();
-            // The last round's program solution, its intervals and its
-            // knot derivatives on C3 there.
-            let mut step = None;
-            for _ in 0..STEP_ROUNDS {
-                let mut lp = self.build(&cur.h, &cur.x, &step_cuts, Some(delta), cur.jerk);
-                // A step only needs to be good, not exact: the merit is exact
-                // (so no iterative refinement of the KKT solves either).
-                lp.tolerance = 1e-8;
-                lp.refine = false;
-                solves += 1;
-                let Ok(sol) = self.solve(&lp) else { break };
-                let (h, x) = self.step_point(&cur.h, &sol);
-                let before = step_cuts.len();
-                add_new_cuts(
-                    &mut step_cuts,
-                    &self.figures(&h, &x, self.torque_samples).cuts,
-                );
-                let settled = step_cuts.len() == before;
-                step = Some((sol, h, x));
-                if settled {
-                    break;
-                }
-            }
-            let Some((sol, h_new, x_new)) = step else {
+            // Where a limit other than jerk binds, a step with only the cuts
+            // at the current point's extrema promised what held only there:
+            // steps were rejected, the region fell to 1e-4 and the search
+            // crawled (the 24-point closed curve at 5.75 s took 2 500 LPs to
+            // 4.81297 m/s³, 1 546 to 4.81231 with the rounds).
+            let rounds = self.step_rounds(&cur, delta, |_| {});
+            solves += rounds.solves;
+            let Some(StepPoint {
+                sol,
+                h: h_new,
+                x: x_new,
+            }) = rounds.last
+            else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -733,6 +730,46 @@ impl Problem {
         cur
     }
 
+    /// The step program at `cur` (h moving by at most Δ·h_k), shaped by
+    /// `shape`, in cutting-plane rounds as in the inner loop: each round's
+    /// point is checked exactly and its new extrema cut, so the step does
+    /// not promise what is only true at the old extrema. With jerk alone
+    /// there are no cuts: one round. Ends at the first round that adds no
+    /// cut, at [`STEP_ROUNDS`], or at a failed solve.
+    fn step_rounds(&self, cur: &Solution, delta: f64, shape: impl Fn(&mut Lp)) -> StepRounds {
+        let mut cuts = self.figures(&cur.h, &cur.x, self.torque_samples).cuts;
+        let mut out = StepRounds {
+            last: None,
+            solves: 0,
+            failed: None,
+        };
+        for _ in 0..STEP_ROUNDS {
+            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta), cur.jerk);
+            // A step only needs to be good, not exact: it is judged exactly
+            // (so no iterative refinement of the KKT solves either).
+            lp.tolerance = 1e-8;
+            lp.refine = false;
+            shape(&mut lp);
+            out.solves += 1;
+            let sol = match self.solve(&lp) {
+                Ok(sol) => sol,
+                Err(failure) => {
+                    out.failed = Some(failure);
+                    break;
+                }
+            };
+            let (h, x) = self.step_point(&cur.h, &sol);
+            let before = cuts.len();
+            add_new_cuts(&mut cuts, &self.figures(&h, &x, self.torque_samples).cuts);
+            let settled = cuts.len() == before;
+            out.last = Some(StepPoint { sol, h, x });
+            if settled {
+                break;
+            }
+        }
+        out
+    }
+
     /// The point of a step program's solution `sol` from intervals `h`: the
     /// new intervals (at least h_min) and the knot derivatives projected
     /// onto C3 there.
@@ -760,15 +797,7 @@ impl Problem {
         let sigma = s_col + 1;
         let t: f64 = cur.h.iter().sum();
         let jerk = self.limits.jerk;
-        let mut cuts = self.figures(&cur.h, &cur.x, self.torque_samples).cuts;
-        let mut out = None;
-        // Cutting planes as in the inner loop: the LP's point is checked
-        // exactly and its new extrema cut, so the step does not promise
-        // what is only true at the old extrema.
-        for round in 1..=STEP_ROUNDS as u64 {
-            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta), cur.jerk);
-            lp.tolerance = 1e-8;
-            lp.refine = false;
+        let rounds = self.step_rounds(cur, delta, |lp| {
             // Relative time against relative violation: making up a
             // violation ν by time-scaling costs about ν/2 of the time, so
             // 1e3 keeps σ at 0 whenever the linearisation allows it.
@@ -778,20 +807,16 @@ impl Problem {
                 lp.cost[dh0 + k] = 1.0 / t;
             }
             lp.at_most(&[(s_col, 1.0), (sigma, -jerk)], jerk);
-            let sol = self.solve(&lp)?;
-            let (h, x) = self.step_point(&cur.h, &sol);
-            let before = cuts.len();
-            add_new_cuts(&mut cuts, &self.figures(&h, &x, self.torque_samples).cuts);
-            out = Some(TimeStep {
-                h,
-                x,
-                solves: round,
-            });
-            if cuts.len() == before {
-                break;
-            }
+        });
+        if let Some(failure) = rounds.failed {
+            return Err(failure);
         }
-        out.ok_or(LpFailure::Cancelled)
+        let StepPoint { h, x, .. } = rounds.last.ok_or(LpFailure::Cancelled)?;
+        Ok(TimeStep {
+            h,
+            x,
+            solves: rounds.solves,
+        })
     }
 
     /// The jerk-only relaxation of this problem. Its optimum is a lower
