@@ -1,23 +1,53 @@
-//! Planner benchmarks: both paper cases with the default search (what
-//! `triquint plan` runs), and a point-to-point min-time move (what
-//! `triquint move-to` runs).
+//! Planner benchmarks, one for each row of issue 15's targets (README,
+//! "Planner speed and scale"): both paper cases with the default search
+//! (what `triquint plan` runs), Case II at minimum time, a point-to-point
+//! min-time move (what `triquint move-to` runs), the infeasible verdict on
+//! the 10-point closed curve, and the closed curve of 100 via-points.
 
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use triquint_planner::{Job, Objective, Options, plan};
+use triquint_planner::{Job, Objective, Options, PlanError, plan};
+
+/// The issue's closed curve of `n` via-points, in mm, to 1 nm as
+/// `examples/scaling_paths.rs` writes it (so these are the job files'
+/// plans: the search's path depends on the last digits).
+fn curve(n: usize) -> Vec<[f64; 3]> {
+    let nm = |mm: f64| (mm * 1e6).round() / 1e6;
+    (0..n)
+        .map(|i| {
+            let t = std::f64::consts::TAU * i as f64 / (n - 1) as f64;
+            [
+                nm(90.0 * t.sin()),
+                nm(70.0 * (2.0 * t).sin()),
+                nm(600.0 + 60.0 * (3.0 * t + 0.3).sin()),
+            ]
+        })
+        .collect()
+}
+
+fn example(case: &str) -> Job {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{case}.toml"));
+    Job::load(&path).expect("example job")
+}
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("planner");
     g.sample_size(10);
     for case in ["paper-case1", "paper-case2"] {
-        let path =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{case}.toml"));
-        let job = Job::load(&path).expect("example job");
+        let job = example(case);
         g.bench_function(case, |b| {
             b.iter(|| plan(&job, &Options::default()).expect("plan"))
         });
     }
+    let min_time = example("paper-case2")
+        .to_builder()
+        .objective(Objective::MinTime)
+        .build()
+        .expect("job");
+    g.bench_function("paper-case2-min-time", |b| {
+        b.iter(|| plan(&min_time, &Options::default()).expect("plan"))
+    });
     let p2p = Job::builder()
         .objective(Objective::MinTime)
         .points_mm([[-90.0, 90.0, 680.0], [-86.0, 83.66, 597.66]])
@@ -25,6 +55,25 @@ fn bench(c: &mut Criterion) {
         .expect("job");
     g.bench_function("point-to-point-min-time", |b| {
         b.iter(|| plan(&p2p, &Options::default()).expect("plan"))
+    });
+    let verdict = Job::builder()
+        .points_mm(curve(10))
+        .total_time(2.7)
+        .build()
+        .expect("job");
+    g.bench_function("verdict-curve-10-at-2.7s", |b| {
+        b.iter(|| match plan(&verdict, &Options::default()) {
+            Err(e @ PlanError::Infeasible { .. }) => e,
+            other => panic!("expected the infeasible verdict, got {other:?}"),
+        })
+    });
+    let long = Job::builder()
+        .points_mm(curve(100))
+        .total_time(0.25 * 99.0)
+        .build()
+        .expect("job");
+    g.bench_function("curve-100", |b| {
+        b.iter(|| plan(&long, &Options::default()).expect("plan"))
     });
     g.finish();
 }
