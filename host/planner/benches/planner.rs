@@ -4,27 +4,14 @@
 //! min-time move (what `triquint move-to` runs), the infeasible verdict on
 //! the 10-point closed curve, and the closed curve of 100 via-points.
 
+#[path = "../examples/support/closed_curve.rs"]
+mod closed_curve;
+
 use std::path::Path;
 
+use closed_curve::closed_curve_mm as curve;
 use criterion::{Criterion, criterion_group, criterion_main};
 use triquint_planner::{Job, Objective, Options, PlanError, plan};
-
-/// The closed curve of `n` via-points, in mm, to 1 nm as
-/// `examples/scaling_paths.rs` writes it (so these are the job files'
-/// plans: the search's path depends on the last digits).
-fn curve(n: usize) -> Vec<[f64; 3]> {
-    let nm = |mm: f64| (mm * 1e6).round() / 1e6;
-    (0..n)
-        .map(|i| {
-            let t = std::f64::consts::TAU * i as f64 / (n - 1) as f64;
-            [
-                nm(90.0 * t.sin()),
-                nm(70.0 * (2.0 * t).sin()),
-                nm(600.0 + 60.0 * (3.0 * t + 0.3).sin()),
-            ]
-        })
-        .collect()
-}
 
 fn example(case: &str) -> Job {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../examples/{case}.toml"));

@@ -6,21 +6,11 @@
 //! `cargo run --release -p triquint-planner --example scaling_paths -- DIR SECONDS_PER_SEGMENT N...`
 //! writes DIR/curve-N.toml for each N (total time = seconds per segment × (N − 1)).
 
+#[path = "support/closed_curve.rs"]
+mod closed_curve;
+
 use std::fmt::Write as _;
 use std::path::PathBuf;
-
-fn curve(n: usize) -> Vec<[f64; 3]> {
-    (0..n)
-        .map(|i| {
-            let t = 2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64;
-            [
-                90.0 * t.sin(),
-                70.0 * (2.0 * t).sin(),
-                600.0 + 60.0 * (3.0 * t + 0.3).sin(),
-            ]
-        })
-        .collect()
-}
 
 fn job_toml(points: &[[f64; 3]], total_time: f64) -> String {
     let mut s = String::new();
@@ -56,7 +46,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             return Err(format!("a closed curve needs at least 3 points, got {n}").into());
         }
         let path = dir.join(format!("curve-{n}.toml"));
-        std::fs::write(&path, job_toml(&curve(n), per_segment * (n - 1) as f64))?;
+        std::fs::write(
+            &path,
+            job_toml(
+                &closed_curve::closed_curve_mm(n),
+                per_segment * (n - 1) as f64,
+            ),
+        )?;
         println!("{}", path.display());
     }
     Ok(())
