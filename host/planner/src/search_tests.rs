@@ -2,6 +2,9 @@
 //! (local and multistart-global) optimum, plans pass the independent check,
 //! and torque limits bind for real.
 
+#[path = "../examples/support/closed_curve.rs"]
+mod closed_curve;
+
 use std::path::Path;
 use std::sync::Arc;
 
@@ -25,20 +28,11 @@ fn example(name: &str) -> Job {
 }
 
 /// The speed figures' closed curve of `n` via-points
-/// (examples/scaling_paths.rs) with the default limits.
+/// (examples/scaling_paths.rs, to 1 nm as it writes them) with the default
+/// limits.
 fn closed_curve(n: usize, total_time: f64) -> Job {
-    let points: Vec<[f64; 3]> = (0..n)
-        .map(|i| {
-            let t = 2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64;
-            [
-                90.0 * t.sin(),
-                70.0 * (2.0 * t).sin(),
-                600.0 + 60.0 * (3.0 * t + 0.3).sin(),
-            ]
-        })
-        .collect();
     Job::builder()
-        .points_mm(points)
+        .points_mm(closed_curve::closed_curve_mm(n))
         .total_time(total_time)
         .build()
         .unwrap()
@@ -257,7 +251,8 @@ fn refined_agreement_keeps_the_optimum_of_every_start() {
     // The jerk-only relaxation (searched first) of the speed figures'
     // closed curve (examples/scaling_paths.rs) with 200 via-points, above
     // the knots where refined agreement applies: its first two coarse
-    // results are 2.6e-3 apart in merit, refined 6e-7. Four starts, so that
+    // results were 2.6e-3 apart in merit, refined 6e-7 (points unrounded;
+    // at 1 nm the two searches end 8e-7 apart). Four starts, so that
     // the search without the refined agreement runs two more.
     let n = 200;
     let job = closed_curve(n, 0.25 * (n - 1) as f64);
