@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Are two planner binaries' plans the same? Plans every job a refactor must
+# not change (examples/, both paper cases as min-max-jerk and min-time, the
+# no-regression jobs, the 10/40/100-point scaling curves) with BASE and NEW
+# and compares the plan JSON with `solver.seconds` removed.
+#
+#   scripts/same-plans.sh BASE_TRIQUINT NEW_TRIQUINT [WORKDIR]
+#
+# Exit 0 when every plan is identical; prints each job's verdict.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+base=$(realpath "$1")
+new=$(realpath "$2")
+work=${3:-$(mktemp -d)}
+mkdir -p "$work/jobs" "$work/base" "$work/new"
+
+cp examples/*.toml host/planner/tests/regression/*-*.toml "$work/jobs/"
+for case in 1 2; do
+    sed 's/^objective = "min-max-jerk"/objective = "min-time"/' \
+        "examples/paper-case$case.toml" >"$work/jobs/paper-case$case-min-time.toml"
+done
+for n in 10 40 100; do
+    cargo run --quiet --release --locked -p triquint-planner --example scaling_paths -- \
+        "$work/jobs" 0.25 "$n" >/dev/null
+done
+
+strip() { python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d.get("solver",{}).pop("seconds",None); print(json.dumps(d,sort_keys=True))' "$1"; }
+
+fail=0
+for job in "$work"/jobs/*.toml; do
+    name=$(basename "$job" .toml)
+    "$base" plan "$job" -o "$work/base/$name.json" --quiet >/dev/null 2>&1 || echo "exit $?" >"$work/base/$name.json"
+    "$new" plan "$job" -o "$work/new/$name.json" --quiet >/dev/null 2>&1 || echo "exit $?" >"$work/new/$name.json"
+    if [ "$(strip "$work/base/$name.json" 2>/dev/null || cat "$work/base/$name.json")" = \
+         "$(strip "$work/new/$name.json" 2>/dev/null || cat "$work/new/$name.json")" ]; then
+        echo "same      $name"
+    else
+        echo "DIFFERENT $name"
+        fail=1
+    fi
+done
+exit $fail
