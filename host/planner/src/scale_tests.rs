@@ -10,9 +10,10 @@ use std::sync::Arc;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::planning::{job_problem, round_within};
+use crate::planning::job_problem;
+use crate::rounding::round_within;
+use crate::run_state::RunState;
 use crate::search::global;
-use crate::watch::Watch;
 use crate::{Job, Limits, Options};
 
 /// Before rounding (the bound).
@@ -30,7 +31,7 @@ fn opts() -> Options {
 
 /// Jerk × T³ before and after rounding.
 fn figures(job: &Job) -> (f64, f64) {
-    let p = job_problem(job, &Arc::new(Watch::new(None))).unwrap();
+    let p = job_problem(job, &Arc::new(RunState::new(None))).unwrap();
     let r = global(&p, &opts()).unwrap();
     let t = p.total_time;
     let written = round_within(&p, &r.best, t).unwrap();
