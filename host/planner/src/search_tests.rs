@@ -221,7 +221,8 @@ fn min_time_finds_the_shortest_time() {
 /// must not beat the planner. DE needs thousands of evaluations, so the test
 /// runs it on a five-point arc of Case II (four segments) at 2 s, where its
 /// population converges within the test; `cargo run --release -p
-/// triquint-host --example evolution` runs it on both paper cases.
+/// triquint-planner --features evolution --example evolution` runs it on
+/// a job.
 #[test]
 fn differential_evolution_finds_nothing_better() {
     let job = Job::from_toml(
