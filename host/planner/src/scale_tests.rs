@@ -16,10 +16,10 @@ use crate::run_state::RunState;
 use crate::search::global;
 use crate::{Job, Limits, Options};
 
-/// Before rounding (the bound).
+/// Before rounding: the search's own tolerance.
 const BEFORE: f64 = 1e-6;
 /// Written plans of at most 12 via-points (6 to 11 segments of 0.3 s or
-/// more): the 1e-4.
+/// more): what the microsecond lattice allows.
 const WRITTEN: f64 = 1e-4;
 
 fn opts() -> Options {
@@ -103,7 +103,7 @@ fn random_knots_where_only_jerk_binds() {
     }
 }
 
-/// The example: 33 evenly spaced points on the axis, 520 → 620 mm.
+/// A long uniform path: 33 evenly spaced points on the axis, 520 → 620 mm.
 #[test]
 fn thirty_three_points_on_the_axis() {
     let pts: Vec<[f64; 3]> = (0..33)

@@ -15,12 +15,12 @@ use crate::time_scaling::scaled_x;
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
-pub struct SearchResult {
-    pub best: Solution,
+pub(crate) struct SearchResult {
+    pub(crate) best: Solution,
     /// The refined local optima, best first (`best` is the first).
-    pub shapes: Vec<Solution>,
-    pub starts: usize,
-    pub lp_solves: u64,
+    pub(crate) shapes: Vec<Solution>,
+    pub(crate) starts: usize,
+    pub(crate) lp_solves: u64,
 }
 
 /// SplitMix64: a tiny, portable, seeded generator (the plan must not depend
@@ -40,7 +40,7 @@ impl SplitMix {
 
 /// Interval sets summing to the total time: uniform, proportional to the
 /// largest joint travel, to its square root, then seeded random (Dirichlet(1)).
-pub fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
+pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
     let nseg = p.knots.segments();
     let travel: Vec<f64> = (0..nseg)
         .map(|k| {
@@ -119,7 +119,7 @@ const REFINED_AGREEMENT_KNOTS: usize = 64;
 /// Its global optimum bounds the problem's from below, so when it meets
 /// every other limit it is the answer; otherwise the full problem is
 /// searched, from the relaxation's optimum and the same starts.
-pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
+pub(crate) fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     global_from(p, opts, relaxed_global(p, opts))
 }
 

@@ -78,7 +78,7 @@ pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
 
 /// A solution's shape time-scaled to total time `t`, re-solved and locally
 /// optimised there.
-pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+pub(crate) fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     let guess = scale(p, s, t)?;
     let mut p = p.clone();
     p.total_time = t;
