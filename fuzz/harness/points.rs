@@ -1,7 +1,7 @@
 // Shared by the `points` fuzz target and host/planner/tests/fuzz_corpus.rs
 // (via include!): the points-file reader's contract on any bytes.
 
-use triquint_planner::parse_points;
+use triquint_planner::files::parse_points;
 
 /// Feeds `data` (when it is UTF-8) to [`parse_points`] and checks the
 /// contract: success means at least one point, all coordinates finite;

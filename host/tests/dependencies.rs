@@ -86,7 +86,9 @@ fn reach(graph: &Graph, name: &str) -> BTreeMap<String, String> {
     let mut todo = vec![(name.to_string(), name.to_string())];
     while let Some((at, path)) = todo.pop() {
         for (d, dev) in graph.get(&at).into_iter().flatten() {
-            if *dev && at != name {
+            // A crate's dev-dependency on itself only turns on its own
+            // features for its tests (the planner's `evolution`).
+            if (*dev && at != name) || d == name {
                 continue;
             }
             if !seen.contains_key(d) {

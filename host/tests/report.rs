@@ -6,7 +6,7 @@ use std::process::Command;
 
 use nalgebra::Vector3;
 use triquint_host::report::{plan_stats, plots};
-use triquint_planner::parse_plan;
+use triquint_planner::files::parse_plan;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{MaxAbs, Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
 use triquint_shared::{Limits, Robot, dynamics};

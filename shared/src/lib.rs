@@ -8,6 +8,7 @@
 //! - [`lagrangian`]: an independent Lagrangian formulation (checks and plant model).
 //! - [`quintic`]: quintic segment evaluation by Horner's rule.
 //! - [`plan`]: the plan file that the planner writes (needs `alloc`).
+//! - [`readable`]: numbers for one-line messages (needs `alloc`).
 #![no_std]
 #![forbid(unsafe_code)]
 
@@ -24,6 +25,8 @@ pub mod params;
 pub mod plan;
 pub mod protocol;
 pub mod quintic;
+#[cfg(feature = "alloc")]
+pub mod readable;
 
 pub use kinematics::KinematicsError;
 pub use params::{Limits, Model, Robot};

@@ -1,7 +1,7 @@
 //! Differential evolution over the intervals of a job, against the planner:
 //! an independent global check on problems too large for a test.
 //!
-//! cargo run --release -p triquint-planner --example evolution -- JOB.toml [GENERATIONS] [POPULATION_PER_SEGMENT]
+//! cargo run --release -p triquint-planner --features evolution --example evolution -- JOB.toml [GENERATIONS] [POPULATION_PER_SEGMENT]
 
 use std::path::Path;
 use std::process::ExitCode;

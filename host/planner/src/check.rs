@@ -12,6 +12,7 @@ use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::quintic::eval_poly;
 
 use crate::load::{LoadError, validate_plan};
+use crate::stats::StatsError;
 use crate::sturm;
 
 /// Torque samples per segment in checks and in the reported maxima.
@@ -31,8 +32,9 @@ pub struct CheckRow {
     pub ok: bool,
 }
 
-/// Exact continuous-time maxima of |v|, |a|, |jerk|; |τ| on a grid.
-pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
+/// Exact continuous-time maxima of |v|, |a|, |jerk|; |τ| on a grid. Err
+/// where the dynamics fail (the plan leaves the workspace).
+pub(crate) fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, StatsError> {
     let mut m = MaxAbs::default();
     let model = plan.robot.model::<f64>();
     for (k, seg) in plan.segments.iter().enumerate() {
@@ -49,8 +51,12 @@ pub fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, String> {
             let t = seg.duration_s * i as f64 / torque_samples as f64;
             let s = [0, 1, 2].map(|j| eval_poly(&seg.coeffs[j], t));
             let v = |r: usize| Vector3::new(s[0][r], s[1][r], s[2][r]);
-            let tau = dynamics::torque(&model, &v(0), &v(1), &v(2))
-                .map_err(|e| format!("segment {} at t = {t:.6} s: {e}", k + 1))?;
+            let tau =
+                dynamics::torque(&model, &v(0), &v(1), &v(2)).map_err(|source| StatsError {
+                    segment: k + 1,
+                    time_s: seg.t0_s + t,
+                    source,
+                })?;
             for j in 0..3 {
                 m.torque[j] = m.torque[j].max(tau[j].abs());
             }
@@ -138,7 +144,7 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
     }
     row("end velocity/acceleration/jerk", rest, CONTINUITY_TOL);
 
-    let m = max_abs(plan, TORQUE_CHECK_SAMPLES).map_err(LoadError::Invalid)?;
+    let m = max_abs(plan, TORQUE_CHECK_SAMPLES).map_err(|e| LoadError::Invalid(e.to_string()))?;
     let l = &plan.limits;
     for (name, vals, lim, tol) in [
         ("velocity (m/s)", m.velocity, l.velocity, LIMIT_TOL),

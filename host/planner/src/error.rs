@@ -2,7 +2,7 @@
 //! the data a program needs to act on it (which field, which point, which
 //! limit, the shortest feasible time), and a one-line message for people.
 
-use crate::readable::readable;
+use triquint_shared::readable::readable;
 
 /// A limit of a job (`[limits]` in a job file).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -61,7 +61,7 @@ pub enum PointKind {
 pub enum CancelReason {
     /// The observer asked for it.
     Observer,
-    /// The time budget of [`crate::Options::time_budget`] ran out.
+    /// The time budget of `Options::time_budget` ran out.
     TimeBudget,
 }
 

@@ -8,12 +8,13 @@
 use std::sync::Arc;
 
 use crate::error::PlanError;
+use crate::inner::{Method, ROUNDS};
 use crate::job::Job;
-use crate::local::Problem;
 use crate::options::Options;
 use crate::planning::job_problem;
+use crate::problem::Problem;
+use crate::run_state::RunState;
 use crate::search::{SplitMix, global, parallel};
-use crate::watch::Watch;
 
 /// Size and seed of a run.
 #[derive(Clone, Debug)]
@@ -55,7 +56,7 @@ pub fn compare(
     opts: &Options,
     report: &dyn Fn(usize, f64),
 ) -> Result<Comparison, PlanError> {
-    let p = job_problem(job, &Arc::new(Watch::new(opts.time_budget)))?;
+    let p = job_problem(job, &Arc::new(RunState::new(opts.time_budget)))?;
     let search =
         global(&p, opts).ok_or_else(|| PlanError::Solver("the search found no solution".into()))?;
     let o = EvolutionOptions {
@@ -88,7 +89,7 @@ pub(crate) fn differential_evolution(
             .collect::<Vec<f64>>()
     };
     let score = |w: &Vec<f64>| {
-        p.inner_via_relaxation(&intervals(w), &p.zero_x())
+        p.inner(&intervals(w), &p.zero_x(), Method::ViaRelaxation, ROUNDS)
             .map_or(f64::INFINITY, |s| s.merit(p.weight))
     };
     let mut pop: Vec<Vec<f64>> = (0..o.population)

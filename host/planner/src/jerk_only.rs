@@ -21,18 +21,15 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::local::Problem;
+use crate::problem::Problem;
 
 /// Largest number of knots solved here (dense algebra, a QR a pivot:
 /// beyond it the interior-point solve of the banded problem is the
-/// cheaper). Measured on the closed curves, whole plans: 24 knots 0.87 s
-/// here against 0.18 s, 40 knots 5.2 s against 0.7 s; at 20 knots 1.2 s
-/// against 1.0 s (within noise), so the small jobs keep this solve.
+/// cheaper; docs/planner-speed.md has where the two cross).
 pub(crate) const MAX_KNOTS: usize = 20;
 /// Relative gap between the LP bound and the exact maximum that ends the
 /// cuts: the interior-point solves' accuracy. The gap falls about fourfold a
-/// round, so 1e-12 cost a fifth more instructions on Case II (same
-/// intervals, maxima within 4e-11).
+/// round, so a tighter gap costs rounds for no change the plan keeps.
 const GAP: f64 = 1e-9;
 /// Cutting-plane rounds at most.
 const ROUNDS: usize = 80;
@@ -378,8 +375,8 @@ mod tests {
 
     use super::*;
     use crate::Job;
+    use crate::run_state::RunState;
     use crate::search::SplitMix;
-    use crate::watch::Watch;
 
     /// ±(a·z + b) ≤ s for random a, b in d reduced variables.
     fn random_rows(rng: &mut SplitMix, d: usize, pairs: usize, rows: &mut Vec<Row>) {
@@ -423,7 +420,7 @@ mod tests {
             &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/paper-case2.toml"),
         )
         .unwrap();
-        let p = crate::planning::job_problem(&job, &Arc::new(Watch::new(None)))
+        let p = crate::planning::job_problem(&job, &Arc::new(RunState::new(None)))
             .unwrap()
             .relaxed();
         let n = p.knots.segments();
@@ -431,7 +428,10 @@ mod tests {
         let h: Vec<f64> = (0..n).map(|k| 0.3 + 0.05 * (k % 3) as f64).collect();
         let direct = p.jerk_only_direct(&h, &p.zero_x()).expect("direct solve");
         let exact = p.evaluate(&h, &direct).jerk;
-        let ipm = p.inner_lp(&h, &p.zero_x(), 25).unwrap().jerk;
+        let ipm = p
+            .inner(&h, &p.zero_x(), crate::inner::Method::CuttingPlanes, 25)
+            .unwrap()
+            .jerk;
         assert!(
             (exact - ipm).abs() <= 1e-8 * ipm,
             "direct {exact} interior point {ipm}"

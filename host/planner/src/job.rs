@@ -18,7 +18,7 @@ use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::{Limits, Model, Robot};
 
 use crate::error::{PlanError, PointKind};
-use crate::readable::readable;
+use triquint_shared::readable::readable;
 
 /// Most via-points a job may have: the search's time grows about linearly
 /// with the points (minutes at 1 000 on two cores) and its memory linearly

@@ -29,55 +29,79 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
-//! How it works: for fixed intervals the min-max-jerk spline is one exact
-//! second-order-cone program (`local`); a deterministic multistart
-//! trust-region search moves the intervals (`search`); the minimum time is
-//! found by a descent on the total time from the jerk-only optimum's
-//! shapes, each iterate time-scaled until it meets every limit; intervals
-//! are rounded to whole microseconds (what the drives run) and repaired
-//! until every limit holds.
+//! How it works, one module a step, each using only those before it
+//! (`tests/layers.rs` holds the order): `problem` is the problem at fixed
+//! knots and its exact evaluation; `program` its second-order-cone program
+//! at a point; `inner` the exact min-max-jerk knot derivatives at fixed
+//! intervals, by a method (cutting planes, the jerk-only direct solve
+//! of `jerk_only`, through the relaxation); `step` the trust-region step
+//! over the intervals; `search` the deterministic multistart of those steps;
+//! `time_scaling`, `time_descent` and `min_time` the minimum time, by a
+//! descent on the total time from the jerk-only optimum's shapes, each
+//! iterate time-scaled until it meets every limit; `rounding` the intervals
+//! in whole microseconds (what the drives run), repaired until every limit
+//! holds; `planning` the entry point, [`plan`].
+//!
+//! Beside the planner: [`files`] reads plan and points files, [`stats`]
+//! and [`poly`] are the figures of a plan for reports, [`bounds`] the
+//! bounds a job must stay within.
 
 mod banded;
 mod check;
 mod error;
+#[cfg(any(test, feature = "evolution"))]
 pub mod evolution;
 mod extrema;
+mod inner;
 mod jerk_only;
 mod job;
 #[cfg(feature = "toml")]
 mod job_file;
 mod load;
-mod local;
 mod lp;
+mod min_time;
 mod options;
 mod planning;
 mod points_file;
-mod readable;
+mod problem;
+mod program;
+mod rounding;
+mod run_state;
 mod search;
 mod spline;
-mod stats;
+pub mod stats;
+mod step;
 mod sturm;
 mod time_descent;
-mod watch;
+mod time_scaling;
 
 #[cfg(test)]
 mod scale_tests;
 #[cfg(test)]
 mod search_tests;
 
-pub use check::{CheckRow, check, max_abs};
+pub use check::{CheckRow, check};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
-pub use job::{Job, JobBuilder, LIMIT_RANGE, MAX_POINTS, MAX_SEGMENT_S};
-pub use load::{LoadError, parse_plan, validate_plan};
+pub use job::{Job, JobBuilder};
 pub use options::{Control, Observer, Options, Progress, Stage};
 pub use planning::{plan, plan_with};
-pub use points_file::{PointsFileError, parse_points};
-pub use readable::readable;
-pub use stats::{PlanStats, Quantity, SegmentStats, StatsError, plan_stats, segment_torque};
 pub use triquint_shared::plan::{Objective, Plan};
 pub use triquint_shared::{Limits, Robot};
 
-/// Polynomial helpers the reports share with the statistics.
+/// Plan and points files: parsing, with their typed errors.
+pub mod files {
+    pub use crate::load::{LoadError, parse_plan, validate_plan};
+    pub use crate::points_file::{PointsFileError, parse_points};
+}
+
+/// The bounds a [`Job`] must stay within (checked by [`JobBuilder::build`]).
+pub mod bounds {
+    pub use crate::job::{LIMIT_RANGE, MAX_POINTS, MAX_SEGMENT_S};
+}
+
+/// Exact extrema and integrals of polynomials in segment-local time (power
+/// coefficients, lowest first), the ones the search and [`stats`] use, for
+/// reports on a plan.
 pub mod poly {
     pub use crate::extrema::{
         antiderivative, argmax_abs_on_interval, derivative, eval, integral_abs_on_interval,

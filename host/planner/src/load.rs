@@ -24,7 +24,7 @@ pub enum LoadError {
 /// Parses and validates plan JSON.
 ///
 /// ```
-/// let e = triquint_planner::parse_plan("{\"format\": 3}").unwrap_err();
+/// let e = triquint_planner::files::parse_plan("{\"format\": 3}").unwrap_err();
 /// assert!(e.to_string().contains("line 1"));
 /// ```
 pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
@@ -83,7 +83,7 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
             return bad(format!(
                 "segment {} lasts {} s, not 1 µs to 60 s",
                 i + 1,
-                crate::readable::readable(s.duration_s)
+                triquint_shared::readable::readable(s.duration_s)
             ));
         }
         if (us - us.round()).abs() > 1e-3 {

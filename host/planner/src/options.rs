@@ -14,7 +14,7 @@ pub struct Options {
     pub seed: u64,
     /// Worker threads (results do not depend on it).
     pub threads: usize,
-    /// Give up with [`crate::PlanError::Cancelled`] after this long.
+    /// Give up with [`crate::error::PlanError::Cancelled`] after this long.
     pub time_budget: Option<Duration>,
 }
 
@@ -61,7 +61,7 @@ pub enum Control {
     Cancel,
 }
 
-/// Watches a search: [`crate::plan_with`] calls it on the calling thread at
+/// Watches a search: `plan_with` calls it on the calling thread at
 /// least every 50 ms while the search runs on another. Returning
 /// [`Control::Cancel`] stops the search within one linear program.
 ///

@@ -11,25 +11,16 @@ use triquint_shared::plan::{Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
 use crate::job::{Job, MAX_SEGMENT_S, MIN_SEGMENT_S};
-use crate::local::{Problem, Quantity, Solution, knots_from, problem};
+use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
-use crate::search::{
-    MinTimeFailure, SearchResult, global_from, min_time, relaxed_global, round_to_microseconds,
-    stretch,
-};
-use crate::watch::Watch;
+use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
+use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, round_within};
+use crate::run_state::RunState;
+use crate::search::{SearchResult, global_from, relaxed_global};
+use crate::time_scaling::{scaled_x, stretch};
 
-/// Torque samples per segment in the final solve (the search uses fewer).
-const FINAL_TORQUE_SAMPLES: usize = 400;
 /// How often [`plan_with`] calls its observer.
 const OBSERVER_PERIOD: Duration = Duration::from_millis(25);
-/// Rounding repairs before giving up (each lengthens the plan a little more).
-const REPAIRS: usize = 24;
-/// Bisection steps back towards the shortest repaired time.
-const BISECTIONS: usize = 8;
-/// How far inside the limits other than jerk a rounded min-max-jerk plan is
-/// re-solved when it misses one by the solves' accuracy (1e-9 relative).
-const ROUNDING_MARGIN: f64 = 1e-8;
 
 /// Plans a job on the calling thread (and `opts.threads` workers).
 ///
@@ -44,8 +35,8 @@ const ROUNDING_MARGIN: f64 = 1e-8;
 /// # Ok::<(), triquint_planner::PlanError>(())
 /// ```
 pub fn plan(job: &Job, opts: &Options) -> Result<Plan, PlanError> {
-    let watch = Arc::new(Watch::new(opts.time_budget));
-    run(job, opts, &watch)
+    let state = Arc::new(RunState::new(opts.time_budget));
+    run(job, opts, &state)
 }
 
 /// [`plan`] with an observer, called on this thread at least every 50 ms
@@ -70,17 +61,17 @@ pub fn plan_with(
     opts: &Options,
     observer: &mut dyn Observer,
 ) -> Result<Plan, PlanError> {
-    let watch = Arc::new(Watch::new(opts.time_budget));
+    let state = Arc::new(RunState::new(opts.time_budget));
     let (done, finished) = channel();
     std::thread::scope(|s| {
         let worker = s.spawn(|| {
-            let r = run(job, opts, &watch);
+            let r = run(job, opts, &state);
             let _ = done.send(());
             r
         });
         while let Err(RecvTimeoutError::Timeout) = finished.recv_timeout(OBSERVER_PERIOD) {
-            if observer.progress(&watch.progress()) == Control::Cancel {
-                watch.cancel();
+            if observer.progress(&state.progress()) == Control::Cancel {
+                state.cancel();
             }
         }
         worker
@@ -89,17 +80,17 @@ pub fn plan_with(
     })
 }
 
-fn run(job: &Job, opts: &Options, watch: &Arc<Watch>) -> Result<Plan, PlanError> {
-    let p = job_problem(job, watch)?;
+fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanError> {
+    let p = job_problem(job, state)?;
     let r = solve(job, &p, opts);
-    if let Some(reason) = watch.cancelled() {
+    if let Some(reason) = state.cancelled() {
         return Err(PlanError::Cancelled { reason });
     }
     let (sol, starts) = r?;
     let mut plan = assemble(job, &p, &sol);
     plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
         .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
-    let progress = watch.progress();
+    let progress = state.progress();
     plan.solver = SolverStats {
         seconds: progress.elapsed.as_secs_f64(),
         starts: starts as u64,
@@ -109,7 +100,7 @@ fn run(job: &Job, opts: &Options, watch: &Arc<Watch>) -> Result<Plan, PlanError>
 }
 
 /// The planning problem of a job at its total-time limit.
-pub(crate) fn job_problem(job: &Job, watch: &Arc<Watch>) -> Result<Problem, PlanError> {
+pub(crate) fn job_problem(job: &Job, state: &Arc<RunState>) -> Result<Problem, PlanError> {
     let model = job.robot().model::<f64>();
     let pts: Vec<Vector3<f64>> = job.knots_m().into_iter().map(Vector3::from).collect();
     let knots = knots_from(&pts, &model).map_err(|(i, reason)| PlanError::OutsideWorkspace {
@@ -119,18 +110,18 @@ pub(crate) fn job_problem(job: &Job, watch: &Arc<Watch>) -> Result<Problem, Plan
         reason,
     })?;
     let mut p = problem(knots, job.limits(), model, job.limits().total_time);
-    p.watch = watch.clone();
+    p.run = state.clone();
     p.h_max = MAX_SEGMENT_S;
     p.h_min = MIN_SEGMENT_S;
     Ok(p)
 }
 
-fn limit_of(q: Quantity) -> Limit {
+fn limit_of(q: Limited) -> Limit {
     match q {
-        Quantity::Velocity => Limit::Velocity,
-        Quantity::Acceleration => Limit::Acceleration,
-        Quantity::Jerk => Limit::Jerk,
-        Quantity::Torque => Limit::Torque,
+        Limited::Velocity => Limit::Velocity,
+        Limited::Acceleration => Limit::Acceleration,
+        Limited::Jerk => Limit::Jerk,
+        Limited::Torque => Limit::Torque,
     }
 }
 
@@ -139,11 +130,11 @@ fn infeasible(p: &Problem, s: &Solution, shortest: Option<f64>) -> PlanError {
     let q = if s.violation > 1e-9 {
         s.binding
     } else {
-        Quantity::Jerk
+        Limited::Jerk
     };
     let limit_value = p.limit(q);
     let reached = match q {
-        Quantity::Jerk => s.jerk,
+        Limited::Jerk => s.jerk,
         _ => limit_value * (1.0 + s.violation),
     };
     PlanError::Infeasible {
@@ -161,9 +152,9 @@ fn shortest(
     opts: &Options,
     relaxed: Option<SearchResult>,
 ) -> Result<(Solution, usize), MinTimeFailure> {
-    p.watch.set_stage(Stage::MinTime);
+    p.run.set_stage(Stage::MinTime);
     let (best, probe) = min_time(p, opts, relaxed)?;
-    p.watch.set_stage(Stage::Finishing);
+    p.run.set_stage(Stage::Finishing);
     let Some(rounded) = lengthen_until_feasible(p, &best) else {
         return Err(MinTimeFailure {
             best: Some(Box::new(best)),
@@ -176,7 +167,7 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
     let total_time = job.limits().total_time;
     match job.objective() {
         Objective::MinMaxJerk => {
-            p.watch.set_stage(Stage::Searching);
+            p.run.set_stage(Stage::Searching);
             let relaxed = relaxed_global(p, opts);
             // When the relaxation's optimum breaks a limit other than jerk,
             // the full search at this time only pays if a plan exists here:
@@ -201,9 +192,9 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
                 known_short = Some(short);
             }
             let r = global_from(p, opts, relaxed).ok_or_else(|| solver_failure(p))?;
-            let found = crate::search::feasible(p, &r.best);
+            let found = feasible(p, &r.best);
             if found {
-                p.watch.set_stage(Stage::Finishing);
+                p.run.set_stage(Stage::Finishing);
                 if let Some(s) = round_within(p, &r.best, total_time) {
                     return Ok((s, r.starts));
                 }
@@ -220,7 +211,7 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
                 return Err(infeasible(p, &r.best, Some(t_short)));
             }
             let stretched = stretch(p, &s, total_time)
-                .filter(|x| crate::search::feasible(p, x))
+                .filter(|x| feasible(p, x))
                 .and_then(|x| round_within(p, &x, total_time));
             Ok((stretched.unwrap_or(s), starts))
         }
@@ -240,16 +231,15 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
 /// The verdict when the shortest plan `s` is longer than `total_time`: the
 /// limit it breaks when time-scaled to `total_time`, and its time. The
 /// scaled plan is evaluated exactly, not re-solved: re-solving its knot
-/// derivatives at the shorter time lowered the figure by 0.25 % (Case II at
-/// 3.0 s) to 3.3 % (the 10-point closed curve at 2.7 s) and took 26 of the
-/// verdict's 199 interior-point solves, the most expensive ones.
+/// derivatives at the shorter time lowers the figure a little and costs the
+/// verdict's most expensive solves (docs/planner-speed.md).
 fn too_short(p: &Problem, s: &Solution, total_time: f64) -> PlanError {
     let t: f64 = s.h.iter().sum();
     let alpha = total_time / t;
     let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
     let mut at = p.clone();
     at.total_time = total_time;
-    let scaled = at.evaluate(&h, &crate::search::scaled_x(&s.x, alpha));
+    let scaled = at.evaluate(&h, &scaled_x(&s.x, alpha));
     if scaled.jerk.is_finite() && scaled.violation.is_finite() {
         infeasible(p, &scaled, Some(t))
     } else {
@@ -267,105 +257,6 @@ fn solver_failure(p: &Problem) -> PlanError {
         "no solution of the inner problem for {} knots",
         p.knots.len()
     ))
-}
-
-/// Strict acceptance of a final plan: no limit exceeded at all.
-fn meets_every_limit(p: &Problem, s: &Solution) -> bool {
-    s.violation == 0.0 && s.jerk <= p.limits.jerk
-}
-
-fn fine(p: &Problem, total: f64) -> Problem {
-    let mut f = p.clone();
-    f.torque_samples = FINAL_TORQUE_SAMPLES;
-    f.total_time = total;
-    f
-}
-
-/// Min-max-jerk: the solution's intervals stretched to the whole budget (more
-/// time never raises the jerk) and rounded to whole µs within it, re-solved
-/// exactly; None when that breaks a limit.
-pub(crate) fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option<Solution> {
-    let total: f64 = s.h.iter().sum();
-    let stretch = total_time / total;
-    let h: Vec<f64> = s.h.iter().map(|x| x * stretch).collect();
-    let h = round_to_microseconds(&h, total_time);
-    let f = fine(p, h.iter().sum());
-    let x0 = crate::search::scaled_x(&s.x, stretch);
-    let exact = f.inner_via_relaxation(&h, &x0)?;
-    if meets_every_limit(&f, &exact) {
-        return Some(exact);
-    }
-    // A limit other than jerk that binds at the optimum is met only to the
-    // solves' accuracy (the 24-point closed curve at 5.75 s: acceleration
-    // 1.1e-10 over, and the plan fell back to the shortest one, 4 % more
-    // jerk; tests/regression/lissajous-24-fast.toml does the same without
-    // this): re-solved with those limits a hair inside.
-    let inside = with_margin(&f, ROUNDING_MARGIN);
-    let exact = inside.inner_via_relaxation(&h, &exact.x)?;
-    let exact = f.evaluate(&exact.h, &exact.x);
-    meets_every_limit(&f, &exact).then_some(exact)
-}
-
-/// `p` with its velocity, acceleration and torque limits `margin` (relative) lower.
-fn with_margin(p: &Problem, margin: f64) -> Problem {
-    let mut inside = p.clone();
-    let l = &mut inside.limits;
-    for v in [&mut l.velocity, &mut l.acceleration, &mut l.torque] {
-        *v *= 1.0 - margin;
-    }
-    inside
-}
-
-/// Min-time: the solution's intervals lengthened by a factor α and rounded
-/// to whole µs, re-solved exactly. Rounding moves each interval by up to
-/// ½ µs, and on long chains of short segments the optimum is sensitive to
-/// that (a few per cent of jerk for 1e-5 relative); so α grows until every
-/// limit holds, then is bisected back towards the smallest that holds.
-fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solution> {
-    let at = |alpha: f64| -> Option<Solution> {
-        let h: Vec<f64> =
-            s.h.iter()
-                .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
-                .collect();
-        let f = fine(p, h.iter().sum());
-        f.inner_final(&h, &crate::search::scaled_x(&s.x, alpha))
-    };
-    let ok = |x: &Solution| meets_every_limit(p, x);
-    let mut lo = 1.0;
-    let mut alpha = 1.0 + 2e-6;
-    let mut excess: f64 = 0.0;
-    let mut found = None;
-    for _ in 0..REPAIRS {
-        let exact = at(alpha)?;
-        if ok(&exact) {
-            found = Some((alpha, exact));
-            break;
-        }
-        lo = alpha;
-        // Time scaling by r lowers jerk by r³ and v, a by r, r²; torque less.
-        let need = if exact.violation > 0.0 {
-            (1.0 + exact.violation).sqrt()
-        } else {
-            (exact.jerk / p.limits.jerk).cbrt()
-        };
-        excess = (need - 1.0).max(2.0 * excess).max(1e-6);
-        alpha *= 1.0 + excess;
-    }
-    let (mut hi, mut best) = found?;
-    for _ in 0..BISECTIONS {
-        if hi - lo <= 2e-6 * hi {
-            break;
-        }
-        let mid = 0.5 * (lo + hi);
-        match at(mid) {
-            Some(x) if ok(&x) => {
-                hi = mid;
-                best = x;
-            }
-            _ => lo = mid,
-        }
-    }
-    Some(best)
 }
 
 fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
@@ -393,5 +284,39 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
         segments,
         max_abs: Default::default(),
         solver: Default::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search_tests::example_problem;
+
+    #[test]
+    fn an_infeasible_verdict_names_the_binding_limit_and_its_value() {
+        let p = example_problem("paper-case1.toml");
+        let h = vec![p.total_time / p.knots.segments() as f64; p.knots.segments()];
+        let mut s = p.evaluate(&h, &p.zero_x());
+        s.violation = 0.25;
+        s.binding = Limited::Torque;
+        let e = infeasible(&p, &s, Some(7.0));
+        assert_eq!(
+            e,
+            PlanError::Infeasible {
+                limit: Limit::Torque,
+                limit_value: p.limits.torque,
+                reached: p.limits.torque * 1.25,
+                shortest_total_time: Some(7.0),
+            }
+        );
+        // Within the solves' accuracy of every other limit, jerk binds.
+        s.violation = 1e-12;
+        match infeasible(&p, &s, None) {
+            PlanError::Infeasible { limit, reached, .. } => {
+                assert_eq!(limit, Limit::Jerk);
+                assert_eq!(reached, s.jerk);
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

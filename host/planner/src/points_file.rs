@@ -9,7 +9,7 @@
 //! `.5`, `1e-3`); `nan`/`inf` and values that overflow are rejected. Every
 //! error names its 1-based line and is one line long.
 
-use crate::readable::readable;
+use triquint_shared::readable::readable;
 
 /// The largest number of points a file may hold.
 pub const MAX_POINTS: usize = 1_000_000;

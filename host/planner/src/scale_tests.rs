@@ -10,15 +10,16 @@ use std::sync::Arc;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::planning::{job_problem, round_within};
+use crate::planning::job_problem;
+use crate::rounding::round_within;
+use crate::run_state::RunState;
 use crate::search::global;
-use crate::watch::Watch;
 use crate::{Job, Limits, Options};
 
-/// Before rounding (the bound).
+/// Before rounding: the search's own tolerance.
 const BEFORE: f64 = 1e-6;
 /// Written plans of at most 12 via-points (6 to 11 segments of 0.3 s or
-/// more): the 1e-4.
+/// more): what the microsecond lattice allows.
 const WRITTEN: f64 = 1e-4;
 
 fn opts() -> Options {
@@ -30,7 +31,7 @@ fn opts() -> Options {
 
 /// Jerk × T³ before and after rounding.
 fn figures(job: &Job) -> (f64, f64) {
-    let p = job_problem(job, &Arc::new(Watch::new(None))).unwrap();
+    let p = job_problem(job, &Arc::new(RunState::new(None))).unwrap();
     let r = global(&p, &opts()).unwrap();
     let t = p.total_time;
     let written = round_within(&p, &r.best, t).unwrap();
@@ -102,7 +103,7 @@ fn random_knots_where_only_jerk_binds() {
     }
 }
 
-/// The example: 33 evenly spaced points on the axis, 520 → 620 mm.
+/// A long uniform path: 33 evenly spaced points on the axis, 520 → 620 mm.
 #[test]
 fn thirty_three_points_on_the_axis() {
     let pts: Vec<[f64; 3]> = (0..33)

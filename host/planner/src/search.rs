@@ -1,6 +1,6 @@
-//! Global search over the intervals: deterministic multistart of the local
-//! trust-region SLP (coarse from the starts in batches until two agree on
-//! the best point, then to convergence for the best few), rounding to whole microseconds, and the min-time search.
+//! Global search over the intervals: deterministic multistart of the
+//! trust-region step (coarse from the starts in batches until two agree on
+//! the best point, then to convergence for the best few).
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
@@ -8,17 +8,19 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::local::{Problem, Solution};
+use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
+use crate::problem::{Problem, Solution};
+use crate::time_scaling::scaled_x;
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
-pub struct SearchResult {
-    pub best: Solution,
+pub(crate) struct SearchResult {
+    pub(crate) best: Solution,
     /// The refined local optima, best first (`best` is the first).
-    pub shapes: Vec<Solution>,
-    pub starts: usize,
-    pub lp_solves: u64,
+    pub(crate) shapes: Vec<Solution>,
+    pub(crate) starts: usize,
+    pub(crate) lp_solves: u64,
 }
 
 /// SplitMix64: a tiny, portable, seeded generator (the plan must not depend
@@ -38,7 +40,7 @@ impl SplitMix {
 
 /// Interval sets summing to the total time: uniform, proportional to the
 /// largest joint travel, to its square root, then seeded random (Dirichlet(1)).
-pub fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
+pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
     let nseg = p.knots.segments();
     let travel: Vec<f64> = (0..nseg)
         .map(|k| {
@@ -107,8 +109,7 @@ const AGREEING: usize = 2;
 /// Above this many knots (and on the full problem, at any size) two coarse
 /// results that do not agree are refined and compared before more starts
 /// run. Below it the jerk-only relaxation's starts are cheap and the
-/// further starts' shapes help min-time (the 20-point closed curve's
-/// shortest time was 1.5e-5 longer without them).
+/// further starts' shapes help min-time (docs/planner-speed.md).
 const REFINED_AGREEMENT_KNOTS: usize = 64;
 
 /// Multistart global search for min-max jerk at the problem's total time.
@@ -118,7 +119,7 @@ const REFINED_AGREEMENT_KNOTS: usize = 64;
 /// Its global optimum bounds the problem's from below, so when it meets
 /// every other limit it is the answer; otherwise the full problem is
 /// searched, from the relaxation's optimum and the same starts.
-pub fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
+pub(crate) fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     global_from(p, opts, relaxed_global(p, opts))
 }
 
@@ -147,8 +148,8 @@ pub(crate) fn global_from(
         lp_solves = r.lp_solves;
         starts.insert(0, r.best.h);
     }
-    if p.watch.progress().stage == Stage::Searching {
-        p.watch.set_stage(Stage::LimitsBind);
+    if p.run.progress().stage == Stage::Searching {
+        p.run.set_stage(Stage::LimitsBind);
     }
     let mut r = multistart(p, &starts, opts)?;
     r.lp_solves += lp_solves;
@@ -162,9 +163,8 @@ const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 /// searched at a reference time (0.5 s a segment) and time-scaled to T.
 /// Exact: a shape's jerk scales as T⁻³, so the relaxation's optimum at any
 /// T is one shape; searched at T itself the search's absolute tolerances
-/// made it depend on T (33 points on the axis: J·T³ = 4.2520 at 2 s,
-/// 4.1947 at 5 s, 4.1905 at the reference 16 s). Searched at T when the
-/// scaled intervals leave [h_min, h_max].
+/// would make it depend on T (docs/planner-speed.md). Searched at T when
+/// the scaled intervals leave [h_min, h_max].
 pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     let target = p.relaxed();
     let direct = || multistart(&target, &start_points(p, opts.starts, opts.seed), opts);
@@ -208,10 +208,8 @@ pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
     // Where a limit other than jerk binds, a coarse search costs hundreds
-    // of solves: the refined agreement spares the further starts (the
-    // 16-point closed curve at 0.4 s a segment: 16.3 → 6.5 s, the same
-    // plan; the 24-point one at 0.25 s (`lissajous-24-fast`): 17.5 → 5.2 s,
-    // 1.5e-5 more jerk, 3.7e-4 less than b0eb6e5's).
+    // of solves: the refined agreement spares the further starts
+    // (docs/planner-speed.md has what it saves).
     let refined_agreement = p.knots.len() > REFINED_AGREEMENT_KNOTS || !p.jerk_only;
     multistart_with(p, starts, opts, refined_agreement)
 }
@@ -240,11 +238,10 @@ pub(crate) fn multistart_with(
     // Coarse searches in fixed batches (the plan must not depend on the
     // thread count), stopping once the best point so far has been reached
     // from enough starts: more starts would only find it again. Coarse
-    // results a little apart may still reach one optimum (the 200-point
-    // closed curve: the first two starts end 2.6e-3 apart in merit, and
-    // refined 6e-7 apart), so on large jobs the two best are refined and
-    // compared when they do not agree: refined results of the same merit
-    // end the starts.
+    // results a little apart may still reach one optimum (the
+    // `refined_agreement_keeps_the_optimum_of_every_start` test), so on
+    // large jobs the two best are refined and compared when they do not
+    // agree: refined results of the same merit end the starts.
     let mut coarse: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
     let mut refined: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
     let by_merit = |coarse: &[Option<Solution>]| {
@@ -273,10 +270,10 @@ pub(crate) fn multistart_with(
         };
     for batch in starts.chunks(BATCH) {
         coarse.extend(parallel(batch, opts.threads, |h| {
-            let first = p.inner(h, &p.zero_x())?;
+            let first = p.inner(h, &p.zero_x(), Method::Direct, ROUNDS)?;
             let sol = p.local_search(&first, 60, 1e-5);
             if sol.violation == 0.0 {
-                p.watch.offer_jerk(sol.jerk);
+                p.run.offer_jerk(sol.jerk);
             }
             Some(sol)
         }));
@@ -295,8 +292,8 @@ pub(crate) fn multistart_with(
         if refined_agreement && let [a, b, ..] = order[..] {
             refine_missing(&coarse, &mut refined, &[a, b]);
             // The merit alone: on long paths some intervals are nearly free
-            // at the optimum (the 400-point curve's two refined results
-            // agree to 1.6e-6 in merit, not to 1e-4 in every interval).
+            // at the optimum, so refined results agree in merit long
+            // before they agree in every interval.
             if let (Some(ra), Some(rb)) = (&refined[a], &refined[b])
                 && same_merit(ra, rb)
             {
@@ -340,7 +337,7 @@ pub(crate) fn multistart_with(
     let refined: Vec<Solution> = if p.jerk_only {
         refined
             .into_iter()
-            .map(|s| match p.inner_lp(&s.h, &s.x, 1) {
+            .map(|s| match p.inner(&s.h, &s.x, Method::CuttingPlanes, 1) {
                 Some(c) => {
                     lp_solves += c.lp_solves;
                     Solution {
@@ -363,250 +360,4 @@ pub(crate) fn multistart_with(
         starts: coarse.len(),
         lp_solves,
     })
-}
-
-/// Rounds intervals to whole microseconds without exceeding the total time.
-pub fn round_to_microseconds(h: &[f64], total_time: f64) -> Vec<f64> {
-    let mut us: Vec<i64> = h
-        .iter()
-        .map(|x| (x * 1e6).round().max(1.0) as i64)
-        .collect();
-    let budget = (total_time * 1e6 + 1e-3).floor() as i64;
-    while us.iter().sum::<i64>() > budget {
-        if let Some((i, _)) = us.iter().enumerate().max_by_key(|(_, v)| **v) {
-            us[i] -= 1;
-        }
-    }
-    // Per-interval rounding must not lose time the optimum spends: the total
-    // is the rounded sum, topped up where rounding took the most.
-    let target = ((h.iter().sum::<f64>() * 1e6).round() as i64).min(budget);
-    while us.iter().sum::<i64>() < target {
-        let residue = |i: usize| h[i] * 1e6 - us[i] as f64;
-        if let Some(i) = (0..us.len()).max_by(|&a, &b| residue(a).total_cmp(&residue(b))) {
-            us[i] += 1;
-        }
-    }
-    us.into_iter().map(|v| v as f64 * 1e-6).collect()
-}
-
-/// A solution is feasible when no limit is violated beyond rounding.
-pub fn feasible(p: &Problem, s: &Solution) -> bool {
-    s.violation <= 1e-9 && s.jerk <= p.limits.jerk * (1.0 + 1e-9)
-}
-
-/// Why min-time found no plan: the binding limit and the shortest time tried.
-#[derive(Debug, Clone)]
-pub struct MinTimeFailure {
-    /// The best plan at the longest time tried, when the search got one.
-    pub best: Option<Box<Solution>>,
-}
-
-/// Relative distance from the relaxation's shortest time within which a
-/// time-scaled shape is taken to meet it (the scaling is bisected to 1e-9).
-const LOWER_BOUND_MET: f64 = 1e-8;
-
-/// Shortest total time with a plan meeting every limit, and a plan there.
-/// It does not depend on the job's total-time limit, so a job's verdict
-/// and its shortest time agree whatever bound is asked.
-///
-/// Jerk alone gives a lower bound: the jerk-only optimum's shape does not
-/// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
-/// to the jerk limit, is the shortest time when nothing else binds. Each
-/// refined shape of that relaxation is time-scaled until velocity,
-/// acceleration and torque hold too, then shortened by the descent on Σh
-/// ([`Problem::descend_time`], every iterate feasible); the shortest wins.
-/// Only when no shape meets the limits at any time scale does a walk-up
-/// with the local search (which may reshape it) look for a first plan.
-///
-/// `relaxed` is the relaxation's search result when the caller has it (at
-/// any total time: only its shapes are used).
-pub fn min_time(
-    template: &Problem,
-    opts: &Options,
-    relaxed: Option<SearchResult>,
-) -> Result<(Solution, SearchResult), MinTimeFailure> {
-    let at = |t: f64| {
-        let mut p = template.clone();
-        p.total_time = t;
-        p
-    };
-    // A reference time of 0.5 s per segment: in theory any would do (but
-    // for h_min and h_max); the search's absolute tolerances make it matter
-    // in practice (Case II min-time: 3.491 s from 0.5, 3.563 s from 1).
-    let t_ref = 0.5 * template.knots.segments() as f64;
-    let probe = match relaxed {
-        Some(r) => r,
-        None => global(&at(t_ref).relaxed(), opts).ok_or(MinTimeFailure { best: None })?,
-    };
-    let s = &probe.best;
-    let total: f64 = s.h.iter().sum();
-    let t_low = total * (s.jerk / template.limits.jerk).cbrt();
-    // Each refined shape of the relaxation, time-scaled until it meets every
-    // limit; the shortest is shortened by the descent on Σh (every iterate
-    // feasible).
-    let total_of = |s: &Solution| s.h.iter().sum::<f64>();
-    let shortest_start = probe
-        .shapes
-        .iter()
-        .filter_map(|shape| shortest_scaling(template, &template.evaluate(&shape.h, &shape.x)))
-        .min_by(|a, b| total_of(a).total_cmp(&total_of(b)));
-    // One descent, from the shape that starts shortest: from all three it
-    // took twice the time and ended at the same plan (Case II, the 10- and
-    // 20-point closed curves).
-    if let Some(start) = shortest_start {
-        // It meets every limit at the relaxation's own shortest time, a
-        // lower bound of this problem's: no descent can shorten it (a
-        // point-to-point move, where only jerk binds, skips six LPs).
-        if total_of(&start) <= t_low * (1.0 + LOWER_BOUND_MET) {
-            return Ok((start, probe));
-        }
-        let best = template.descend_time(&start);
-        return Ok((best, probe));
-    }
-    let mut spent = 0;
-    // No shape of the relaxation meets the limits at any time scale (torque
-    // that slowing down does not lower): walk up from the lower bound with
-    // the local search, which may reshape it.
-    let mut last = None;
-    let mut found = None;
-    let mut t = t_low;
-    for _ in 0..40 {
-        let p = at(t);
-        if let Some(guess) = scale(&p, s, t) {
-            let sol = p.local_search_until(&guess, TRIAL_STEPS, 1e-9, &|sol| feasible(&p, sol));
-            spent += sol.lp_solves;
-            if feasible(&p, &sol) {
-                found = Some(sol);
-                break;
-            }
-            last = Some(sol);
-        }
-        if template.watch.cancelled().is_some() {
-            break;
-        }
-        t *= 1.1;
-    }
-    let Some(found) = found else {
-        return Err(MinTimeFailure {
-            best: last.map(Box::new),
-        });
-    };
-    let mut best = template.descend_time(&found);
-    // The descent's count starts from the walk-up trial's, already in `spent`.
-    best.lp_solves = spent + best.lp_solves - found.lp_solves;
-    Ok((best, probe))
-}
-
-/// `s`'s shape time-scaled (and evaluated, not re-solved) to the shortest
-/// total time at which it meets every limit. Velocity, acceleration and
-/// jerk fall as α⁻¹, α⁻², α⁻³ with the time scale α, and torque's inertial
-/// part as α⁻², so the feasible scalings are (in practice) a half-line:
-/// bracketed, then bisected to a relative 1e-9.
-pub(crate) fn shortest_scaling(p: &Problem, s: &Solution) -> Option<Solution> {
-    let at = |alpha: f64| {
-        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-        p.evaluate(&h, &scaled_x(&s.x, alpha))
-    };
-    let ok = |sol: &Solution| feasible(p, sol);
-    let (mut lo, mut hi, mut best) = if ok(s) {
-        // No shape meets the jerk limit faster than (J / J_max)^(1/3).
-        let lo = (s.jerk / p.limits.jerk).cbrt().min(1.0);
-        (lo * (1.0 - 1e-12), 1.0, s.clone())
-    } else {
-        let mut alpha = 1.0;
-        let mut found = None;
-        for _ in 0..30 {
-            alpha *= 1.0 + (0.5 * s.violation).clamp(1e-4, 0.5);
-            let sol = at(alpha);
-            if ok(&sol) {
-                found = Some(sol);
-                break;
-            }
-        }
-        (1.0, alpha, found?)
-    };
-    while hi - lo > 1e-9 * hi {
-        let mid = 0.5 * (lo + hi);
-        let sol = at(mid);
-        if ok(&sol) {
-            hi = mid;
-            best = sol;
-        } else {
-            lo = mid;
-        }
-    }
-    Some(Solution {
-        lp_solves: s.lp_solves,
-        ..best
-    })
-}
-
-/// Trust-region steps of one walk-up trial: a trial that has not found a
-/// feasible point by then counts as infeasible.
-const TRIAL_STEPS: usize = 20;
-
-/// A solution's shape time-scaled to total time `t` (velocities ÷ α,
-/// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
-pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
-    let alpha = t / s.h.iter().sum::<f64>();
-    let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-    let mut p = p.clone();
-    p.total_time = t;
-    p.inner_via_relaxation(&h, &scaled_x(&s.x, alpha))
-}
-
-/// Knot derivatives of a shape time-scaled by α: velocities ÷ α, accelerations ÷ α².
-pub(crate) fn scaled_x(x: &[Vec<f64>; 3], alpha: f64) -> [Vec<f64>; 3] {
-    x.clone().map(|v| {
-        let n = v.len() / 2;
-        v.iter()
-            .enumerate()
-            .map(|(i, x)| {
-                if i < n {
-                    x / alpha
-                } else {
-                    x / (alpha * alpha)
-                }
-            })
-            .collect()
-    })
-}
-
-/// A solution's shape time-scaled to total time `t`, re-solved and locally
-/// optimised there.
-pub fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
-    let guess = scale(p, s, t)?;
-    let mut p = p.clone();
-    p.total_time = t;
-    Some(p.local_search(&guess, 200, 1e-9))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::round_to_microseconds;
-
-    #[test]
-    fn rounding_keeps_the_whole_budget_and_never_exceeds_it() {
-        // 96 intervals that sum to 30 s but each round down by 0.4 µs.
-        let h: Vec<f64> = (0..96)
-            .map(|i| {
-                if i < 95 {
-                    0.3125004
-                } else {
-                    30.0 - 95.0 * 0.3125004
-                }
-            })
-            .collect();
-        let r = round_to_microseconds(&h, 30.0);
-        let total: i64 = r.iter().map(|x| (x * 1e6).round() as i64).sum();
-        assert_eq!(total, 30_000_000);
-        for (a, b) in r.iter().zip(&h) {
-            assert!((a - b).abs() <= 1.000_001e-6, "{a} vs {b}");
-        }
-        // Never above the budget, even when the optimum overshoots it slightly.
-        let over: Vec<f64> = h.iter().map(|x| x * (1.0 + 1e-7)).collect();
-        let r = round_to_microseconds(&over, 30.0);
-        let total: i64 = r.iter().map(|x| (x * 1e6).round() as i64).sum();
-        assert_eq!(total, 30_000_000);
-    }
 }

@@ -9,13 +9,28 @@ use std::path::Path;
 use std::sync::Arc;
 
 use crate::evolution::{EvolutionOptions, differential_evolution};
-use crate::local::{Problem, Solution};
+use crate::inner::{Method, ROUNDS};
+use crate::problem::{Problem, Solution};
+use crate::run_state::RunState;
 use crate::search::{global, multistart_with, start_points};
-use crate::watch::Watch;
 use crate::{Job, Options, Plan, check, plan};
 
 fn job_problem(job: &Job) -> Result<Problem, crate::PlanError> {
-    crate::planning::job_problem(job, &Arc::new(Watch::new(None)))
+    crate::planning::job_problem(job, &Arc::new(RunState::new(None)))
+}
+
+/// The problem of an example job (`examples/NAME`), for the core's unit tests.
+pub(crate) fn example_problem(name: &str) -> Problem {
+    job_problem(&example(name)).unwrap()
+}
+
+/// Uneven intervals summing to the problem's total time, so that interior
+/// extrema matter.
+pub(crate) fn uneven_intervals(p: &Problem) -> Vec<f64> {
+    let n = p.knots.segments();
+    let h: Vec<f64> = (0..n).map(|k| 1.0 + 0.3 * (k % 3) as f64).collect();
+    let sum: f64 = h.iter().sum();
+    h.iter().map(|x| x * p.total_time / sum).collect()
 }
 
 fn example(name: &str) -> Job {
@@ -95,7 +110,9 @@ fn paper_intervals_reoptimised_exactly() {
         ),
     ] {
         let p = job_problem(&example(file)).unwrap();
-        let s = p.inner_via_relaxation(&h, &p.zero_x()).unwrap();
+        let s = p
+            .inner(&h, &p.zero_x(), Method::ViaRelaxation, ROUNDS)
+            .unwrap();
         assert!((s.jerk - expect).abs() < 1e-3, "{file}: {}", s.jerk);
     }
 }
@@ -117,7 +134,7 @@ fn perturbing_the_intervals_never_improves() {
                 let mut h = best.h.clone();
                 h[i] += eps;
                 h[j] -= eps;
-                let s: Solution = p.inner_via_relaxation(&h, &best.x).unwrap();
+                let s: Solution = p.inner(&h, &best.x, Method::ViaRelaxation, ROUNDS).unwrap();
                 worst_gain = worst_gain.max(best.jerk - s.jerk);
             }
         }
@@ -140,7 +157,9 @@ fn seeded_starts_agree_on_the_optimum() {
     // every other limit of Case I, so it is the optimum.
     let relaxed = p.relaxed();
     for h in start_points(&p, 6, 7) {
-        let s0 = relaxed.inner(&h, &p.zero_x()).unwrap();
+        let s0 = relaxed
+            .inner(&h, &p.zero_x(), Method::Direct, ROUNDS)
+            .unwrap();
         let s = relaxed.local_search(&s0, 400, 1e-11);
         assert!(
             s.jerk >= best.jerk * (1.0 - 1e-6),
@@ -202,7 +221,8 @@ fn min_time_finds_the_shortest_time() {
 /// must not beat the planner. DE needs thousands of evaluations, so the test
 /// runs it on a five-point arc of Case II (four segments) at 2 s, where its
 /// population converges within the test; `cargo run --release -p
-/// triquint-host --example evolution` runs it on both paper cases.
+/// triquint-planner --features evolution --example evolution` runs it on
+/// a job.
 #[test]
 fn differential_evolution_finds_nothing_better() {
     let job = Job::from_toml(

@@ -2,10 +2,11 @@
 //! |v|, |a|, |jerk| and |τ|, and per-segment maxima.
 //!
 //! Velocity, acceleration and jerk are polynomials per segment (quartic,
-//! cubic, quadratic), so their maxima are exact ([`super::extrema`]) and
-//! their means too: ∫|p′| between the roots of p′ is a change of p. Torque
-//! is sampled on [`TORQUE_INTERVALS`] intervals per segment, the grid maximum
-//! refined by golden-section search, and averaged by Simpson's rule.
+//! cubic, quadratic), so their maxima are exact (the [`poly`](super::poly)
+//! functions) and their means too: ∫|p′| between the roots of p′ is a
+//! change of p. Torque is sampled on [`TORQUE_INTERVALS`] intervals per
+//! segment, the grid maximum refined by golden-section search, and averaged
+//! by Simpson's rule.
 
 use nalgebra::Vector3;
 use serde::Serialize;

@@ -4,11 +4,11 @@
 //! ([`Problem::time_step`]); its point, whose limits are right only to first
 //! order in the change of h, is then time-scaled to the shortest total time
 //! at which it meets every limit exactly ([`shortest_scaling`]). The scaling
-//! absorbs the second-order error that stalls a plain SLP on Σh (it stopped
-//! at 3.77 s on Case II), and the step is accepted on that exact time.
+//! absorbs the second-order error that stalls a plain SLP on Σh
+//! (docs/planner-speed.md), and the step is accepted on that exact time.
 
-use crate::local::{Problem, Solution};
-use crate::search::shortest_scaling;
+use crate::problem::{Problem, Solution};
+use crate::time_scaling::shortest_scaling;
 
 /// Steps at most.
 const MAX_STEPS: usize = 80;
@@ -17,60 +17,82 @@ const PROMISE_FLOOR: f64 = 1e-6;
 /// Consecutive steps gaining less than this (relative) end the descent.
 const STALL_GAIN: f64 = 1e-7;
 
-impl Problem {
-    /// From a feasible solution, the shortest feasible plan the descent
-    /// reaches (`start` itself when no step gains).
-    pub(crate) fn descend_time(&self, start: &Solution) -> Solution {
-        let mut cur = start.clone();
-        let mut delta: f64 = 0.05;
-        let mut solves = 0;
-        let mut stalled = 0;
-        for _ in 0..MAX_STEPS {
-            let t_cur: f64 = cur.h.iter().sum();
-            let mut p = self.clone();
-            p.total_time = t_cur;
-            let Ok(step) = p.time_step(&cur, delta) else {
-                delta *= 0.25;
-                if delta < 1e-7 {
-                    break;
-                }
-                continue;
-            };
-            solves += step.solves;
-            let (h, x) = (step.h, step.x);
-            let promised = t_cur - h.iter().sum::<f64>();
-            // A promised gain near the plan's microsecond rounding is not
-            // worth the steps: on the 20-point closed curve the last 52 of
-            // 80 steps gained 2.4e-5 of the time together.
-            if promised <= PROMISE_FLOOR * t_cur {
+/// From a feasible solution of `template`, the shortest feasible plan the
+/// descent reaches (`start` itself when no step gains).
+pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
+    let mut cur = start.clone();
+    let mut delta: f64 = 0.05;
+    let mut solves = 0;
+    let mut stalled = 0;
+    for _ in 0..MAX_STEPS {
+        let t_cur: f64 = cur.h.iter().sum();
+        let mut p = template.clone();
+        p.total_time = t_cur;
+        let Ok(step) = p.time_step(&cur, delta) else {
+            delta *= 0.25;
+            if delta < 1e-7 {
                 break;
             }
-            let exact = p.evaluate(&h, &x);
-            let cand = shortest_scaling(&p, &exact);
-            let actual = cand
-                .as_ref()
-                .map_or(f64::NEG_INFINITY, |c| t_cur - c.h.iter().sum::<f64>());
-            let rho = actual / promised;
-            if let (Some(c), true) = (cand, rho > 0.1) {
-                stalled = if actual < STALL_GAIN * t_cur {
-                    stalled + 1
-                } else {
-                    0
-                };
-                cur = c;
-                if rho > 0.75 {
-                    delta = (delta * 2.0).min(0.5);
-                } else if rho < 0.25 {
-                    delta *= 0.5;
-                }
-            } else {
-                delta *= 0.25;
-            }
-            if stalled >= 3 || delta < 1e-7 {
-                break;
-            }
+            continue;
+        };
+        solves += step.solves;
+        let (h, x) = (step.h, step.x);
+        let promised = t_cur - h.iter().sum::<f64>();
+        // A promised gain near the plan's microsecond rounding is not
+        // worth the steps: such a tail of steps gains almost nothing
+        // together (docs/planner-speed.md).
+        if promised <= PROMISE_FLOOR * t_cur {
+            break;
         }
-        cur.lp_solves = start.lp_solves + solves;
-        cur
+        let exact = p.evaluate(&h, &x);
+        let cand = shortest_scaling(&p, &exact);
+        let actual = cand
+            .as_ref()
+            .map_or(f64::NEG_INFINITY, |c| t_cur - c.h.iter().sum::<f64>());
+        let rho = actual / promised;
+        if let (Some(c), true) = (cand, rho > 0.1) {
+            stalled = if actual < STALL_GAIN * t_cur {
+                stalled + 1
+            } else {
+                0
+            };
+            cur = c;
+            if rho > 0.75 {
+                delta = (delta * 2.0).min(0.5);
+            } else if rho < 0.25 {
+                delta *= 0.5;
+            }
+        } else {
+            delta *= 0.25;
+        }
+        if stalled >= 3 || delta < 1e-7 {
+            break;
+        }
+    }
+    cur.lp_solves = start.lp_solves + solves;
+    cur
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inner::{Method, ROUNDS};
+    use crate::problem::feasible;
+    use crate::search_tests::{example_problem, uneven_intervals};
+
+    #[test]
+    fn the_descent_shortens_and_every_iterate_is_feasible() {
+        let mut p = example_problem("paper-case2.toml");
+        p.limits.jerk = 1.0;
+        let h = uneven_intervals(&p);
+        let s = p
+            .inner(&h, &p.zero_x(), Method::ViaRelaxation, ROUNDS)
+            .unwrap();
+        let start = shortest_scaling(&p, &s).unwrap();
+        let end = descend_time(&p, &start);
+        let (t0, t1) = (start.h.iter().sum::<f64>(), end.h.iter().sum::<f64>());
+        assert!(t1 < t0 * (1.0 - 1e-3), "{t1} against {t0}");
+        assert!(feasible(&p, &end));
+        assert!(end.lp_solves > start.lp_solves);
     }
 }

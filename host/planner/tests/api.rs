@@ -3,9 +3,11 @@
 
 use std::time::Duration;
 
+use triquint_planner::bounds::MAX_POINTS;
+use triquint_planner::files::parse_plan;
 use triquint_planner::{
-    CancelReason, Control, Job, Limit, MAX_POINTS, Objective, Options, PlanError, PointKind,
-    Progress, check, parse_plan, plan, plan_with,
+    CancelReason, Control, Job, Limit, Objective, Options, PlanError, PointKind, Progress, check,
+    plan, plan_with,
 };
 
 fn case2() -> Job {

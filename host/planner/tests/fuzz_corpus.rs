@@ -62,7 +62,7 @@ fn points_corpus_and_random_inputs_pass() {
             .collect();
         fuzz_points(&data);
         oks += usize::from(
-            triquint_planner::parse_points(std::str::from_utf8(&data).unwrap_or("")).is_ok(),
+            triquint_planner::files::parse_points(std::str::from_utf8(&data).unwrap_or("")).is_ok(),
         );
     }
     assert!(oks > 100, "only {oks} inputs parsed");

@@ -9,7 +9,8 @@ use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
-use triquint_planner::{CancelReason, LoadError, PlanError, PointKind};
+use triquint_planner::files::LoadError;
+use triquint_planner::{CancelReason, PlanError, PointKind};
 
 use crate::units::Units;
 

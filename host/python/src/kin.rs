@@ -4,9 +4,9 @@
 use nalgebra::Vector3;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use triquint_planner::readable;
 use triquint_shared::dynamics;
 use triquint_shared::kinematics::Pose;
+use triquint_shared::readable::readable;
 
 use crate::arrays::{Floats, floats, rows_array};
 use crate::errors::{guard, invalid_job, outside_instance};

@@ -337,7 +337,7 @@ impl PyPlan {
     #[classmethod]
     fn from_json(_cls: &Bound<'_, PyType>, py: Python<'_>, text: &str) -> PyResult<Self> {
         let plan = guard(py, || {
-            triquint_planner::parse_plan(text).map_err(|e| load_error(py, &e, None))
+            triquint_planner::files::parse_plan(text).map_err(|e| load_error(py, &e, None))
         })?;
         Ok(Self { plan })
     }
@@ -351,7 +351,8 @@ impl PyPlan {
         let text = std::fs::read_to_string(&path)?;
         let origin = path.display().to_string();
         let plan = guard(py, || {
-            triquint_planner::parse_plan(&text).map_err(|e| load_error(py, &e, Some(&origin)))
+            triquint_planner::files::parse_plan(&text)
+                .map_err(|e| load_error(py, &e, Some(&origin)))
         })?;
         Ok(Self { plan })
     }

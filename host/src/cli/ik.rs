@@ -3,9 +3,9 @@
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
-use triquint_planner::readable;
 use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
+use triquint_shared::readable::readable;
 
 use super::{finite, fmt_triple};
 use crate::exit::{CliError, CliResult};

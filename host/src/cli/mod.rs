@@ -75,6 +75,6 @@ pub fn same_robot(robot_file: Option<&std::path::Path>, plan: &std::path::Path) 
 pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
-    triquint_planner::parse_plan(&text)
+    triquint_planner::files::parse_plan(&text)
         .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", path.display())))
 }

@@ -64,9 +64,9 @@ pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
     Pose::from_cartesian(&m, target).map_err(|e| {
         CliError::bad_input(format!(
             "target ({}, {}, {}) mm is not reachable: {e}",
-            triquint_planner::readable(target_mm.x),
-            triquint_planner::readable(target_mm.y),
-            triquint_planner::readable(target_mm.z)
+            triquint_shared::readable::readable(target_mm.x),
+            triquint_shared::readable::readable(target_mm.y),
+            triquint_shared::readable::readable(target_mm.z)
         ))
     })?;
     check_bus_args(&args.bus)?;

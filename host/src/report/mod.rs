@@ -14,10 +14,10 @@ pub(crate) use triquint_planner::poly as extrema;
 
 /// The planner's plan statistics, as the tables and plots use them.
 pub(crate) mod stats {
-    pub use triquint_planner::{PlanStats, Quantity, segment_torque};
+    pub use triquint_planner::stats::{PlanStats, Quantity, segment_torque};
 }
 
-pub use triquint_planner::{PlanStats, plan_stats};
+pub use triquint_planner::stats::{PlanStats, plan_stats};
 
 /// Why a report cannot be made from a plan.
 #[derive(Debug, thiserror::Error)]
@@ -34,8 +34,8 @@ pub enum ReportError {
     },
 }
 
-impl From<triquint_planner::StatsError> for ReportError {
-    fn from(e: triquint_planner::StatsError) -> Self {
+impl From<triquint_planner::stats::StatsError> for ReportError {
+    fn from(e: triquint_planner::stats::StatsError) -> Self {
         ReportError::Kinematics {
             segment: e.segment,
             time_s: e.time_s,

@@ -214,7 +214,7 @@ mod tests {
 
     fn case1() -> Plan {
         let text = include_str!("../../../testdata/protocol/plans/case1-spline.json");
-        triquint_planner::parse_plan(text).unwrap()
+        triquint_planner::files::parse_plan(text).unwrap()
     }
 
     /// The recomputed feedforward is the drives' own: with feedforward on,

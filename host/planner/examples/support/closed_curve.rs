@@ -1,4 +1,4 @@
-//! The closed curve of issue 15's scaling jobs and verdicts, shared by
+//! The closed curve of the speed figures' scaling jobs and verdicts, shared by
 //! `examples/scaling_paths.rs` (which writes it as job files) and
 //! `benches/planner.rs` (which plans it in process).
 

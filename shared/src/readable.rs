@@ -1,4 +1,10 @@
-//! Numbers for messages: at most 6 significant digits, no trailing zeros.
+//! Numbers for one-line messages, the same in every front end (the
+//! planner's errors, the CLI, the Python bindings): at most 6 significant
+//! digits, no trailing zeros.
+
+use alloc::borrow::ToOwned;
+use alloc::format;
+use alloc::string::String;
 
 /// `x` for a one-line message: plain decimals for moderate magnitudes,
 /// scientific (`1e300`, `-2.5e-9`) when the value rounded to 6 significant

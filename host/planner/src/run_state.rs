@@ -8,7 +8,7 @@ use crate::error::CancelReason;
 use crate::options::{Progress, Stage};
 
 #[derive(Debug)]
-pub(crate) struct Watch {
+pub(crate) struct RunState {
     started: Instant,
     deadline: Option<Instant>,
     cancelled: AtomicBool,
@@ -26,7 +26,7 @@ const STAGES: [Stage; 4] = [
     Stage::Finishing,
 ];
 
-impl Watch {
+impl RunState {
     pub(crate) fn new(budget: Option<Duration>) -> Self {
         let started = Instant::now();
         Self {

@@ -1,0 +1,219 @@
+//! The inner problem: the exact min-max-jerk knot derivatives at fixed
+//! intervals, by one of the [`Method`]s.
+//!
+//! Cutting planes: the program ([`crate::program`]) is solved, its point
+//! evaluated exactly, and cuts are added at the new extrema until the
+//! program's bound equals the exact continuous-time maximum. Torque cuts are
+//! re-linearised at each new point until they hold.
+
+use crate::problem::{Limited, Problem, Solution};
+use crate::program::add_new_cuts;
+
+/// Relative tolerance of the cutting-plane loop.
+const TOL: f64 = 1e-9;
+/// Cutting-plane rounds of a full inner solve.
+pub(crate) const ROUNDS: usize = 25;
+/// Accuracy of the inner solves. Tighter asks for more than the interior
+/// point method delivers on these degenerate problems (most solves then end
+/// "almost solved", less accurate than this).
+const INNER_TOL: f64 = 1e-9;
+
+/// How an inner solve is done. Each gives the exact optimum when it
+/// succeeds; they differ in cost, and in which optimal knot derivatives
+/// they pick where the optimum is not unique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Method {
+    /// Cutting planes by interior-point solves only.
+    CuttingPlanes,
+    /// On the jerk-only relaxation, each joint's exact optimum without an
+    /// interior-point solve ([`crate::jerk_only`]) when it certifies;
+    /// otherwise (and on the full problem) cutting planes.
+    Direct,
+    /// Through the relaxation: its interior-point optimum when that meets
+    /// every limit (then it is exact and the cutting planes are skipped),
+    /// else cutting planes from its knot derivatives.
+    ViaRelaxation,
+    /// For a final plan: the relaxation's direct solve when it meets every
+    /// limit, else [`Method::ViaRelaxation`]. Only at the end: the search
+    /// and the descent start better from the interior-point solve's central
+    /// knot derivatives.
+    Final,
+}
+
+impl Problem {
+    /// The inner optimum at intervals `h` by `method`, with at most
+    /// `rounds` cutting-plane rounds. `x0` is where torque is first
+    /// linearised (zeros will do). None when a solve fails or is cancelled.
+    pub(crate) fn inner(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        method: Method,
+        rounds: usize,
+    ) -> Option<Solution> {
+        match method {
+            Method::CuttingPlanes => self.cutting_planes(h, x0, rounds),
+            Method::Direct => self.direct(h, x0, rounds),
+            Method::ViaRelaxation => self.via_relaxation(h, x0, rounds),
+            Method::Final => self.final_solve(h, x0, rounds),
+        }
+    }
+
+    /// [`Method::Direct`].
+    fn direct(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        if self.jerk_only
+            && self.run.cancelled().is_none()
+            && let Some(x) = self.jerk_only_direct(h, x0)
+        {
+            let fig = self.evaluation(h, &x, self.torque_samples);
+            return Some(Solution {
+                h: h.to_vec(),
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: 0,
+            });
+        }
+        self.cutting_planes(h, x0, max_rounds)
+    }
+
+    /// [`Method::CuttingPlanes`].
+    fn cutting_planes(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        let mut x = x0.clone();
+        let first = self.evaluation(h, &x, self.torque_samples);
+        let mut jerk = first.jerk;
+        let mut cuts = first.cuts;
+        let mut solves = 0;
+        for _ in 0..max_rounds {
+            let mut lp = self.build(h, &x, &cuts, None, jerk);
+            lp.tolerance = INNER_TOL;
+            let sol = self.solve(&lp).ok()?;
+            solves += 1;
+            let s_lp = sol[3 * self.nv()];
+            let sigma_lp = sol[3 * self.nv() + 1];
+            let prev = x.clone();
+            x = self.unpack(&sol);
+            self.project(h, &mut x);
+            let fig = self.evaluation(h, &x, self.torque_samples);
+            jerk = fig.jerk;
+            let moved = x
+                .iter()
+                .zip(&prev)
+                .flat_map(|(a, b)| a.iter().zip(b))
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let scale = x.iter().flatten().map(|v| v.abs()).fold(1e-3, f64::max);
+            let exact = fig.jerk <= s_lp * (1.0 + TOL) + 1e-12
+                && fig.violation <= sigma_lp + TOL
+                && (fig.binding != Limited::Torque || moved <= 1e-9 * scale);
+            let before = cuts.len();
+            add_new_cuts(&mut cuts, &fig.cuts);
+            // Without a new cut the next LP is the same one, unless torque
+            // cuts are re-linearised at the new point: stop, the figures are exact.
+            let relinearise = moved > 1e-9 * scale && cuts.iter().any(|c| c.q == Limited::Torque);
+            let stuck = cuts.len() == before && !relinearise;
+            if exact || stuck || solves == max_rounds as u64 {
+                return Some(Solution {
+                    h: h.to_vec(),
+                    x,
+                    jerk: fig.jerk,
+                    violation: fig.violation,
+                    binding: fig.binding,
+                    lp_solves: solves,
+                });
+            }
+        }
+        None
+    }
+
+    /// [`Method::ViaRelaxation`].
+    fn via_relaxation(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        // The relaxation's probe keeps the interior-point solve: its knot
+        // derivatives (the analytic centre of the non-binding joints') start
+        // the full problem's cutting planes, and start them better than the
+        // direct solve's, each joint at its own optimum (docs/planner-speed.md).
+        if !self.jerk_only
+            && let Some(r) = self.relaxed().cutting_planes(h, x0, ROUNDS)
+        {
+            if let Some(sol) = self.accept_relaxed(&r) {
+                return Some(sol);
+            }
+            return self.direct(h, &r.x, max_rounds).map(|s| Solution {
+                lp_solves: s.lp_solves + r.lp_solves,
+                ..s
+            });
+        }
+        self.direct(h, x0, max_rounds)
+    }
+
+    /// [`Method::Final`].
+    fn final_solve(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+        if !self.jerk_only
+            && self.run.cancelled().is_none()
+            && let Some(x) = self.relaxed().jerk_only_direct(h, x0)
+        {
+            let full = self.evaluate(h, &x);
+            if full.violation == 0.0 {
+                return Some(full);
+            }
+        }
+        self.via_relaxation(h, x0, max_rounds)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search_tests::{example_problem, uneven_intervals};
+
+    /// Every method reaches the same exact optimum, where only jerk binds
+    /// and where velocity binds (then the relaxation's answer is refused).
+    #[test]
+    fn every_method_reaches_the_same_optimum() {
+        for binds in [false, true] {
+            let mut p = example_problem("paper-case1.toml");
+            let h = uneven_intervals(&p);
+            let relaxed = p.relaxed();
+            let free = relaxed
+                .inner(&h, &p.zero_x(), Method::Direct, ROUNDS)
+                .unwrap();
+            if binds {
+                // 0.9 of the relaxation's optimum's peak velocity.
+                let mut probe = p.clone();
+                probe.limits.velocity = 1e-9;
+                let peak = 1e-9 * (1.0 + probe.evaluate(&h, &free.x).violation);
+                p.limits.velocity = 0.9 * peak;
+            }
+            assert_eq!(p.accept_relaxed(&free).is_none(), binds);
+            let merit = |s: &Solution| s.merit(p.weight);
+            let solve = |m| p.inner(&h, &p.zero_x(), m, ROUNDS).unwrap();
+            let planes = solve(Method::CuttingPlanes);
+            for m in [Method::Direct, Method::ViaRelaxation, Method::Final] {
+                let s = solve(m);
+                assert!(
+                    (merit(&s) - merit(&planes)).abs() <= 1e-7 * merit(&planes),
+                    "{m:?}: {} against {}",
+                    merit(&s),
+                    merit(&planes)
+                );
+                assert!(
+                    s.jerk >= free.jerk * (1.0 - 1e-9),
+                    "{m:?} below the relaxation"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_cancelled_run_solves_nothing() {
+        let p = example_problem("paper-case1.toml");
+        p.run.cancel();
+        let h = uneven_intervals(&p);
+        assert!(
+            p.inner(&h, &p.zero_x(), Method::CuttingPlanes, ROUNDS)
+                .is_none()
+        );
+        assert!(p.inner(&h, &p.zero_x(), Method::Final, ROUNDS).is_none());
+    }
+}

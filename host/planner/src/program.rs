@@ -1,0 +1,315 @@
+//! The program of a problem at a point: the second-order-cone program whose
+//! optimum is the min-max-jerk knot derivatives, with h fixed or, in a
+//! trust region, linearised in h.
+//!
+//! Velocity, acceleration and torque limits enter as cutting planes at the
+//! evaluation's extrema ([`crate::problem`]); torque is linearised in
+//! (q, q̇, q̈) there.
+
+// Index loops over joints and segments mirror the maths.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::Vector3;
+use triquint_shared::dynamics;
+
+use crate::lp::Lp;
+use crate::problem::{Cut, Limited, Problem};
+use crate::spline::Affine;
+
+/// Jerk (m/s³) below which a program's jerk rows are scaled to 1 (see
+/// [`Problem::build`]). Not at 1: the small relaxations of point-to-point
+/// moves then took more solves to the same plan (docs/planner-speed.md).
+const SMALL_JERK: f64 = 0.1;
+
+/// Terms of one LP row built from affine forms.
+#[derive(Default)]
+struct RowBuilder {
+    terms: Vec<(usize, f64)>,
+    /// Value of the row's affine expression with all LP variables at zero.
+    constant: f64,
+}
+
+impl RowBuilder {
+    /// Σ scale·row.
+    fn combine(parts: &[(f64, &RowBuilder)]) -> RowBuilder {
+        let mut out = RowBuilder::default();
+        for &(scale, row) in parts {
+            out.terms
+                .extend(row.terms.iter().map(|&(c, v)| (c, scale * v)));
+            out.constant += scale * row.constant;
+        }
+        out
+    }
+
+    /// The row plus coef·(variable col).
+    fn plus(mut self, col: usize, coef: f64) -> RowBuilder {
+        self.terms.push((col, coef));
+        self
+    }
+
+    /// Adds scale·(an affine form of joint j on segment k), linearised at x0.
+    fn add(&mut self, scale: f64, f: &Affine, x0: &[f64], x_off: usize, dh_col: Option<usize>) {
+        let mut c = f.value;
+        for &(v, a) in f.dx() {
+            self.terms.push((x_off + v, scale * a));
+            c -= a * x0[v];
+        }
+        if let Some(col) = dh_col {
+            self.terms.push((col, scale * f.dh));
+        }
+        self.constant += scale * c;
+    }
+}
+
+impl Problem {
+    /// Joint positions, velocities, accelerations at (segment k, u) as affine forms.
+    fn motion_forms(&self, h: &[f64], x: &[Vec<f64>; 3], k: usize, u: f64) -> [[Affine; 3]; 3] {
+        [0, 1, 2].map(|j| [0, 1, 2].map(|r| self.knots.functional(&x[j], j, k, u, r, h[k])))
+    }
+
+    /// Builds the LP at (h, x) with these cuts; `trust` = Some(Δ) lets h move by
+    /// at most Δ·h_k (linearised), None keeps h fixed. `jerk` is the size of
+    /// the jerks about there (m/s³): below [`SMALL_JERK`] the jerk rows and
+    /// the cost are divided by it. The solver's gap and residual tests are
+    /// absolute below 1 (its relative measures have a floor of 1), so at a
+    /// small jerk they are coarse relative to it, and the trust-region steps
+    /// stall on that noise (docs/planner-speed.md).
+    /// Scaling a row with its right-hand side, or a cone's rows together,
+    /// keeps the feasible set; scaling the cost keeps the optimum.
+    pub(crate) fn build(
+        &self,
+        h: &[f64],
+        x: &[Vec<f64>; 3],
+        cuts: &[Cut],
+        trust: Option<f64>,
+        jerk: f64,
+    ) -> Lp {
+        let k_j = if jerk < SMALL_JERK {
+            1.0 / jerk.max(1e-12)
+        } else {
+            1.0
+        };
+        let nv = self.nv();
+        let nseg = self.nseg();
+        let dh0 = 3 * nv;
+        let s_col = dh0 + if trust.is_some() { nseg } else { 0 };
+        let sigma = s_col + 1;
+        let lambda0 = sigma + 1;
+        let mut lp = Lp::new(lambda0 + 6 * nseg);
+        lp.cost[s_col] = k_j;
+        lp.cost[sigma] = self.weight * k_j;
+        let dh_col = |k: usize| trust.map(|_| dh0 + k);
+
+        // C3 at interior knots and zero jerk at both ends.
+        for j in 0..3 {
+            for (a, b) in self.jerk_conditions() {
+                let mut row = RowBuilder::default();
+                for (scale, (k, u)) in [(1.0, a), (-1.0, b.unwrap_or((0, f64::NAN)))] {
+                    if u.is_nan() {
+                        continue;
+                    }
+                    let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
+                    row.add(scale * k_j, &f, &x[j], j * nv, dh_col(k));
+                }
+                lp.equal(&row.terms, -row.constant);
+            }
+        }
+
+        // |jerk| ≤ s on every whole segment, exactly: s ∓ J(u) is a quadratic
+        // in u that must be ≥ 0 on [0, 1], which holds iff it equals
+        // σ₀(u) + λ u(1 − u) with σ₀ a sum of squares (a 2×2 PSD matrix, i.e.
+        // a 3-dimensional second-order cone) and λ ≥ 0 (Markov–Lukács).
+        for j in 0..3 {
+            for k in 0..nseg {
+                let at = |u: f64| {
+                    let mut row = RowBuilder::default();
+                    let f = self.knots.functional(&x[j], j, k, u, 3, h[k]);
+                    row.add(k_j, &f, &x[j], j * nv, dh_col(k));
+                    row
+                };
+                let (j0, jm, j1) = (at(0.0), at(0.5), at(1.0));
+                // Power coefficients of J(u) from its values at 0, ½, 1.
+                let c0 = RowBuilder::combine(&[(1.0, &j0)]);
+                let c1 = RowBuilder::combine(&[(-3.0, &j0), (4.0, &jm), (-1.0, &j1)]);
+                let c2 = RowBuilder::combine(&[(2.0, &j0), (-4.0, &jm), (2.0, &j1)]);
+                for (n, sign) in [1.0, -1.0].into_iter().enumerate() {
+                    let lam = lambda0 + 6 * k + 2 * j + n;
+                    lp.at_most(&[(lam, -1.0)], 0.0);
+                    // p(u) = s − sign·J(u): p0 = s − sign c0, p1 = −sign c1, p2 = −sign c2.
+                    let p0 = RowBuilder::combine(&[(-sign, &c0)]).plus(s_col, k_j);
+                    let p1 = RowBuilder::combine(&[(-sign, &c1)]);
+                    let p2 = RowBuilder::combine(&[(-sign, &c2)]);
+                    let t = RowBuilder::combine(&[(1.0, &p0), (1.0, &p2)]).plus(lam, 1.0);
+                    let a = RowBuilder::combine(&[(1.0, &p1)]).plus(lam, -1.0);
+                    let b = RowBuilder::combine(&[(1.0, &p0), (-1.0, &p2)]).plus(lam, -1.0);
+                    lp.second_order_cone([
+                        (&t.terms, t.constant),
+                        (&a.terms, a.constant),
+                        (&b.terms, b.constant),
+                    ]);
+                }
+            }
+        }
+
+        for cut in cuts {
+            let mut row = RowBuilder::default();
+            match cut.q {
+                Limited::Torque => {
+                    let f = self.motion_forms(h, x, cut.k, cut.u);
+                    let Some(grad) = self.torque_gradient(&f, cut.j) else {
+                        continue;
+                    };
+                    for j in 0..3 {
+                        for r in 0..3 {
+                            row.add(grad.1[j][r], &f[j][r], &x[j], j * nv, dh_col(cut.k));
+                        }
+                    }
+                    // Affine part: τ0 − Σ ∂τ·D0 + Σ ∂τ·D(x, δh).
+                    let lin0: f64 = (0..3)
+                        .flat_map(|j| (0..3).map(move |r| (j, r)))
+                        .map(|(j, r)| grad.1[j][r] * f[j][r].value)
+                        .sum();
+                    row.constant += grad.0 - lin0;
+                }
+                q => {
+                    let r = match q {
+                        Limited::Velocity => 1,
+                        Limited::Acceleration => 2,
+                        _ => 3,
+                    };
+                    let f = self
+                        .knots
+                        .functional(&x[cut.j], cut.j, cut.k, cut.u, r, h[cut.k]);
+                    row.add(1.0, &f, &x[cut.j], cut.j * nv, dh_col(cut.k));
+                }
+            }
+            for sign in [1.0, -1.0] {
+                let mut terms: Vec<(usize, f64)> =
+                    row.terms.iter().map(|&(c, v)| (c, sign * v)).collect();
+                if cut.q == Limited::Jerk {
+                    terms.iter_mut().for_each(|t| t.1 *= k_j);
+                    terms.push((s_col, -k_j));
+                    lp.at_most(&terms, -sign * row.constant * k_j);
+                } else {
+                    let lim = self.limit(cut.q);
+                    terms.push((sigma, -lim));
+                    lp.at_most(&terms, lim - sign * row.constant);
+                }
+            }
+        }
+        lp.at_most(&[(sigma, -1.0)], 0.0);
+
+        if let Some(delta) = trust {
+            let slack = self.total_time - h.iter().sum::<f64>();
+            let all: Vec<(usize, f64)> = (0..nseg).map(|k| (dh0 + k, 1.0)).collect();
+            lp.at_most(&all, slack.max(0.0));
+            for (k, &hk) in h.iter().enumerate() {
+                lp.at_most(
+                    &[(dh0 + k, 1.0)],
+                    (delta * hk).min(self.h_max - hk).max(0.0),
+                );
+                lp.at_most(
+                    &[(dh0 + k, -1.0)],
+                    (delta * hk).min(hk - self.h_min).max(0.0),
+                );
+            }
+        }
+        lp
+    }
+
+    /// τ_axis and ∂τ_axis/∂(q_j, q̇_j, q̈_j) at a point.
+    #[allow(clippy::type_complexity)]
+    fn torque_gradient(&self, f: &[[Affine; 3]; 3], axis: usize) -> Option<(f64, [[f64; 3]; 3])> {
+        let base = [0, 1, 2].map(|r| Vector3::new(f[0][r].value, f[1][r].value, f[2][r].value));
+        let tau = |s: &[Vector3<f64>; 3]| {
+            dynamics::torque(&self.model, &s[0], &s[1], &s[2])
+                .ok()
+                .map(|t| t[axis])
+        };
+        let t0 = tau(&base)?;
+        let mut grad = [[0.0; 3]; 3];
+        for (j, row) in grad.iter_mut().enumerate() {
+            for (r, g) in row.iter_mut().enumerate() {
+                // Torque is affine in q̈ and quadratic in q̇: central differences are exact there.
+                let e = if r == 0 { 1e-6 } else { 1e-3 };
+                let mut plus = base;
+                plus[r][j] += e;
+                let mut minus = base;
+                minus[r][j] -= e;
+                *g = (tau(&plus)? - tau(&minus)?) / (2.0 * e);
+            }
+        }
+        Some((t0, grad))
+    }
+}
+
+/// Appends the cuts of `found` that `cuts` does not hold yet (same
+/// quantity, joint, segment and normalised time).
+pub(crate) fn add_new_cuts(cuts: &mut Vec<Cut>, found: &[Cut]) {
+    for c in found {
+        if !cuts
+            .iter()
+            .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
+        {
+            cuts.push(*c);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search_tests::{example_problem, uneven_intervals};
+
+    /// Markov–Lukács makes the program's jerk bound exact on whole
+    /// segments: with jerk alone and h fixed, one solve's bound is the
+    /// exact maximum of its point.
+    #[test]
+    fn one_solve_of_the_jerk_program_is_exact() {
+        let p = example_problem("paper-case2.toml").relaxed();
+        let h = uneven_intervals(&p);
+        let x0 = p.zero_x();
+        let lp = p.build(&h, &x0, &[], None, 1.0);
+        let sol = p.solve(&lp).unwrap();
+        let s_lp = sol[3 * p.nv()];
+        let mut x = p.unpack(&sol);
+        p.project(&h, &mut x);
+        let exact = p.evaluate(&h, &x).jerk;
+        assert!(
+            (exact - s_lp).abs() <= 1e-6 * exact,
+            "bound {s_lp}, exact {exact}"
+        );
+    }
+
+    #[test]
+    fn a_trust_region_keeps_the_intervals_within_it() {
+        let p = example_problem("paper-case1.toml").relaxed();
+        let h = uneven_intervals(&p);
+        let x = p.evaluate(&h, &p.zero_x()).x;
+        let delta = 0.1;
+        let lp = p.build(&h, &x, &[], Some(delta), 1.0);
+        let sol = p.solve(&lp).unwrap();
+        let dh0 = 3 * p.nv();
+        let total: f64 = (0..p.nseg()).map(|k| h[k] + sol[dh0 + k]).sum();
+        assert!(total <= p.total_time * (1.0 + 1e-7), "{total}");
+        for k in 0..p.nseg() {
+            assert!(
+                sol[dh0 + k].abs() <= delta * h[k] * (1.0 + 1e-6),
+                "segment {k}"
+            );
+        }
+    }
+
+    #[test]
+    fn new_cuts_are_added_once() {
+        let cut = |k: usize, u: f64| Cut {
+            q: Limited::Velocity,
+            j: 0,
+            k,
+            u,
+        };
+        let mut cuts = vec![cut(0, 0.5)];
+        add_new_cuts(&mut cuts, &[cut(0, 0.5 + 1e-12), cut(1, 0.5), cut(1, 0.5)]);
+        assert_eq!(cuts, vec![cut(0, 0.5), cut(1, 0.5)]);
+    }
+}

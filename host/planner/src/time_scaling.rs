@@ -1,0 +1,122 @@
+//! Time-scaling a solution's shape: the same intervals and knot
+//! derivatives stretched by a factor α (velocities ÷ α, accelerations ÷ α²,
+//! jerk ÷ α³), evaluated as it is or re-solved at the new intervals.
+
+use crate::inner::{Method, ROUNDS};
+use crate::problem::{Problem, Solution, feasible};
+
+/// Knot derivatives of a shape time-scaled by α: velocities ÷ α, accelerations ÷ α².
+pub(crate) fn scaled_x(x: &[Vec<f64>; 3], alpha: f64) -> [Vec<f64>; 3] {
+    x.clone().map(|v| {
+        let n = v.len() / 2;
+        v.iter()
+            .enumerate()
+            .map(|(i, x)| {
+                if i < n {
+                    x / alpha
+                } else {
+                    x / (alpha * alpha)
+                }
+            })
+            .collect()
+    })
+}
+
+/// `s`'s shape time-scaled (and evaluated, not re-solved) to the shortest
+/// total time at which it meets every limit. Velocity, acceleration and
+/// jerk fall as α⁻¹, α⁻², α⁻³ with the time scale α, and torque's inertial
+/// part as α⁻², so the feasible scalings are (in practice) a half-line:
+/// bracketed, then bisected to a relative 1e-9.
+pub(crate) fn shortest_scaling(p: &Problem, s: &Solution) -> Option<Solution> {
+    let at = |alpha: f64| {
+        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+        p.evaluate(&h, &scaled_x(&s.x, alpha))
+    };
+    let ok = |sol: &Solution| feasible(p, sol);
+    let (mut lo, mut hi, mut best) = if ok(s) {
+        // No shape meets the jerk limit faster than (J / J_max)^(1/3).
+        let lo = (s.jerk / p.limits.jerk).cbrt().min(1.0);
+        (lo * (1.0 - 1e-12), 1.0, s.clone())
+    } else {
+        let mut alpha = 1.0;
+        let mut found = None;
+        for _ in 0..30 {
+            alpha *= 1.0 + (0.5 * s.violation).clamp(1e-4, 0.5);
+            let sol = at(alpha);
+            if ok(&sol) {
+                found = Some(sol);
+                break;
+            }
+        }
+        (1.0, alpha, found?)
+    };
+    while hi - lo > 1e-9 * hi {
+        let mid = 0.5 * (lo + hi);
+        let sol = at(mid);
+        if ok(&sol) {
+            hi = mid;
+            best = sol;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(Solution {
+        lp_solves: s.lp_solves,
+        ..best
+    })
+}
+
+/// A solution's shape time-scaled to total time `t` (velocities ÷ α,
+/// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
+pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+    let alpha = t / s.h.iter().sum::<f64>();
+    let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+    let mut p = p.clone();
+    p.total_time = t;
+    p.inner(&h, &scaled_x(&s.x, alpha), Method::ViaRelaxation, ROUNDS)
+}
+
+/// A solution's shape time-scaled to total time `t`, re-solved and locally
+/// optimised there.
+pub(crate) fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+    let guess = scale(p, s, t)?;
+    let mut p = p.clone();
+    p.total_time = t;
+    Some(p.local_search(&guess, 200, 1e-9))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::inner::Method;
+    use crate::search_tests::{example_problem, uneven_intervals};
+
+    #[test]
+    fn jerk_scales_as_the_cube_of_the_time_scale() {
+        let p = example_problem("paper-case1.toml").relaxed();
+        let h = uneven_intervals(&p);
+        let s = p.inner(&h, &p.zero_x(), Method::Direct, ROUNDS).unwrap();
+        for alpha in [0.5, 1.7] {
+            let hs: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+            let scaled = p.evaluate(&hs, &scaled_x(&s.x, alpha));
+            let want = s.jerk / alpha.powi(3);
+            assert!((scaled.jerk - want).abs() <= 1e-9 * want, "α {alpha}");
+        }
+    }
+
+    #[test]
+    fn the_shortest_scaling_is_feasible_and_a_hair_shorter_is_not() {
+        let mut p = example_problem("paper-case2.toml");
+        p.limits.jerk = 1.0;
+        let h = uneven_intervals(&p);
+        let s = p
+            .inner(&h, &p.zero_x(), Method::ViaRelaxation, ROUNDS)
+            .unwrap();
+        let best = shortest_scaling(&p, &s).expect("a scaling meets the limits");
+        assert!(feasible(&p, &best));
+        let alpha = best.h.iter().sum::<f64>() / s.h.iter().sum::<f64>();
+        let shorter = alpha * (1.0 - 1e-6);
+        let hs: Vec<f64> = s.h.iter().map(|x| x * shorter).collect();
+        assert!(!feasible(&p, &p.evaluate(&hs, &scaled_x(&s.x, shorter))));
+    }
+}

@@ -1,0 +1,291 @@
+//! The planner's modules depend on each other in one direction only: every
+//! `crate::…` path in a module (a `use`, a path in code, a doc link), outside
+//! its test module, names a module listed before it in [`LAYERS`], and no
+//! module calls a method that a module after it adds to the core types
+//! (`impl Problem` and `impl Solution` are spread over the core's layers, so
+//! a call upwards needs no `use` and the paths alone would not show it).
+//! So there is no cycle, and a reader can take the modules in this order.
+//! `crate::Name` through a re-export of the crate root is refused too: it
+//! hides which module it points to.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// Bottom first. A new module goes where its dependencies allow.
+const LAYERS: &[&str] = &[
+    "error",        // PlanError
+    "options",      // how hard to search; the observer's side
+    "run_state",    // cancellation and progress shared with the observer
+    "extrema",      // polynomial extrema (the search's)
+    "sturm",        // polynomial extrema by Sturm sequences (the check's)
+    "banded",       // banded least-change projection
+    "spline",       // the quintic spline as affine forms of the knot derivatives
+    "lp",           // the conic program and its solver
+    "job",          // the job model
+    "bounded_read", // size-limited reads of input files
+    "points_file",  // points files
+    "job_file",     // job files
+    "load",         // plan files
+    "stats",        // statistics of a plan
+    "check",        // independent verification of a plan
+    "problem",      // the problem at fixed knots and its exact evaluation
+    "program",      // its program at a point (cutting planes, trust region)
+    "jerk_only",    // the jerk-only inner problem without interior point
+    "inner",        // the inner solve at fixed intervals, by a method
+    "step",         // the trust-region step
+    "time_scaling", // a shape time-scaled
+    "search",       // the multistart search
+    "time_descent", // the descent on the total time
+    "min_time",     // the shortest total time
+    "rounding",     // whole microseconds
+    "planning",     // the entry point, `plan`
+    "evolution",    // differential evolution, the search's independent check
+];
+
+/// Types whose methods are spread over several layers.
+const CORE_TYPES: &[&str] = &["Problem", "Solution"];
+
+fn src() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+fn module_of(rel: &Path) -> String {
+    let first = rel
+        .components()
+        .next()
+        .unwrap()
+        .as_os_str()
+        .to_string_lossy();
+    first.trim_end_matches(".rs").to_string()
+}
+
+/// The end (exclusive) of the block whose `{` is the first at or after `from`.
+fn block_end(text: &str, from: usize) -> usize {
+    let Some(open) = text[from..].find('{') else {
+        return text.len();
+    };
+    let mut depth = 0;
+    for (k, c) in text[from + open..].char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return from + open + k + 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    text.len()
+}
+
+/// The text outside `#[cfg(test)]` items (a test module, a test-only `use`).
+fn without_tests(text: &str) -> String {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("#[cfg(test)]") {
+        out.push_str(&rest[..i]);
+        let after = &rest[i..];
+        let semi = after.find(';').unwrap_or(after.len());
+        let brace = after.find('{').unwrap_or(after.len());
+        rest = if semi < brace {
+            &after[semi + 1..]
+        } else {
+            &after[block_end(after, 0)..]
+        };
+    }
+    out.push_str(rest);
+    out
+}
+
+/// First segments of every `crate::` path, with their line numbers.
+fn crate_paths(text: &str) -> Vec<(usize, String)> {
+    let mut v = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let mut rest = line;
+        while let Some(i) = rest.find("crate::") {
+            let before = rest[..i].chars().last();
+            rest = &rest[i + "crate::".len()..];
+            if before.is_some_and(|c| c == '$' || c == '_' || c.is_alphanumeric()) {
+                continue;
+            }
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            v.push((n + 1, name));
+        }
+    }
+    v
+}
+
+fn identifier_after(text: &str) -> String {
+    text.chars()
+        .take_while(|c| c.is_alphanumeric() || *c == '_')
+        .collect()
+}
+
+/// Every `fn` declared in the text.
+fn functions(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find("fn ") {
+        let before = rest[..i].chars().last();
+        rest = &rest[i + 3..];
+        if before.is_none_or(|c| !(c.is_alphanumeric() || c == '_')) {
+            let name = identifier_after(rest);
+            if !name.is_empty() {
+                out.push(name);
+            }
+        }
+    }
+    out
+}
+
+/// The methods the text adds to the core types.
+fn core_methods(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for ty in CORE_TYPES {
+        let head = format!("impl {ty} {{");
+        let mut from = 0;
+        while let Some(i) = text[from..].find(&head) {
+            let start = from + i;
+            let end = block_end(text, start);
+            out.extend(functions(&text[start..end]));
+            from = end;
+        }
+    }
+    out
+}
+
+fn files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// Every violation in the sources under `root`.
+fn violations(root: &Path) -> Vec<String> {
+    let mut all = Vec::new();
+    files(root, &mut all);
+    all.sort();
+    let mut bad = Vec::new();
+    // (file, module, level, text outside tests)
+    let mut sources = Vec::new();
+    for path in all {
+        let rel = path.strip_prefix(root).unwrap().to_path_buf();
+        let module = module_of(&rel);
+        // The crate root, and the crate's test modules (`#[cfg(test)] mod x_tests`).
+        if module == "lib" || module.ends_with("_tests") {
+            continue;
+        }
+        let Some(level) = LAYERS.iter().position(|m| *m == module) else {
+            bad.push(format!(
+                "{}: module `{module}` is not in LAYERS",
+                rel.display()
+            ));
+            continue;
+        };
+        let text = without_tests(&fs::read_to_string(&path).unwrap());
+        sources.push((rel, module, level, text));
+    }
+    // The level that adds each core method, and every fn name per level.
+    let mut adds: BTreeMap<String, usize> = BTreeMap::new();
+    let mut declared: Vec<(usize, String)> = Vec::new();
+    for (_, _, level, text) in &sources {
+        for m in core_methods(text) {
+            adds.entry(m).or_insert(*level);
+        }
+        declared.extend(functions(text).into_iter().map(|f| (*level, f)));
+    }
+    // Below the first layer that adds core methods there is no core value
+    // to call them on without a path to it (checked above).
+    let core_floor = adds.values().copied().min().unwrap_or(usize::MAX);
+    for (rel, module, level, text) in &sources {
+        for (line, target) in crate_paths(text) {
+            match LAYERS.iter().position(|m| *m == target) {
+                Some(t) if t < *level => {}
+                Some(t) if t == *level => bad.push(format!(
+                    "{}:{line}: crate::{target} inside `{module}` (use self:: or super::)",
+                    rel.display()
+                )),
+                Some(_) => bad.push(format!(
+                    "{}:{line}: `{module}` points up to crate::{target}",
+                    rel.display()
+                )),
+                None => bad.push(format!(
+                    "{}:{line}: crate::{target} is not a module path (name the module)",
+                    rel.display()
+                )),
+            }
+        }
+        for (method, &at) in &adds {
+            // A name that this layer or one below declares as well may be
+            // that function (another type's method): not a call upwards.
+            let known_below = declared.iter().any(|(l, f)| l <= level && f == method);
+            if at <= *level || *level < core_floor || known_below {
+                continue;
+            }
+            for (n, l) in text.lines().enumerate() {
+                if l.contains(&format!(".{method}(")) {
+                    bad.push(format!(
+                        "{}:{}: `{module}` calls {method}, added by `{}` above it",
+                        rel.display(),
+                        n + 1,
+                        LAYERS[at]
+                    ));
+                }
+            }
+        }
+    }
+    bad
+}
+
+#[test]
+fn modules_depend_in_one_direction() {
+    let bad = violations(&src());
+    assert!(bad.is_empty(), "module layering:\n{}", bad.join("\n"));
+}
+
+#[test]
+fn the_check_catches_a_path_up_a_call_up_a_re_export_and_an_unlisted_module() {
+    let dir = std::env::temp_dir().join(format!("triquint-planner-layers-{}", std::process::id()));
+    fs::create_dir_all(&dir).unwrap();
+    fs::write(
+        dir.join("problem.rs"),
+        "//! See [`crate::search::global`].\nuse crate::spline::Knots;\n\
+         impl Problem { fn evaluate(&self) {} }\n\
+         fn f(p: &Problem) { p.evaluate(); p.descend_time(); }\n\
+         #[cfg(test)]\nmod tests { use crate::planning::plan; }\n",
+    )
+    .unwrap();
+    fs::write(
+        dir.join("min_time.rs"),
+        "impl Problem {\n    fn descend_time(&self) { self.evaluate(); }\n}\n",
+    )
+    .unwrap();
+    fs::write(dir.join("step.rs"), "fn f() { crate::Job::new(); }\n").unwrap();
+    fs::write(dir.join("extra.rs"), "\n").unwrap();
+    let bad = violations(&dir);
+    fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(bad.len(), 4, "{bad:#?}");
+    assert!(bad[0].contains("not in LAYERS"), "{}", bad[0]);
+    assert!(
+        bad[1].contains("problem.rs:1") && bad[1].contains("points up to crate::search"),
+        "{}",
+        bad[1]
+    );
+    assert!(
+        bad[2].contains("problem.rs:4") && bad[2].contains("calls descend_time"),
+        "{}",
+        bad[2]
+    );
+    assert!(bad[3].contains("not a module path"), "{}", bad[3]);
+}
