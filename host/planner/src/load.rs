@@ -33,9 +33,7 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
         && let Some(f) = v.get("format").and_then(|f| f.as_str())
         && f != PLAN_FORMAT
     {
-        return Err(LoadError::Format {
-            found: one_line(f),
-        });
+        return Err(LoadError::Format { found: one_line(f) });
     }
     let plan: Plan =
         serde_json::from_str(text).map_err(|e| LoadError::Json(one_line(&e.to_string())))?;
