@@ -3,10 +3,15 @@
 // `--robot FILE.toml` (robot parameters and the `[homing]` table), read as
 // both binaries read it, from a file.
 
-/// The file each input is written to (one per process: libFuzzer and the
-/// test harness run inputs one at a time per process).
+/// The file each input is written to: one per thread, as the corpus tests
+/// run in threads of one process.
 fn robot_file_path() -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("triquint-fuzz-robot-{}.toml", std::process::id()))
+    let thread = format!("{:?}", std::thread::current().id());
+    let thread: String = thread.chars().filter(char::is_ascii_digit).collect();
+    std::env::temp_dir().join(format!(
+        "triquint-fuzz-robot-{}-{thread}.toml",
+        std::process::id()
+    ))
 }
 
 /// Runs one fuzz input: a refusal is one line; an accepted
@@ -14,7 +19,9 @@ fn robot_file_path() -> std::path::PathBuf {
 pub fn fuzz_robot_file(data: &[u8]) {
     let path = robot_file_path();
     std::fs::write(&path, data).expect("writing the input file");
-    match triquint_cli_common::robot_file::read_machine(Some(&path)) {
+    let read = triquint_cli_common::robot_file::read_machine(Some(&path));
+    let _ = std::fs::remove_file(&path);
+    match read {
         Ok((robot, homing)) => {
             assert!(
                 robot.validate().is_ok(),
