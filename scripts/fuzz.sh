@@ -10,15 +10,20 @@
 # 1. The `canary` target (a planted bug behind an 8-byte comparison) must
 #    crash within FUZZ_CANARY_SECONDS, or the instrumentation is broken and
 #    the run fails.
-# 2. `frames` and `job` each run FUZZ_SECONDS (default 45) from their
-#    committed corpus and fuzz/regressions/; any crash fails, leaving the
-#    input in $OUT/crashes/. New inputs go to $OUT, never into the corpus.
+# 2. `frames`, `job` and `points` each run FUZZ_SECONDS (default 45), and
+#    `plan`, `link_rx`, `candump` and `robot_file` FUZZ_SHORT_SECONDS
+#    (default half of it: they are smaller surfaces, and CI's whole fuzz
+#    step must stay short), from their committed corpus and
+#    fuzz/regressions/, with fuzz/TARGET.dict when there is one; any crash
+#    fails, leaving the input in $OUT/crashes/. New inputs go to $OUT, never
+#    into the corpus.
 #
 # Output: ${CARGO_TARGET_DIR:-target}/fuzz/ (its own build: the flags differ).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 SECONDS_PER_TARGET=${FUZZ_SECONDS:-45}
+SHORT_SECONDS=${FUZZ_SHORT_SECONDS:-$((SECONDS_PER_TARGET / 2))}
 CANARY_SECONDS=${FUZZ_CANARY_SECONDS:-60}
 DIR="${CARGO_TARGET_DIR:-$ROOT/target}/fuzz"
 OUT="$DIR/run"
@@ -50,7 +55,7 @@ fuzz() {
     local t=$1 secs=$2
     shift 2
     local opts=()
-    [ "$t" = job ] && opts=(-dict="$ROOT/fuzz/job.dict")
+    [ -f "$ROOT/fuzz/$t.dict" ] && opts=(-dict="$ROOT/fuzz/$t.dict")
     mkdir -p "$OUT/corpus-$t"
     "$BIN/$t" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
         -artifact_prefix="$OUT/crashes/$t-" "${opts[@]}" "$OUT/corpus-$t" "$@" \
@@ -72,9 +77,13 @@ grep -E "^#[0-9]+|Done|panicked" "$OUT/canary.log" | tail -2
 rm -f "$OUT"/crashes/canary-*
 
 status=0
-for t in frames job points; do
-    step "$t: ${SECONDS_PER_TARGET} s from the committed corpus"
-    if fuzz "$t" "$SECONDS_PER_TARGET" "$ROOT/fuzz/corpus/$t" "$ROOT/fuzz/regressions/$t"; then
+for t in frames job points plan link_rx candump robot_file; do
+    case $t in
+        frames | job | points) secs=$SECONDS_PER_TARGET ;;
+        *) secs=$SHORT_SECONDS ;;
+    esac
+    step "$t: ${secs} s from the committed corpus"
+    if fuzz "$t" "$secs" "$ROOT/fuzz/corpus/$t" "$ROOT/fuzz/regressions/$t"; then
         grep -E "^stat::(number_of_executed_units|new_units_added)|^Done" "$OUT/$t.log" || true
     else
         status=1

@@ -22,12 +22,12 @@ use triquint_shared::protocol::{
 };
 use triquint_shared::quintic::JointMotion;
 
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
+use crate::f32_cast::to_f32;
 use crate::hal::{Encoder, LimitSwitch, MotorOutput, NoSwitch};
 use crate::homing::Homing;
-use crate::inbox::{Item, Source, Status, TAKE_PER_TICK};
+use crate::inbox::{Item, Source, TAKE_PER_TICK, TickSnapshot};
 use crate::law::{self, Gains, LawState};
-use crate::ns::to_f32;
 use crate::scaling::{Phase, Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -78,7 +78,7 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     node_id: u8,
     state: State,
     fault: FaultCode,
-    active: Option<Active>,
+    active: Option<DerivedConfig>,
     /// The committed configuration and its robot model (valid with `active`).
     cfg: DriveConfig,
     model: Model<f32>,
@@ -221,8 +221,8 @@ impl<const Q: usize> Drive<Q> {
         self.active.as_ref().map(|a| a.crc).unwrap_or(0)
     }
     /// What the receive side needs to know, published every tick.
-    pub fn status(&self) -> Status {
-        Status {
+    pub fn snapshot(&self) -> TickSnapshot {
+        TickSnapshot {
             config_crc: self.config_crc(),
             flushes: self.flushes,
             // Only a node with no motion pending may follow a new host time base.
@@ -519,7 +519,7 @@ impl<const Q: usize> Drive<Q> {
     }
 
     /// Reads the encoder: our position (m), and the filtered velocity.
-    fn measure<E: Encoder>(&mut self, a: &Active, enc: &mut E) -> f32 {
+    fn measure<E: Encoder>(&mut self, a: &DerivedConfig, enc: &mut E) -> f32 {
         let q = to_f32(enc.read_counts().wrapping_sub(self.home_offset)) * a.inv_cpm;
         let raw_v = match self.last_q {
             Some(l) => (q - l) / a.dt,

@@ -50,7 +50,7 @@ pub struct RxFrame {
 }
 
 /// The CAN controller.
-pub trait CanPort {
+pub trait CanBus {
     /// Queues a frame for transmission; `false` when the mailboxes are full
     /// (the core keeps it and tries again).
     fn transmit(&mut self, frame: &Frame) -> bool;

@@ -1,7 +1,7 @@
 //! The hand-off between the two contexts of a node, in both directions:
 //! finished items from the CAN receive side to the control tick (already
 //! decoded, reassembled and, for segments and configurations, validated),
-//! and the [`Status`] the tick publishes back. A leaf below both sides, so
+//! and the [`TickSnapshot`] the tick publishes back. A leaf below both sides, so
 //! neither depends on the other. The tick only files items, so a frame costs
 //! it a short, bounded step.
 
@@ -11,7 +11,7 @@ use triquint_shared::protocol::{
 };
 use triquint_shared::quintic::JointMotion;
 
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
 use crate::scaling::{Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -36,9 +36,9 @@ pub type Inbox = heapless::spsc::Queue<Item, INBOX_SLOTS>;
 pub const RESERVED_SLOTS: usize = 3;
 
 /// What the receive side needs to know of the node, published by the tick
-/// (`Drive::status`); a board shares it in a critical section.
+/// (`Drive::snapshot`); a board shares it in a critical section.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Status {
+pub struct TickSnapshot {
     /// CRC of the running configuration (0: none).
     pub config_crc: u32,
     /// Queue flushes so far: a flush also drops a partial segment.
@@ -52,9 +52,9 @@ pub struct Status {
     pub override_q16: u32,
 }
 
-impl Status {
+impl TickSnapshot {
     /// A node just started: nothing configured, at σ = 1.
-    pub const INITIAL: Status = Status {
+    pub const INITIAL: TickSnapshot = TickSnapshot {
         config_crc: 0,
         flushes: 0,
         may_rebase: true,
@@ -63,7 +63,7 @@ impl Status {
     };
 }
 
-impl Default for Status {
+impl Default for TickSnapshot {
     fn default() -> Self {
         Self::INITIAL
     }
@@ -170,7 +170,7 @@ pub struct CheckedSegment {
 pub struct Prepared {
     pub cfg: DriveConfig,
     pub model: Model<f32>,
-    pub active: Active,
+    pub active: DerivedConfig,
 }
 
 /// What a command brings beyond its frame.

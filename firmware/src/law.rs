@@ -11,7 +11,7 @@ use triquint_shared::dynamics;
 use triquint_shared::protocol::DriveConfig;
 use triquint_shared::quintic::JointMotion;
 
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
 
 /// Slope of the smoothed Coulomb friction sign through zero speed (s/m):
 /// tanh(v · 1000) is ±0.96 at ±2 mm/s.
@@ -42,7 +42,7 @@ pub struct Gains {
 }
 
 impl Gains {
-    pub fn new(cfg: &DriveConfig, a: &Active) -> Self {
+    pub fn new(cfg: &DriveConfig, a: &DerivedConfig) -> Self {
         Self {
             kp: cfg.kp,
             ki: cfg.ki,

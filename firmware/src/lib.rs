@@ -11,22 +11,22 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
-pub mod active;
+pub mod derived_config;
 pub mod drive;
+pub mod f32_cast;
 pub mod hal;
 pub mod homing;
 pub mod inbox;
 pub mod law;
 pub mod node;
-pub mod ns;
 pub mod receiver;
 pub mod scaling;
 pub mod segment;
 pub mod sync;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
-pub use hal::{CanPort, Encoder, LimitSwitch, MotorOutput, NoSwitch, RxFrame};
-pub use inbox::{Item, Status};
+pub use hal::{CanBus, Encoder, LimitSwitch, MotorOutput, NoSwitch, RxFrame};
+pub use inbox::{Item, TickSnapshot};
 pub use node::Node;
 pub use receiver::Receiver;
 #[cfg(test)]

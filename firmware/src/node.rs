@@ -5,7 +5,7 @@
 use core::ops::{Deref, DerefMut};
 
 use crate::drive::{Drive, QUEUE_CAPACITY};
-use crate::hal::{CanPort, RxFrame};
+use crate::hal::{CanBus, RxFrame};
 use crate::receiver::Receiver;
 
 /// One drive node with a segment queue of capacity `Q`. Derefs to its
@@ -34,7 +34,7 @@ impl<const Q: usize> Node<Q> {
 
     /// Handles one received frame: receive side, then the drive takes the item.
     pub fn on_frame(&mut self, rx: &RxFrame) {
-        if let Some(item) = self.receiver.on_frame(rx, self.drive.status()) {
+        if let Some(item) = self.receiver.on_frame(rx, self.drive.snapshot()) {
             self.drive.take(&item);
         }
     }
@@ -43,7 +43,7 @@ impl<const Q: usize> Node<Q> {
 /// Runs one communication pass: every received frame into the node, the
 /// controller's error counters into its heartbeat, then as many queued
 /// frames as the controller takes.
-pub fn service<P: CanPort, const Q: usize>(node: &mut Node<Q>, port: &mut P) {
+pub fn service<P: CanBus, const Q: usize>(node: &mut Node<Q>, port: &mut P) {
     while let Some(rx) = port.receive() {
         node.on_frame(&rx);
     }

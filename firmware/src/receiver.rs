@@ -10,12 +10,12 @@ use triquint_shared::protocol::{
 };
 
 use triquint_shared::protocol::contract::{
-    LIMIT_CHECK_INTERVALS, LIMIT_TOL, MAX_DURATION_US, MIN_DURATION_US,
+    LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, RELATIVE_LIMIT_MARGIN,
 };
 
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
 use crate::hal::RxFrame;
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, Status};
+use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, TickSnapshot};
 use crate::scaling::{Retarget, q16_from_permille};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -34,11 +34,11 @@ pub struct Receiver {
 }
 
 /// Velocity, acceleration and jerk of every axis within the configured
-/// limits (with [`LIMIT_TOL`]), else `Invalid`, and this axis's position
+/// limits (with [`RELATIVE_LIMIT_MARGIN`]), else `Invalid`, and this axis's position
 /// within its soft limits, else `OutsideSoftLimits`; checked at
 /// [`LIMIT_CHECK_INTERVALS`] + 1 points of the segment.
 fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
-    let k = 1.0 + LIMIT_TOL;
+    let k = 1.0 + RELATIVE_LIMIT_MARGIN;
     let (v, a, j) = (
         cfg.max_velocity * k,
         cfg.max_acceleration * k,
@@ -80,9 +80,9 @@ impl Receiver {
     }
 
     /// Handles one received frame; returns what the tick must take, if anything.
-    pub fn on_frame(&mut self, rx: &RxFrame, status: Status) -> Option<Item> {
-        if status.flushes != self.flushes {
-            self.flushes = status.flushes;
+    pub fn on_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
+        if snapshot.flushes != self.flushes {
+            self.flushes = snapshot.flushes;
             self.asm.clear();
         }
         let Ok((msg, node)) = decode(&rx.frame) else {
@@ -93,7 +93,7 @@ impl Receiver {
         match msg {
             Msg::TimeSync(s) => {
                 self.sync
-                    .on_sync(s.seq, s.prev_tx_us, rx_us, status.may_rebase);
+                    .on_sync(s.seq, s.prev_tx_us, rx_us, snapshot.may_rebase);
                 Some(Item::Sync(self.sync))
             }
             Msg::Emergency(_) if node != self.node_id => Some(Item::Emergency {
@@ -105,9 +105,9 @@ impl Receiver {
                 node,
                 rx_us,
                 // The stop it causes when Running (dated on receipt).
-                ready: self.ramps(&status).and_then(|(stop, _)| {
+                ready: self.ramps(&snapshot).and_then(|(stop, _)| {
                     let t = self.sync.host_ns(rx_us).unwrap_or(0);
-                    Retarget::prepare(&status.scaling, t, 0, stop)
+                    Retarget::prepare(&snapshot.scaling, t, 0, stop)
                 }),
             }),
             Msg::Heartbeat(heartbeat) if node != self.node_id => Some(Item::PeerHeartbeat {
@@ -118,7 +118,7 @@ impl Receiver {
             Msg::Command(c) if for_me => Some(Item::Command {
                 command: c,
                 rx_us,
-                data: self.command_data(&c, rx_us, &status),
+                data: self.command_data(&c, rx_us, &snapshot),
             }),
             Msg::ConfigWrite { index, value } if for_me => {
                 if let Some(slot) = self.written.get_mut(index as usize) {
@@ -127,13 +127,13 @@ impl Receiver {
                 }
                 None
             }
-            Msg::SegmentPart => self.part(rx.frame.payload(), false, status.config_crc),
-            Msg::SegmentPartFd => self.part(rx.frame.payload(), true, status.config_crc),
+            Msg::SegmentPart => self.part(rx.frame.payload(), false, snapshot.config_crc),
+            Msg::SegmentPartFd => self.part(rx.frame.payload(), true, snapshot.config_crc),
             _ => None,
         }
     }
 
-    fn command_data(&mut self, c: &Command, rx_us: u64, status: &Status) -> CommandData {
+    fn command_data(&mut self, c: &Command, rx_us: u64, snapshot: &TickSnapshot) -> CommandData {
         let code = c.command();
         match code {
             Ok(CommandCode::ReadConfig) => CommandData::Values(self.written),
@@ -144,20 +144,20 @@ impl Receiver {
                 | CommandCode::Override
                 | CommandCode::Stop
                 | CommandCode::QuickStop,
-            ) if status.scaling.in_transition() => {
+            ) if snapshot.scaling.in_transition() => {
                 // The change of σ the drive makes of it if it acts on it
                 // (see `Drive::on_command`): sized here, not in the tick.
-                let Some((stop, quick)) = self.ramps(status) else {
+                let Some((stop, quick)) = self.ramps(snapshot) else {
                     return CommandData::None;
                 };
                 let (k, full) = match code {
-                    Ok(CommandCode::Resume) => (status.override_q16, stop),
+                    Ok(CommandCode::Resume) => (snapshot.override_q16, stop),
                     Ok(CommandCode::Override) => (q16_from_permille(c.arg2 as u32), stop),
                     Ok(CommandCode::QuickStop) => (0, quick),
                     _ => (0, stop),
                 };
                 let t = self.sync.apply_ns(c.arg, rx_us);
-                match Retarget::prepare(&status.scaling, t, k, full) {
+                match Retarget::prepare(&snapshot.scaling, t, k, full) {
                     Some(r) => CommandData::Scaling(r),
                     None => CommandData::None,
                 }
@@ -167,14 +167,14 @@ impl Receiver {
     }
 
     /// Stop and quick-stop ramps (ns) of the running configuration.
-    fn ramps(&self, status: &Status) -> Option<(i64, i64)> {
-        let crc = status.config_crc;
+    fn ramps(&self, snapshot: &TickSnapshot) -> Option<(i64, i64)> {
+        let crc = snapshot.config_crc;
         let (_, cfg) = self
             .configs
             .iter()
             .flatten()
             .find(|(c, _)| *c == crc && crc != 0)?;
-        let a = Active::new(cfg, crc);
+        let a = DerivedConfig::new(cfg, crc);
         Some((a.stop_ns, a.quick_stop_ns))
     }
 
@@ -193,7 +193,7 @@ impl Receiver {
             Ok(Prepared {
                 cfg,
                 model: cfg.robot().native_model(),
-                active: Active::new(&cfg, crc),
+                active: DerivedConfig::new(&cfg, crc),
             })
         };
         CommandData::Commit { crc, config }

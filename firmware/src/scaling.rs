@@ -16,7 +16,7 @@
 //! (≤ T·max σ; its rounding stays below 1 µs of plan time for T ≤ 2 s,
 //! under 1 µm of path at 1 m/s).
 
-use crate::ns::{to_f32, to_i64};
+use crate::f32_cast::{to_f32, to_i64};
 
 /// Phase of the time-scaling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,12 +59,12 @@ const PEAK_D2: f32 = 5.773_503;
 const CANDIDATES: [f32; 9] = [0.2, 0.3, 0.45, 0.65, 1.0, 1.4, 2.0, 2.8, 4.0];
 
 /// A [`TimeScaling::retarget`] the receive side ran ahead of the tick, on a
-/// copy of the time-scaling the tick published (`inbox::Status`).
+/// copy of the time-scaling the tick published (`inbox::TickSnapshot`).
 ///
 /// Why there: from a constant σ a transition is sized in closed form, but
-/// in the middle of another one the sampled search costs ~7 500
-/// instructions, more than twice the tick's whole budget (3 000, QEMU),
-/// while the receive side already spends ~25 000 on a segment. Deferring or
+/// in the middle of another one the sampled search costs more than twice
+/// the tick's whole instruction budget, while the receive side already
+/// spends several times that on a segment. Deferring or
 /// spreading the search over ticks would have to date the new transition
 /// later, identically on every node; here nothing moves: the tick adopts
 /// the result only if its state and the command's instant, target and ramp
@@ -256,8 +256,8 @@ impl TimeScaling {
             // From a constant σ the transition is σ = k + e₀(1 − S(u)),
             // monotone, never crossing k, with exact peaks 1.875|e₀|/T and
             // 5.77|e₀|/T²: the shortest candidate within them, in closed form
-            // (this runs in the tick that takes the command: the sampled
-            // search costs it ~5 000 instructions).
+            // (this runs in the tick that takes the command, and the
+            // sampled search would take it over its budget).
             for f in CANDIDATES {
                 let rho = base * f;
                 if ad <= 1.0001 * rho && ad <= 1.0001 * rho * rho {
@@ -573,8 +573,7 @@ mod tests {
     /// σ reaches each target, stays within [−0.002, max of the targets +
     /// 0.05] (a hold late in a resume ramp overshoots 1 by up to 4.5 %), and
     /// |σ̇|, |σ̈| within the nominal ramp's peaks times the budget (1.0 from
-    /// constant σ; 1.05 and 1.8 in the middle of a transition; measured
-    /// 1.00 and 1.63).
+    /// constant σ; 1.05 and 1.8 in the middle of a transition).
     #[test]
     fn any_target_from_any_state_at_random_instants() {
         let full = 400 * MS;

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 
-use crate::ns::to_f32;
+use crate::f32_cast::to_f32;
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::quintic::{JointMotion, eval_poly};

@@ -96,7 +96,8 @@ impl SyncEstimator {
         // host_ns = (ha + dl)·1000 + c: floor(host_ns / 1000) is
         // ha + dl + floor(c / 1000), exactly, with the rate correction c
         // divided in i32 (one instruction) when it fits, as it does within
-        // minutes of a sample; not a 64-bit division (~150 instructions).
+        // minutes of a sample; a 64-bit division is a long soft routine on the
+        // target.
         let (ha, la) = self.a?;
         let dl = local_us as i64 - la as i64;
         let c = self.correction_ns(dl.saturating_mul(1000));

@@ -111,7 +111,7 @@ impl Rig {
             frame,
             timestamp_us: self.t,
         };
-        self.node.receiver.on_frame(&rx, self.node.drive.status())
+        self.node.receiver.on_frame(&rx, self.node.drive.snapshot())
     }
 
     fn new() -> Self {
@@ -626,7 +626,7 @@ fn a_measured_position_beyond_the_soft_limits_stops_with_its_code() {
     );
 }
 
-/// Hole 1 of issue 18: a receive side that keeps finding the inbox full of
+/// A receive side that keeps finding the inbox full of
 /// segments must still get Stop through, and the tick must run it.
 #[test]
 fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {

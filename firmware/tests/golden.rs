@@ -254,7 +254,7 @@ impl Recorder {
             frame: f,
             timestamp_us: self.now,
         };
-        if let Some(item) = self.receiver.on_frame(&rx, self.node.status()) {
+        if let Some(item) = self.receiver.on_frame(&rx, self.node.snapshot()) {
             // A full inbox drops the item, as on the board.
             let _ = self.inbox.enqueue(item);
         }

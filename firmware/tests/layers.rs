@@ -10,18 +10,18 @@ use std::path::{Path, PathBuf};
 
 /// Bottom first. A new module goes where its dependencies allow.
 const LAYERS: &[&str] = &[
-    "ns",       // integer ↔ f32 conversions of the tick
-    "segment",  // a queued segment and its evaluation
-    "scaling",  // the jerk-limited time-scaling of stops and resumes
-    "sync",     // host time from TimeSync frames
-    "active",   // what a configuration derives once
-    "inbox",    // the hand-off between the receive side and the tick
-    "hal",      // the hardware traits
-    "law",      // the control law, a pure step function
-    "homing",   // the homing state machine, a pure step function
-    "receiver", // the CAN receive side
-    "drive",    // the control side: state machine, queue, tick
-    "node",     // both sides in one context
+    "f32_cast",       // integer ↔ f32 conversions of the tick
+    "segment",        // a queued segment and its evaluation
+    "scaling",        // the jerk-limited time-scaling of stops and resumes
+    "sync",           // host time from TimeSync frames
+    "derived_config", // what a configuration derives once
+    "inbox",          // the hand-off between the receive side and the tick
+    "hal",            // the hardware traits
+    "law",            // the control law, a pure step function
+    "homing",         // the homing state machine, a pure step function
+    "receiver",       // the CAN receive side
+    "drive",          // the control side: state machine, queue, tick
+    "node",           // both sides in one context
 ];
 
 fn src() -> PathBuf {

@@ -116,8 +116,8 @@ pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
                 frame,
                 timestamp_us: self.t,
             };
-            let status = self.node.drive.status();
-            let Some(item) = self.node.receiver.on_frame(&rx, status) else {
+            let snapshot = self.node.drive.snapshot();
+            let Some(item) = self.node.receiver.on_frame(&rx, snapshot) else {
                 return;
             };
             self.node.drive.take(&item);

@@ -22,7 +22,8 @@ OUT = os.environ.get("HIL_OUT", "/tmp/triquint-hil")
 PLANS = os.environ.get("HIL_PLANS", os.path.join(OUT, "plans"))
 TRIQUINT = os.environ.get("TRIQUINT", os.path.join(ROOT, "target", "release", "triquint"))
 TRIQUINT_SIM = os.environ.get("TRIQUINT_SIM", os.path.join(ROOT, "target", "release", "triquint-sim"))
-# The guest computes ~11x slower than the host: 1 kHz control fits.
+# The emulated guest computes much slower than the host: 1 kHz control
+# fits it (docs/measured-margins.md).
 RATE = os.environ.get("HIL_RATE", "1000")
 
 

@@ -15,11 +15,10 @@ from conftest import IFACE, OUT, TRIQUINT, Proxy, plan_path, plan_start_mm, run
 
 CASE = 1
 # Tracking bound through the proxy: a quarter of the drives' 1 mm following
-# bound. In the emulated guest the proxy's own latency (its report: mean
-# ~2 ms, worst ~30 ms, the guest's CPUs being taken by the drives' catch-up)
-# reaches the drives as time-sync jitter, which moves their time base (see
-# Guarantees, delay and jitter); measured 35-70 µm, against ~1.5 µm without
-# the proxy (test_upload.py).
+# bound. In the emulated guest the proxy's own latency (the guest's CPUs
+# being taken by the drives' catch-up) reaches the drives as time-sync
+# jitter, which moves their time base (see Guarantees, delay and jitter);
+# the errors measured against this bound: docs/measured-margins.md.
 MAX_ERROR_M = 250e-6
 STATES = {0: "Idle", 1: "Loaded", 2: "Armed", 3: "Running", 4: "Stopping", 5: "Fault"}
 

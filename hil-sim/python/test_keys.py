@@ -1,4 +1,4 @@
-"""Keys during `triquint upload` on a real terminal (issue 21): the upload
+"""Keys during `triquint upload` on a real terminal: the upload
 runs under a pseudo-terminal, as on a user's console. Space holds and
 resumes, '-' lowers the override by 10 %, both shown in the progress line;
 the plan then completes with no fault. A second upload is stopped with 's'."""

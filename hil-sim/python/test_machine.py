@@ -1,4 +1,4 @@
-"""Operating a machine over vcan (issue 20): an unhomed simulator, status,
+"""Operating a machine over vcan: an unhomed simulator, status,
 refusals (NotHomed, faulted, too far from the start), home, clear, estop,
 stuck and dead switches, drives on node ids 4, 5, 6."""
 import json

@@ -11,7 +11,8 @@ import pytest
 
 from conftest import IFACE, OUT, TRIQUINT, plan_path, plan_start_mm, run
 
-# Tracking bound over vcan in the emulated guest (in process: ~1-3 µm max).
+# Tracking bound over vcan in the emulated guest (in process the error is
+# far smaller: docs/measured-margins.md).
 # Real-time jitter of the 1 kHz loop under emulation is the main error source.
 MAX_ERROR_M = 50e-6
 RMS_ERROR_M = 10e-6

@@ -1,8 +1,8 @@
-//! A virtual drive's view of a SocketCAN bus: the firmware's `CanPort` over
+//! A virtual drive's view of a SocketCAN bus: the firmware's `CanBus` over
 //! the shared socket of `triquint-link` ([`SocketCanPort`]), with the
 //! frames received this pass timestamped on the drive's own clock.
 
-use triquint_firmware::{CanPort, RxFrame};
+use triquint_firmware::{CanBus, RxFrame};
 use triquint_link::socketcan::{SocketCanError, SocketCanPort, SocketRx};
 use triquint_shared::protocol::{Frame, TimeSync};
 
@@ -19,11 +19,11 @@ pub struct NodePort<'a> {
     /// True time (ns) of the tick this pass runs.
     pub tick_ns: u64,
     /// The first transport error, kept for the caller (the firmware's
-    /// `CanPort` has no error path: a real controller just stops).
+    /// `CanBus` has no error path: a real controller just stops).
     pub error: Option<SocketCanError>,
 }
 
-impl CanPort for NodePort<'_> {
+impl CanBus for NodePort<'_> {
     fn transmit(&mut self, frame: &Frame) -> bool {
         match self.port.send(frame) {
             Ok(sent) => sent,

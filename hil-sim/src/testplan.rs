@@ -243,7 +243,7 @@ pub const SPIRAL_POINTS: usize = 97;
 pub const SPIRAL_TURNS: f64 = 3.0;
 pub const SPIRAL_TIME: f64 = 30.0;
 
-/// The job file `examples/spiral.toml` for the planner (issue 5's format).
+/// The job file `examples/spiral.toml` for the planner .
 pub fn spiral_job_toml() -> String {
     let mut o = String::from(
         "# Stress example: a 3-turn helix of radius 80 mm rising from 560 to 680 mm,\n\

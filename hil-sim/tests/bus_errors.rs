@@ -1,4 +1,4 @@
-//! Issue 18, hole 2: the CAN error counters of HeartbeatExt are fed. On the
+//! The CAN error counters of HeartbeatExt are fed. On the
 //! simulated bus, the fault layer's confinement rules (ISO 11898-1) move
 //! them; the drives report them to the host.
 

@@ -5,9 +5,9 @@
 use triquint_shared::protocol::{FaultCode, State};
 
 use super::{Drive, StopReason};
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
+use crate::f32_cast::{to_f32, to_i64};
 use crate::homing::{Homing, HomingEvent, HomingLimits};
-use crate::ns::{to_f32, to_i64};
 
 impl<const Q: usize> Drive<Q> {
     /// Home: Idle with a configuration, switch not active. A switch already
@@ -54,7 +54,7 @@ impl<const Q: usize> Drive<Q> {
     #[inline(never)]
     pub(super) fn homing_step(
         &mut self,
-        a: &Active,
+        a: &DerivedConfig,
         q: f32,
         edge: Option<i64>,
         now_us: u64,

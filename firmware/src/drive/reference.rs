@@ -6,8 +6,8 @@ use triquint_shared::protocol::{FaultCode, State};
 use triquint_shared::quintic::JointMotion;
 
 use super::{Drive, FF_LOOKAHEAD_NS_PER_S, StopReason};
-use crate::active::Active;
-use crate::ns::to_i64;
+use crate::derived_config::DerivedConfig;
+use crate::f32_cast::to_i64;
 use crate::scaling::{Phase, TimeScaling};
 use crate::segment::scale;
 
@@ -37,7 +37,7 @@ impl<const Q: usize> Drive<Q> {
     /// from: on the path when Running or Stopping, else the hold pose.
     pub(super) fn reference(
         &mut self,
-        a: &Active,
+        a: &DerivedConfig,
         host_ns: i64,
     ) -> (JointMotion<f32>, JointMotion<f32>) {
         let moving = matches!(self.state, State::Running | State::Stopping);
@@ -86,7 +86,11 @@ impl<const Q: usize> Drive<Q> {
 
     /// Reference on the path (Running/Stopping); handles queue advance, the
     /// end of the plan, the end of a stop and underrun.
-    pub(super) fn path_reference(&mut self, a: &Active, host_ns: i64) -> Option<JointMotion<f32>> {
+    pub(super) fn path_reference(
+        &mut self,
+        a: &DerivedConfig,
+        host_ns: i64,
+    ) -> Option<JointMotion<f32>> {
         let sc = self.scaling.at(host_ns);
         while self.queue.len() > 1 {
             match self.queue.front() {
@@ -96,7 +100,8 @@ impl<const Q: usize> Drive<Q> {
                 _ => break,
             }
         }
-        // Read the front in place (a copy of a segment costs the tick ~100 instructions).
+        // Read the front in place: copying a whole segment would cost the tick
+        // more than evaluating it.
         let front = self.queue.front()?;
         let path = front.eval(sc.s_ns);
         let (front_last, front_end_ns) = (front.last, front.end_ns());

@@ -2,7 +2,9 @@
 //! sequence, queue room, C3 continuity with the previous segment), its place
 //! in plan time, and the SegmentAck that answers it.
 
-use triquint_shared::protocol::contract::{CONTINUITY_TOL, LIMIT_TOL, MAX_DURATION_US};
+use triquint_shared::protocol::contract::{
+    MAX_DURATION_US, MAX_POSITION_JUMP_M, RELATIVE_LIMIT_MARGIN,
+};
 use triquint_shared::protocol::{DriveConfig, Reject, SegmentAck, State};
 use triquint_shared::quintic::JointMotion;
 
@@ -10,13 +12,13 @@ use super::Drive;
 use crate::inbox::CheckedSegment;
 
 /// The new segment starts where the previous one ended, in position (within
-/// [`CONTINUITY_TOL`]) and in velocity, acceleration and jerk (within
-/// [`LIMIT_TOL`] of the limits): C3 continuity.
+/// [`MAX_POSITION_JUMP_M`]) and in velocity, acceleration and jerk (within
+/// [`RELATIVE_LIMIT_MARGIN`] of the limits): C3 continuity.
 fn c3_continuous(prev: &JointMotion<f32>, next: &JointMotion<f32>, cfg: &DriveConfig) -> bool {
-    (prev.q - next.q).amax() <= CONTINUITY_TOL
-        && (prev.qd - next.qd).amax() <= LIMIT_TOL * cfg.max_velocity
-        && (prev.qdd - next.qdd).amax() <= LIMIT_TOL * cfg.max_acceleration
-        && (prev.qddd - next.qddd).amax() <= LIMIT_TOL * cfg.max_jerk
+    (prev.q - next.q).amax() <= MAX_POSITION_JUMP_M
+        && (prev.qd - next.qd).amax() <= RELATIVE_LIMIT_MARGIN * cfg.max_velocity
+        && (prev.qdd - next.qdd).amax() <= RELATIVE_LIMIT_MARGIN * cfg.max_acceleration
+        && (prev.qddd - next.qddd).amax() <= RELATIVE_LIMIT_MARGIN * cfg.max_jerk
 }
 
 fn seq_diff(a: u16, b: u16) -> i16 {

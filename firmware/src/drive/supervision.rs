@@ -7,7 +7,7 @@ use triquint_shared::protocol::contract::PEER_SKEW_MARGIN_US;
 use triquint_shared::protocol::{FaultCode, Heartbeat, State};
 
 use super::{Drive, StopReason};
-use crate::active::Active;
+use crate::derived_config::DerivedConfig;
 use crate::scaling::Retarget;
 
 impl<const Q: usize> Drive<Q> {
@@ -74,7 +74,7 @@ impl<const Q: usize> Drive<Q> {
 
     /// A peer (seen at least once) whose heartbeat has been missing for the
     /// sync timeout.
-    pub(super) fn peer_silent(&self, a: &Active, now_us: u64) -> bool {
+    pub(super) fn peer_silent(&self, a: &DerivedConfig, now_us: u64) -> bool {
         self.peer_seen_us
             .iter()
             .enumerate()
@@ -85,7 +85,7 @@ impl<const Q: usize> Drive<Q> {
     /// Supervision of the time base and the peers: the fault it calls for, if any.
     pub(super) fn time_fault(
         &self,
-        a: &Active,
+        a: &DerivedConfig,
         has_host_time: bool,
         now_us: u64,
     ) -> Option<FaultCode> {

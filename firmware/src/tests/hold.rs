@@ -241,8 +241,9 @@ fn override_above_the_cap_is_refused_with_the_cap() {
     assert!(ms < 900, "1.2 s of plan at 150 %: {ms} ms");
 }
 
-/// The two bugs of issue 21: a resume during the hold ramp was dropped; a
-/// hold during the resume ramp restarted from σ = 1 (a velocity step).
+/// A resume during the hold ramp must not be dropped, and a hold during the
+/// resume ramp must continue from the current σ, not restart from σ = 1 (a
+/// velocity step).
 #[test]
 fn resume_during_hold_and_hold_during_resume_ramps() {
     let mut r = in_state("holding");

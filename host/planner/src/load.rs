@@ -33,13 +33,26 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
         && let Some(f) = v.get("format").and_then(|f| f.as_str())
         && f != PLAN_FORMAT
     {
-        return Err(LoadError::Format {
-            found: f.to_string(),
-        });
+        return Err(LoadError::Format { found: one_line(f) });
     }
-    let plan: Plan = serde_json::from_str(text).map_err(|e| LoadError::Json(e.to_string()))?;
+    let plan: Plan =
+        serde_json::from_str(text).map_err(|e| LoadError::Json(one_line(&e.to_string())))?;
     validate_plan(&plan)?;
     Ok(plan)
+}
+
+/// `msg` with its control characters escaped: the parser quotes keys and
+/// values of the input, which may hold a line break, and an error is one line.
+fn one_line(msg: &str) -> String {
+    msg.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// The structural rules of a plan: format; robot and limits valid; knots =
@@ -51,7 +64,7 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let bad = |m: String| Err(LoadError::Invalid(m));
     if plan.format != PLAN_FORMAT {
         return Err(LoadError::Format {
-            found: plan.format.clone(),
+            found: one_line(&plan.format),
         });
     }
     plan.robot

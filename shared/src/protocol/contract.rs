@@ -7,14 +7,16 @@ pub use super::segment::MAX_DURATION_US;
 
 /// Shortest segment accepted (µs).
 pub const MIN_DURATION_US: u32 = 1;
-/// Relative tolerance on the configured velocity, acceleration and jerk
-/// limits (segment check), and on the jump of q', q'', q''' between
-/// segments as a fraction of those limits: f32 evaluation of an exact plan
-/// stays far inside it.
-pub const LIMIT_TOL: f32 = 0.01;
-/// Largest jump between a segment's start position and the previous
-/// segment's end (m), on every axis.
-pub const CONTINUITY_TOL: f32 = 10e-6;
+/// The margin a drive grants over the configured velocity, acceleration and
+/// jerk limits, as a fraction of them (segment check), and the largest jump
+/// of q', q'', q''' between segments, also as a fraction of the limits. Not
+/// the planner's own verification tolerance: this one absorbs the drive's
+/// f32 evaluation of an exactly verified plan.
+pub const RELATIVE_LIMIT_MARGIN: f32 = 0.01;
+/// Largest jump a drive accepts between a segment's start position and the
+/// previous segment's end (m), on every axis: f32 rounding of positions, not
+/// a gap in the plan.
+pub const MAX_POSITION_JUMP_M: f32 = 10e-6;
 /// The limits and soft limits are checked at `LIMIT_CHECK_INTERVALS + 1`
 /// evenly spaced points of a segment (a safety net behind the host's exact
 /// verification, not a replacement for it).
@@ -60,7 +62,7 @@ pub const BOUNDS: &[Bound] = &[
     },
     Bound {
         name: "limit tolerance",
-        value: LIMIT_TOL as f64 * 100.0,
+        value: RELATIVE_LIMIT_MARGIN as f64 * 100.0,
         unit: "%",
         doc: "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond).",
     },
@@ -72,7 +74,7 @@ pub const BOUNDS: &[Bound] = &[
     },
     Bound {
         name: "position continuity",
-        value: CONTINUITY_TOL as f64 * 1e6,
+        value: MAX_POSITION_JUMP_M as f64 * 1e6,
         unit: "µm",
         doc: "Largest jump between a segment's start and the previous end, every axis (`Discontinuous` beyond).",
     },

@@ -137,11 +137,8 @@ code_enum! {
     }
 }
 
-/// Protocol version carried in every heartbeat. Version 3: command
-/// Override, hold/resume/stop applied at the host time in `arg`, fault code
-/// OverrideAboveCap, parameter `override_cap`, flag `override` in use.
-/// Version 2: HeartbeatExt `flags` (was `sync_ok`), state Homing, command
-/// Home, 8-byte Command, node ids 1–15, homing parameters and fault codes.
+/// Protocol version carried in every heartbeat: a host refuses nodes of
+/// another version. What each version changed: the top of `docs/protocol.md`.
 pub const PROTOCOL_VERSION: u8 = 3;
 
 /// Bits of HeartbeatExt `flags`.

@@ -15,7 +15,7 @@ use triquint_firmware::inbox::offer;
 use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
 
-use crate::control::STATUS;
+use crate::control::SNAPSHOT;
 
 /// Raised by the tick when it queued frames.
 pub static TX_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
@@ -60,8 +60,8 @@ pub async fn receive(
         let Some(frame) = frame else {
             continue;
         };
-        let status = critical_section::with(|cs| STATUS.borrow(cs).get());
-        if let Some(item) = receiver.on_frame(&frame, status) {
+        let snapshot = critical_section::with(|cs| SNAPSHOT.borrow(cs).get());
+        if let Some(item) = receiver.on_frame(&frame, snapshot) {
             hand_off(&mut to_tick, item).await;
         }
     }

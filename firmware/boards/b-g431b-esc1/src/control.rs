@@ -11,7 +11,7 @@ use critical_section::Mutex;
 use embassy_stm32::interrupt;
 use embassy_stm32::pac;
 use heapless::spsc::{Consumer, Producer};
-use triquint_firmware::{Drive, Item, Status};
+use triquint_firmware::{Drive, Item, TickSnapshot};
 use triquint_shared::protocol::{Frame, PARAM_COUNT};
 
 use crate::encoder::QuadratureEncoder;
@@ -38,7 +38,7 @@ pub type Kept = ([f32; PARAM_COUNT], u32);
 /// Committed configuration the storage task should keep in flash.
 pub static TO_STORE: Mutex<RefCell<Option<Kept>>> = Mutex::new(RefCell::new(None));
 /// What the receive side needs to know of the drive, published every tick.
-pub static STATUS: Mutex<Cell<Status>> = Mutex::new(Cell::new(Status::INITIAL));
+pub static SNAPSHOT: Mutex<Cell<TickSnapshot>> = Mutex::new(Cell::new(TickSnapshot::INITIAL));
 /// Ticks run, for the heartbeat LED and debugging.
 pub static TICKS: AtomicU32 = AtomicU32::new(0);
 
@@ -62,8 +62,8 @@ fn TIM6_DAC() {
     t.drive.set_error_counters(errors);
     t.drive
         .tick_with_switch(now_us(), &mut t.encoder, &mut t.motor, &mut Switch);
-    let status = t.drive.status();
-    critical_section::with(|cs| STATUS.borrow(cs).set(status));
+    let snapshot = t.drive.snapshot();
+    critical_section::with(|cs| SNAPSHOT.borrow(cs).set(snapshot));
     while let Some(f) = t.drive.peek_tx() {
         if t.tx.enqueue(f).is_err() {
             break;
@@ -71,7 +71,7 @@ fn TIM6_DAC() {
         t.drive.pop_tx();
     }
     crate::can::TX_READY.signal(());
-    let crc = status.config_crc;
+    let crc = snapshot.config_crc;
     if crc != *LAST_CRC {
         *LAST_CRC = crc;
         if let Some(cfg) = t.drive.config() {

@@ -245,8 +245,8 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                     frame: Frame::with_payload(id, payload, fd),
                     timestamp_us: ts,
                 };
-                let status = n.status();
-                let (item, k) = cnt.instructions(|| triquint_can_rx(rcv, &rx, status));
+                let snapshot = n.snapshot();
+                let (item, k) = cnt.instructions(|| triquint_can_rx(rcv, &rx, snapshot));
                 fig.rx_frames += 1;
                 fig.rx_sum += k as u64;
                 fig.rx_max = fig.rx_max.max(k);

@@ -15,7 +15,8 @@ use panic_semihosting as _;
 
 static GOLDEN: &[u8] = include_bytes!("../../../../testdata/firmware/golden.bin");
 
-/// Instructions per control tick allowed in the worst case (issue 8).
+/// Instructions per control tick allowed in the worst case: the tick must
+/// fit its period on the target with room for the CAN receive side.
 const BUDGET: u32 = 3000;
 /// SysTick counts per 1024 instructions under `-icount shift=10` (1024 ns per
 /// instruction) at the 25 MHz core clock: 25.6 × 1024.

@@ -4,7 +4,7 @@
 //! rejects f64 soft-float and panic paths.
 
 use triquint_firmware::inbox::Inbox;
-use triquint_firmware::{Drive, Encoder, Item, MotorOutput, Receiver, RxFrame, Status};
+use triquint_firmware::{Drive, Encoder, Item, MotorOutput, Receiver, RxFrame, TickSnapshot};
 
 /// Encoder of the test image: the recorded count.
 pub struct Counts(pub i64);
@@ -53,9 +53,9 @@ pub extern "Rust" fn triquint_control_tick(
 pub extern "Rust" fn triquint_can_rx(
     receiver: &mut Receiver,
     rx: &RxFrame,
-    status: Status,
+    snapshot: TickSnapshot,
 ) -> Option<Item> {
-    receiver.on_frame(rx, status)
+    receiver.on_frame(rx, snapshot)
 }
 
 /// What the check must catch: an f64 operation and a reachable panic.

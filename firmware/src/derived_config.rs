@@ -4,13 +4,13 @@
 
 use triquint_shared::protocol::DriveConfig;
 
-use crate::ns::to_i64;
+use crate::f32_cast::to_i64;
 
 /// What is derived once from a configuration (by the receive side, when it
 /// prepares a commit). Small on purpose: the tick copies it; the
 /// configuration and model stay in the drive.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Active {
+pub struct DerivedConfig {
     /// CRC-32 of the configuration.
     pub crc: u32,
     /// This node's axis (0–2).
@@ -35,7 +35,7 @@ pub struct Active {
     pub heartbeat_us: u64,
 }
 
-impl Active {
+impl DerivedConfig {
     /// Periods and filter constants of configuration `cfg` (with CRC `crc`),
     /// in f32 and integers only.
     pub fn new(cfg: &DriveConfig, crc: u32) -> Self {

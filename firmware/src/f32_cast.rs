@@ -1,6 +1,5 @@
 //! Integer ↔ f32 conversion for the control tick. Cortex-M4F converts i32 in
-//! one instruction but i64 only through a soft-float routine (≈ 25–50
-//! instructions); tick values (ns within a segment or ramp, encoder counts)
+//! one instruction but i64 only through a soft-float routine; tick values (ns within a segment or ramp, encoder counts)
 //! almost always fit in i32. Same rounding either way, so results are
 //! identical bit for bit.
 
@@ -19,8 +18,8 @@ pub fn to_f32(x: i64) -> f32 {
 /// i32: x shifted right by 5 with the dropped bits ORed into its lowest bit
 /// (a sticky bit: 27 to 31 significant bits, at least 3 below f32's
 /// rounding position, so round-to-nearest-even sees the same tie or no
-/// tie), converted and scaled by 2⁵ exactly. ≈ 15 instructions instead of
-/// the soft-float routine's 40.
+/// tie), converted and scaled by 2⁵ exactly, a fraction of the soft-float
+/// routine's cost.
 #[inline(never)]
 fn to_f32_wide(x: i64) -> f32 {
     let m = x.unsigned_abs();
