@@ -387,7 +387,8 @@ impl Session {
                 if let Some(e) = self.config.read_back_error(&self.nodes) {
                     return Err(e);
                 }
-                self.timeout(now, "reading back its configuration", 1)?;
+                let node = self.config.reading_back().unwrap_or(self.nodes.id(0));
+                self.timeout(now, "reading back its configuration", node)?;
             }
             Phase::Sync => {
                 let since = self.phase_since;
@@ -412,7 +413,8 @@ impl Session {
                     self.start.arm(now, &mut self.out);
                     self.set_phase(Phase::Arm, now);
                 } else {
-                    self.timeout(now, "acknowledging the first segments", 1)?;
+                    let node = self.nodes.first(|v| (v.next_seq as usize) < want);
+                    self.timeout(now, "acknowledging the first segments", node)?;
                 }
             }
             Phase::Arm => {
