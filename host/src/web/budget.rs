@@ -35,7 +35,7 @@ impl Default for Limits {
             per_client: 32,
             control_reserve: 16,
             streams: 32,
-            streams_per_client: 4,
+            streams_per_client: 8,
         }
     }
 }
