@@ -142,4 +142,22 @@ mod tests {
         assert!(verdict("vcan0", &w, 200).is_ok());
         assert!(lines(&w)[1].starts_with("node 5: already Fault (FollowingError)"));
     }
+
+    #[test]
+    fn a_wait_out_of_range_or_bad_nodes_are_bad_input() {
+        for (nodes, wait) in [
+            ("1,2,3", 0),
+            ("1,2,3", 5_001),
+            ("1,1,3", 200),
+            ("0,1,2", 200),
+        ] {
+            let args = EstopArgs {
+                iface: "triquint-no-such-iface".into(),
+                nodes: nodes.into(),
+                wait,
+            };
+            let e = run(&args).unwrap_err();
+            assert_eq!(e.status, Status::BadInput, "{nodes} {wait}: {e}");
+        }
+    }
 }
