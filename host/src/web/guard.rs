@@ -123,8 +123,13 @@ impl Policy {
             }
             let given = headers
                 .get("x-triquint-token")
-                .and_then(|v| v.to_str().ok());
-            if self.token.is_none() || given != self.token.as_deref() {
+                .map(|v| v.as_bytes())
+                .unwrap_or_default();
+            let ok = self
+                .token
+                .as_deref()
+                .is_some_and(|t| same_secret(t.as_bytes(), given));
+            if !ok {
                 return Err(refuse(
                     StatusCode::UNAUTHORIZED,
                     "missing or wrong X-Triquint-Token",
@@ -149,6 +154,12 @@ impl Policy {
             }
         }
     }
+}
+
+/// `a == b` in a time that does not depend on where they differ (a token
+/// guessed byte by byte over the network).
+fn same_secret(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |d, (x, y)| d | (x ^ y)) == 0
 }
 
 /// At most `burst` control requests at once, refilled at `per_s`.
@@ -302,6 +313,14 @@ mod tests {
             r.check_control(remote, HERE, &h).unwrap_err().0,
             StatusCode::UNAUTHORIZED
         );
+        for wrong in ["abd", "ab", "abcd", ""] {
+            h.insert("x-triquint-token", HeaderValue::from_static(wrong));
+            assert_eq!(
+                r.check_control(remote, HERE, &h).unwrap_err().0,
+                StatusCode::UNAUTHORIZED,
+                "{wrong}"
+            );
+        }
         h.insert("x-triquint-token", HeaderValue::from_static("abc"));
         assert!(r.check_control(remote, HERE, &h).is_ok());
         let off = Policy {

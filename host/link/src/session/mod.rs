@@ -255,12 +255,12 @@ impl Session {
         }
     }
 
-    /// What the host last heard from each node (node i + 1 at index i).
+    /// What the host last heard from each node (axis i + 1's at index i).
     pub fn nodes(&self) -> &[NodeView; NODES] {
         &self.nodes.0
     }
 
-    /// Last reported state and fault code of nodes 1–3 (`None`: never heard).
+    /// Last reported state and fault code of each node, axis 1 first (`None`: never heard).
     pub fn node_states(&self) -> [(Option<State>, u8); NODES] {
         self.nodes.0.map(|v| (v.state, v.fault))
     }
