@@ -383,7 +383,7 @@ impl Siege {
                             reopened.fetch_add(1, Ordering::Relaxed);
                         }
                     }
-                    std::thread::sleep(Duration::from_millis(10));
+                    std::thread::sleep(Duration::from_millis(25));
                 }
             }));
         }
