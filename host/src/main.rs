@@ -46,7 +46,7 @@ enum Command {
     Home(cli::home::HomeArgs),
     /// Return faulted drives to Idle.
     Clear(cli::clear::ClearArgs),
-    /// Send the host's emergency stop frame.
+    /// Send the host's emergency stop frame; wait for every drive to confirm it.
     Estop(cli::estop::EstopArgs),
     /// Feed hold: a running plan slows to rest on its path and waits.
     Hold(cli::hold::HoldArgs),

@@ -7,6 +7,7 @@
 //!   flow-controlled streaming with retransmission (`session/stream.rs`),
 //!   the arm/start sequence (`session/start.rs`), and what the host knows
 //!   of each node (`session/nodes.rs`);
+//! - [`estop`]: the host's emergency stop, confirmed by every drive;
 //! - [`configs`]: the drives' configurations for a plan, from its exact
 //!   maxima (`plan.max_abs`), or for the limits themselves;
 //! - [`override_cap`]: the largest feed override a plan allows;
@@ -21,6 +22,7 @@
 //! simulator.
 
 pub mod configs;
+pub mod estop;
 pub mod host_clock;
 pub mod override_cap;
 pub mod session;
@@ -28,6 +30,7 @@ pub mod socketcan;
 pub mod status;
 
 pub use configs::DriveConfigs;
+pub use estop::{EstopAnswer, EstopError, EstopWatch, emergency_stop};
 pub use host_clock::HostClock;
 pub use session::{
     FaultReport, Feed, NodeView, Outcome, Progress, Session, SessionOptions, UploadError,

@@ -1,28 +1,163 @@
-//! `triquint estop --iface IFACE`: the host's emergency frame (Emergency
-//! from node 0). Every drive stops: a moving one along its path within its
-//! stop time, an idle one goes to Fault; `triquint clear` afterwards.
+//! `triquint estop --iface IFACE [--nodes A,B,C]`: the host's emergency
+//! frame (Emergency from node 0). Every drive stops: a moving one along its
+//! path within its stop time, an idle one goes to Fault; `triquint clear`
+//! afterwards. The frame going out proves nothing, so the command waits
+//! (`--wait`, 200 ms) for every drive to report it (Fault or Stopping with
+//! the host's code), resending meanwhile: exit 0 when each did, 4 naming
+//! the drives that did not.
 
-use crate::cli::listen::open;
-use crate::cli::send::send_emergency;
-use crate::exit::{CliError, CliResult};
+use std::time::Duration;
+
 use clap::Args;
+use triquint_link::{EstopAnswer, EstopWatch, emergency_stop};
+use triquint_shared::protocol::{FaultCode, State};
+
+use crate::cli::listen::{nodes_arg, open};
+use crate::exit::{CliError, CliResult};
+
+/// Longest `--wait` (ms): an emergency stop must not hang.
+const MAX_WAIT_MS: u64 = 5_000;
 
 #[derive(Args, Debug)]
 pub struct EstopArgs {
     /// SocketCAN interface (can0, vcan0).
     #[arg(long, value_name = "IFACE")]
     pub iface: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15) that must confirm.
+    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
+    pub nodes: String,
+    /// How long to wait for every drive to confirm (ms, 1 to 5000).
+    #[arg(long, default_value_t = 200, value_name = "MS")]
+    pub wait: u64,
 }
 
 pub fn run(args: &EstopArgs) -> CliResult {
+    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+    if !(1..=MAX_WAIT_MS).contains(&args.wait) {
+        return Err(CliError::bad_input(format!(
+            "--wait {}: must be 1 to {MAX_WAIT_MS} ms",
+            args.wait
+        )));
+    }
     let mut port = open(&args.iface)?;
-    // The controller's queue may be full for a moment: tried for 100 ms.
-    if send_emergency(&mut port)? {
-        println!("emergency stop sent on {}", args.iface);
+    let watch = emergency_stop(&mut port, ids, args.wait * 1000, || {
+        std::thread::sleep(Duration::from_millis(1))
+    })
+    .map_err(|e| CliError::device(format!("{}: {e}", args.iface)))?;
+    println!("emergency stop sent on {}", args.iface);
+    for line in lines(&watch) {
+        println!("{line}");
+    }
+    verdict(&args.iface, &watch, args.wait)
+}
+
+/// A line per drive: what it reported.
+pub fn lines(watch: &EstopWatch) -> Vec<String> {
+    let ids = watch.ids();
+    watch
+        .answers()
+        .iter()
+        .zip(ids)
+        .map(|(a, id)| match a {
+            Some(EstopAnswer::Heard { state }) => {
+                format!("node {id}: {} (HostEmergency)", state.name())
+            }
+            Some(EstopAnswer::Already { state, fault }) => format!(
+                "node {id}: already {} ({}): stopped, not known to have heard the emergency stop",
+                state.name(),
+                fault.name()
+            ),
+            None => format!("node {id}: no answer"),
+        })
+        .collect()
+}
+
+/// Exit 0 when every drive confirmed, 4 naming those that did not.
+pub fn verdict(iface: &str, watch: &EstopWatch, wait_ms: u64) -> CliResult {
+    let silent = watch.silent();
+    if silent.is_empty() {
         return Ok(());
     }
+    let names: Vec<String> = silent.iter().map(u8::to_string).collect();
+    let (noun, pronoun) = if silent.len() == 1 {
+        ("node", "it")
+    } else {
+        ("nodes", "they")
+    };
     Err(CliError::device(format!(
-        "{}: the emergency frame could not be sent (transmit queue full)",
-        args.iface
+        "{iface}: {noun} {} did not confirm the emergency stop within {wait_ms} ms (no Emergency frame, no heartbeat in {} or {} with {}): {} may be off the bus or still moving; check with `triquint status --iface {iface}{}`",
+        names.join(", "),
+        State::Fault.name(),
+        State::Stopping.name(),
+        FaultCode::HostEmergency.name(),
+        pronoun,
+        nodes_arg(watch.ids()),
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use triquint_cli_common::exit::Status;
+    use triquint_link::Received;
+    use triquint_shared::protocol::Emergency;
+
+    fn heard(w: &mut EstopWatch, node: u8, state: State, code: FaultCode) {
+        let frame = Emergency {
+            code: code as u8,
+            state: state as u8,
+            segment: 0,
+            plan_time_us: 0,
+        }
+        .to_frame(node);
+        w.take(&Received {
+            frame,
+            t_us: 0,
+            own: false,
+        });
+    }
+
+    #[test]
+    fn a_drive_that_did_not_confirm_is_named_and_exit_4() {
+        let mut w = EstopWatch::new([4, 5, 6]);
+        heard(&mut w, 4, State::Fault, FaultCode::HostEmergency);
+        heard(&mut w, 6, State::Stopping, FaultCode::HostEmergency);
+        let e = verdict("vcan0", &w, 200).unwrap_err();
+        assert_eq!(e.status, Status::Device);
+        assert!(
+            e.message
+                .contains("node 5 did not confirm the emergency stop within 200 ms"),
+            "{e}"
+        );
+        assert!(e.message.contains("--nodes 4,5,6"), "{e}");
+        assert_eq!(
+            lines(&w),
+            [
+                "node 4: Fault (HostEmergency)",
+                "node 5: no answer",
+                "node 6: Stopping (HostEmergency)"
+            ]
+        );
+        heard(&mut w, 5, State::Fault, FaultCode::FollowingError);
+        assert!(verdict("vcan0", &w, 200).is_ok());
+        assert!(lines(&w)[1].starts_with("node 5: already Fault (FollowingError)"));
+    }
+
+    #[test]
+    fn a_wait_out_of_range_or_bad_nodes_are_bad_input() {
+        for (nodes, wait) in [
+            ("1,2,3", 0),
+            ("1,2,3", 5_001),
+            ("1,1,3", 200),
+            ("0,1,2", 200),
+        ] {
+            let args = EstopArgs {
+                iface: "triquint-no-such-iface".into(),
+                nodes: nodes.into(),
+                wait,
+            };
+            let e = run(&args).unwrap_err();
+            assert_eq!(e.status, Status::BadInput, "{nodes} {wait}: {e}");
+        }
+    }
 }

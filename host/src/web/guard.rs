@@ -1,8 +1,12 @@
-//! Which requests the server answers: the Host header must name the bound
-//! address or localhost (against DNS rebinding); control requests need
-//! `--allow-control`, come from loopback unless `--allow-remote-control`
-//! (then with the token printed at start), carry no foreign Origin (a
-//! missing Origin only from loopback), and are rate-limited.
+//! Which requests the server answers: the request target must be a path
+//! (an absolute-form target is a proxy request: refused); the Host header
+//! must name the address the client connected to, or localhost on a
+//! loopback one, with its port (against DNS rebinding); control requests
+//! need `--allow-control`, come from loopback unless
+//! `--allow-remote-control` (then with the token printed at start), carry
+//! no foreign Origin (the scheme, name and port of this server; a missing
+//! Origin only from loopback). Hold and resume are rate-limited together;
+//! Stop never is.
 
 use std::net::{IpAddr, SocketAddr};
 use std::time::{Duration, Instant};
@@ -45,50 +49,72 @@ fn split_host(h: &str) -> Option<(&str, Option<u16>)> {
 }
 
 impl Policy {
-    /// Does `host` (a Host header, or an Origin's authority) name this server?
-    pub fn names_us(&self, host: &str) -> bool {
+    /// Does `host` (a Host header, or an Origin's authority) name this
+    /// server as reached at `local`? Its name must be `local`'s address,
+    /// or localhost when that is a loopback one; its port the bound one
+    /// (none: HTTP's 80).
+    pub fn names_us(&self, host: &str, local: IpAddr) -> bool {
         let Some((name, port)) = split_host(host) else {
             return false;
         };
-        if port.is_some_and(|p| p != self.bound.port()) {
+        if port.unwrap_or(80) != self.bound.port() {
             return false;
         }
+        let local = local.to_canonical();
         let name = name.to_ascii_lowercase();
         if name == "localhost" {
-            return true;
+            return local.is_loopback();
         }
-        match name.parse::<IpAddr>() {
-            Ok(ip) => ip == self.bound.ip() || (self.bound.ip().is_loopback() && ip.is_loopback()),
-            Err(_) => false,
+        name.parse::<IpAddr>()
+            .is_ok_and(|ip| ip.to_canonical() == local)
+    }
+
+    /// Every request: a target in origin form (a path), not absolute form
+    /// (`GET http://other.example/ HTTP/1.1` asks a proxy).
+    pub fn check_target(&self, uri: &hyper::Uri) -> Result<(), Refusal> {
+        if uri.scheme().is_some() || uri.authority().is_some() {
+            return Err(refuse(
+                StatusCode::BAD_REQUEST,
+                "absolute-form request target: this server is no proxy",
+            ));
         }
+        Ok(())
     }
 
     /// Every request: a Host header that names us.
-    pub fn check_host(&self, headers: &HeaderMap) -> Result<(), Refusal> {
+    pub fn check_host(&self, headers: &HeaderMap, local: IpAddr) -> Result<(), Refusal> {
         let host = headers
             .get(hyper::header::HOST)
             .and_then(|h| h.to_str().ok())
             .ok_or_else(|| refuse(StatusCode::BAD_REQUEST, "no Host header"))?;
-        if self.names_us(host) {
+        if self.names_us(host, local) {
             Ok(())
         } else {
             Err(refuse(
                 StatusCode::MISDIRECTED_REQUEST,
-                format!("Host {host:?} is not this server ({})", self.bound),
+                format!(
+                    "Host {host:?} is not this server ({})",
+                    SocketAddr::new(local, self.bound.port())
+                ),
             ))
         }
     }
 
-    /// A control request from `peer`.
-    pub fn check_control(&self, peer: SocketAddr, headers: &HeaderMap) -> Result<(), Refusal> {
+    /// A control request from `peer`, received at `local`.
+    pub fn check_control(
+        &self,
+        peer: SocketAddr,
+        local: IpAddr,
+        headers: &HeaderMap,
+    ) -> Result<(), Refusal> {
         if !self.allow_control {
             return Err(refuse(
                 StatusCode::FORBIDDEN,
                 "control is off: start the monitor with --allow-control",
             ));
         }
-        let local = peer.ip().is_loopback();
-        if !local {
+        let from_here = peer.ip().to_canonical().is_loopback();
+        if !from_here {
             if !self.allow_remote_control {
                 return Err(refuse(
                     StatusCode::FORBIDDEN,
@@ -97,8 +123,13 @@ impl Policy {
             }
             let given = headers
                 .get("x-triquint-token")
-                .and_then(|v| v.to_str().ok());
-            if self.token.is_none() || given != self.token.as_deref() {
+                .map(|v| v.as_bytes())
+                .unwrap_or_default();
+            let ok = self
+                .token
+                .as_deref()
+                .is_some_and(|t| same_secret(t.as_bytes(), given));
+            if !ok {
                 return Err(refuse(
                     StatusCode::UNAUTHORIZED,
                     "missing or wrong X-Triquint-Token",
@@ -106,12 +137,13 @@ impl Policy {
             }
         }
         match headers.get(hyper::header::ORIGIN) {
-            None if local => Ok(()),
+            None if from_here => Ok(()),
             None => Err(refuse(StatusCode::FORBIDDEN, "no Origin header")),
             Some(o) => {
                 let o = o.to_str().unwrap_or("");
+                // Only http: this server speaks no TLS.
                 let authority = o.strip_prefix("http://").unwrap_or("");
-                if self.names_us(authority) {
+                if self.names_us(authority, local) {
                     Ok(())
                 } else {
                     Err(refuse(
@@ -122,6 +154,12 @@ impl Policy {
             }
         }
     }
+}
+
+/// `a == b` in a time that does not depend on where they differ (a token
+/// guessed byte by byte over the network).
+fn same_secret(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |d, (x, y)| d | (x ^ y)) == 0
 }
 
 /// At most `burst` control requests at once, refilled at `per_s`.
@@ -179,28 +217,63 @@ mod tests {
         }
     }
 
+    const HERE: IpAddr = IpAddr::V4(std::net::Ipv4Addr::LOCALHOST);
+
     #[test]
     fn host_names() {
         let p = policy();
         for ok in [
             "127.0.0.1:8080",
             "localhost:8080",
-            "LOCALHOST",
-            "[::1]:8080",
-            "127.0.0.1",
+            "LOCALHOST:8080",
+            "[::ffff:127.0.0.1]:8080",
         ] {
-            assert!(p.names_us(ok), "{ok}");
+            assert!(p.names_us(ok, HERE), "{ok}");
         }
         for bad in [
             "evil.example:8080",
             "127.0.0.1:9999",
+            // No port: HTTP's 80, another origin.
+            "127.0.0.1",
+            "localhost",
+            // Another loopback address is another origin.
+            "127.0.0.2:8080",
+            "[::1]:8080",
             "",
             ":8080",
             "[::1",
             "10.0.0.1:8080",
+            "localhost.:8080",
         ] {
-            assert!(!p.names_us(bad), "{bad}");
+            assert!(!p.names_us(bad, HERE), "{bad}");
         }
+        // Bound to every address: the one the client reached, localhost
+        // only on loopback.
+        let any = Policy {
+            bound: "0.0.0.0:8080".parse().unwrap(),
+            ..policy()
+        };
+        let lan: IpAddr = "192.0.2.7".parse().unwrap();
+        assert!(any.names_us("192.0.2.7:8080", lan));
+        assert!(!any.names_us("localhost:8080", lan));
+        assert!(!any.names_us("0.0.0.0:8080", lan));
+        assert!(any.names_us("localhost:8080", HERE));
+        // On port 80 the port may be left out.
+        let p80 = Policy {
+            bound: "127.0.0.1:80".parse().unwrap(),
+            ..policy()
+        };
+        assert!(p80.names_us("localhost", HERE) && p80.names_us("127.0.0.1:80", HERE));
+    }
+
+    #[test]
+    fn absolute_form_targets_are_refused() {
+        let p = policy();
+        for bad in ["http://evil.example/api/state", "http://127.0.0.1:8080/"] {
+            let uri: hyper::Uri = bad.parse().unwrap();
+            assert_eq!(p.check_target(&uri).unwrap_err().0, StatusCode::BAD_REQUEST);
+        }
+        assert!(p.check_target(&"/api/state?x=1".parse().unwrap()).is_ok());
     }
 
     #[test]
@@ -209,33 +282,55 @@ mod tests {
         let local: SocketAddr = "127.0.0.1:5000".parse().unwrap();
         let remote: SocketAddr = "192.0.2.1:5000".parse().unwrap();
         let mut h = HeaderMap::new();
-        assert!(p.check_control(local, &h).is_ok());
+        assert!(p.check_control(local, HERE, &h).is_ok());
         assert_eq!(
-            p.check_control(remote, &h).unwrap_err().0,
+            p.check_control(remote, HERE, &h).unwrap_err().0,
             StatusCode::FORBIDDEN
         );
-        h.insert("origin", HeaderValue::from_static("http://evil.example"));
-        assert_eq!(
-            p.check_control(local, &h).unwrap_err().0,
-            StatusCode::FORBIDDEN
-        );
+        for foreign in [
+            "http://evil.example",
+            "http://localhost",
+            "http://127.0.0.1",
+            "http://127.0.0.2:8080",
+            "https://localhost:8080",
+            "null",
+        ] {
+            h.insert("origin", HeaderValue::from_static(foreign));
+            assert_eq!(
+                p.check_control(local, HERE, &h).unwrap_err().0,
+                StatusCode::FORBIDDEN,
+                "{foreign}"
+            );
+        }
         h.insert("origin", HeaderValue::from_static("http://localhost:8080"));
-        assert!(p.check_control(local, &h).is_ok());
+        assert!(p.check_control(local, HERE, &h).is_ok());
+        h.insert("origin", HeaderValue::from_static("http://127.0.0.1:8080"));
+        assert!(p.check_control(local, HERE, &h).is_ok());
         let mut r = policy();
         r.allow_remote_control = true;
         r.token = Some("abc".into());
         assert_eq!(
-            r.check_control(remote, &h).unwrap_err().0,
+            r.check_control(remote, HERE, &h).unwrap_err().0,
             StatusCode::UNAUTHORIZED
         );
+        for wrong in ["abd", "ab", "abcd", ""] {
+            h.insert("x-triquint-token", HeaderValue::from_static(wrong));
+            assert_eq!(
+                r.check_control(remote, HERE, &h).unwrap_err().0,
+                StatusCode::UNAUTHORIZED,
+                "{wrong}"
+            );
+        }
         h.insert("x-triquint-token", HeaderValue::from_static("abc"));
-        assert!(r.check_control(remote, &h).is_ok());
+        assert!(r.check_control(remote, HERE, &h).is_ok());
         let off = Policy {
             allow_control: false,
             ..policy()
         };
         assert_eq!(
-            off.check_control(local, &HeaderMap::new()).unwrap_err().0,
+            off.check_control(local, HERE, &HeaderMap::new())
+                .unwrap_err()
+                .0,
             StatusCode::FORBIDDEN
         );
     }

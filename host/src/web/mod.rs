@@ -5,10 +5,14 @@
 //! - [`model`]: the state (`status`'s model plus staleness, traces, trail,
 //!   planned path, bus statistics);
 //! - [`traces`]: the trace ring buffers; [`stats`]: frame rates, bus load;
-//! - [`server`]: the HTTP server and its routes; [`guard`]: Host, Origin,
-//!   token and rate limit; [`control`]: hold, resume, stop on the bus;
+//! - [`server`]: the HTTP server and its routes; [`guard`]: request
+//!   target, Host, Origin, token and rate limit; [`budget`]: the
+//!   connections, per client and in total, with a reserve for control;
+//!   [`write_timeout`]: a socket whose writes give up; [`control`]: hold,
+//!   resume, stop on the bus;
 //! - [`page`]: the page with its assets compiled in.
 
+pub mod budget;
 pub mod candump;
 pub mod control;
 pub mod guard;
@@ -18,6 +22,7 @@ pub mod server;
 pub mod source;
 pub mod stats;
 pub mod traces;
+pub mod write_timeout;
 
 use std::io::Write;
 use std::net::SocketAddr;
@@ -29,6 +34,7 @@ use std::time::{Duration, Instant};
 use triquint_shared::Robot;
 
 use crate::exit::{CliError, CliResult};
+use budget::{Budget, Limits};
 use guard::{Policy, RateLimit};
 use model::Model;
 use source::Source;
@@ -98,6 +104,8 @@ pub fn run(opts: &WebOptions, robot: &Robot, stop: Arc<AtomicBool>) -> CliResult
         policy,
         iface: if replay { None } else { opts.iface.clone() },
         rate: Mutex::new(RateLimit::new(3, 2.0)),
+        budget: Mutex::new(Budget::new(Limits::default())),
+        control_sends: tokio::sync::Semaphore::new(server::CONTROL_SENDS),
         events_sent: AtomicU64::new(0),
         events_missed: AtomicU64::new(0),
     });

@@ -8,6 +8,12 @@
 //!   the frame source);
 //! - `GET /api/trace.csv?window=S`: the last S seconds of every trace;
 //! - `POST /api/hold`, `/api/resume`, `/api/stop`: see [`super::guard`].
+//!
+//! One request a connection (no keep-alive), within the connection
+//! [`super::budget`]: a client has [`HEADER_TIMEOUT`] to send its request
+//! head, and every write gives up after [`WRITE_TIMEOUT`] without progress
+//! ([`super::write_timeout`]), so a client that stops reading its event
+//! stream loses it.
 
 use std::convert::Infallible;
 use std::net::SocketAddr;
@@ -27,11 +33,13 @@ use serde_json::{Value as Json, json};
 use tokio::net::TcpListener;
 use tokio::sync::{Semaphore, mpsc};
 
+use super::budget::{Budget, Busy, Kind};
 use super::control::{self, Action};
 use super::guard::{Policy, RateLimit};
 use super::model::Model;
 use super::page;
 use super::traces::QUANTITIES;
+use super::write_timeout::WriteTimeout;
 
 /// Events per second on `/api/events`.
 pub const EVENT_HZ: u64 = 20;
@@ -39,8 +47,17 @@ pub const EVENT_HZ: u64 = 20;
 const CLIENT_QUEUE: usize = 4;
 /// Samples per series in one event (the first one carries the history).
 const MAX_EVENT_SAMPLES: usize = 20_000;
-/// Open connections at most; more are closed at once.
-const MAX_CONNECTIONS: usize = 64;
+/// Time to send a complete request head; then the connection is closed.
+pub const HEADER_TIMEOUT: Duration = Duration::from_secs(3);
+/// A write that makes no progress this long closes the connection.
+pub const WRITE_TIMEOUT: Duration = Duration::from_secs(5);
+/// Control requests sending on the bus at once (Stop waits its turn, hold
+/// and resume are refused).
+pub const CONTROL_SENDS: usize = 2;
+/// Kernel send buffer of a connection: small, so that a client that stops
+/// reading blocks the writes (and meets [`WRITE_TIMEOUT`]) within seconds
+/// of events instead of after megabytes.
+const SEND_BUFFER: usize = 64 * 1024;
 
 type Resp = Response<BoxBody<Bytes, Infallible>>;
 
@@ -50,7 +67,11 @@ pub struct App {
     pub policy: Policy,
     /// The interface control frames go to (`None`: replay, nothing to send to).
     pub iface: Option<String>,
+    /// Hold and resume (Stop is never rate-limited).
     pub rate: Mutex<RateLimit>,
+    pub budget: Mutex<Budget>,
+    /// Control requests on the bus at once ([`CONTROL_SENDS`]).
+    pub control_sends: Semaphore,
     /// Events sent and missed (client queue full), over all clients.
     pub events_sent: std::sync::atomic::AtomicU64,
     pub events_missed: std::sync::atomic::AtomicU64,
@@ -182,12 +203,27 @@ fn query_window(query: Option<&str>) -> Result<f64, String> {
     Ok(10.0)
 }
 
-async fn control(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>, action: Action) -> Resp {
-    if let Err((s, why)) = app.policy.check_control(peer, req.headers()) {
+/// Where a request came from and reached us.
+#[derive(Clone, Copy, Debug)]
+pub struct Peer {
+    pub remote: SocketAddr,
+    pub local: SocketAddr,
+    /// Its connection in the budget.
+    pub conn: u64,
+}
+
+async fn control(app: Arc<App>, peer: Peer, req: Request<Incoming>, action: Action) -> Resp {
+    if let Err((s, why)) = app
+        .policy
+        .check_control(peer.remote, peer.local.ip(), req.headers())
+    {
         return text(s, why);
     }
-    if let Err(wait) = lock(&app.rate).take(Instant::now()) {
-        let mut r = text(StatusCode::TOO_MANY_REQUESTS, "control requests too often");
+    // Stop is never refused for the rate of hold and resume.
+    if action != Action::Stop
+        && let Err(wait) = lock(&app.rate).take(Instant::now())
+    {
+        let mut r = text(StatusCode::TOO_MANY_REQUESTS, "hold and resume too often");
         if let Ok(v) = header::HeaderValue::from_str(&format!("{}", wait.as_secs() + 1)) {
             r.headers_mut().insert(header::RETRY_AFTER, v);
         }
@@ -195,6 +231,22 @@ async fn control(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>, action
     }
     let Some(iface) = app.iface.clone() else {
         return text(StatusCode::CONFLICT, "replaying a log: no bus to send to");
+    };
+    let _permit = if action == Action::Stop {
+        match app.control_sends.acquire().await {
+            Ok(p) => p,
+            Err(_) => return text(StatusCode::SERVICE_UNAVAILABLE, "shutting down"),
+        }
+    } else {
+        match app.control_sends.try_acquire() {
+            Ok(p) => p,
+            Err(_) => {
+                return text(
+                    StatusCode::TOO_MANY_REQUESTS,
+                    "another control request is on the bus",
+                );
+            }
+        }
     };
     let ids = lock(&app.model).listener.nodes.0.map(|v| v.id);
     match tokio::task::spawn_blocking(move || control::send(&iface, ids, action)).await {
@@ -207,12 +259,46 @@ async fn control(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>, action
     }
 }
 
+/// What serving `path` by `method` takes from the budget (`None`: an
+/// error answer, nothing to serve).
+fn kind_of(path: &str, method: &Method) -> Option<Kind> {
+    let get = method == Method::GET || method == Method::HEAD;
+    match path {
+        "/api/events" if get => Some(Kind::Stream),
+        "/" | "/api/state" | "/api/trace.csv" if get => Some(Kind::Request),
+        p if Action::from_path(p).is_some() && method == Method::POST => Some(Kind::Control),
+        _ => None,
+    }
+}
+
+/// 503: the budget is spent for this kind of request.
+fn busy(b: Busy) -> Resp {
+    let mut r = text(
+        StatusCode::SERVICE_UNAVAILABLE,
+        match b {
+            Busy::Requests => "too many requests at once; control requests still go through",
+            Busy::Streams => "too many event streams open (from this address, or in all)",
+        },
+    );
+    r.headers_mut()
+        .insert(header::RETRY_AFTER, header::HeaderValue::from_static("2"));
+    r
+}
+
 /// Answers one request.
-pub async fn handle(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>) -> Resp {
-    if let Err((s, why)) = app.policy.check_host(req.headers()) {
+pub async fn handle(app: Arc<App>, peer: Peer, req: Request<Incoming>) -> Resp {
+    if let Err((s, why)) = app.policy.check_target(req.uri()) {
+        return text(s, why);
+    }
+    if let Err((s, why)) = app.policy.check_host(req.headers(), peer.local.ip()) {
         return text(s, why);
     }
     let path = req.uri().path().to_string();
+    if let Some(kind) = kind_of(&path, req.method())
+        && let Err(b) = lock(&app.budget).serve(peer.conn, kind)
+    {
+        return busy(b);
+    }
     let get = req.method() == Method::GET || req.method() == Method::HEAD;
     match (path.as_str(), get) {
         ("/", true) => {
@@ -260,36 +346,61 @@ pub async fn handle(app: Arc<App>, peer: SocketAddr, req: Request<Incoming>) -> 
 
 /// Serves on `listener` until `stop` (checked every 100 ms).
 pub async fn serve(listener: TcpListener, app: Arc<App>, stop: Arc<AtomicBool>) {
-    let slots = Arc::new(Semaphore::new(MAX_CONNECTIONS));
     while !stop.load(Ordering::Relaxed) {
         let Ok(accepted) =
             tokio::time::timeout(Duration::from_millis(100), listener.accept()).await
         else {
             continue;
         };
-        let Ok((stream, peer)) = accepted else {
+        let Ok((stream, remote)) = accepted else {
             // Out of file descriptors and the like: wait, never spin.
             tokio::time::sleep(Duration::from_millis(50)).await;
             continue;
         };
-        let Ok(slot) = Arc::clone(&slots).try_acquire_owned() else {
+        let Ok(local) = stream.local_addr() else {
+            continue;
+        };
+        let Some((conn, evicted)) = lock(&app.budget).admit(remote.ip(), Instant::now()) else {
             drop(stream);
             continue;
         };
         let _ = stream.set_nodelay(true);
+        let _ = socket2::SockRef::from(&stream).set_send_buffer_size(SEND_BUFFER);
+        let peer = Peer {
+            remote,
+            local,
+            conn,
+        };
         let app = Arc::clone(&app);
         tokio::spawn(async move {
-            let svc = service_fn(move |req| {
+            let svc = {
                 let app = Arc::clone(&app);
-                async move { Ok::<_, Infallible>(handle(app, peer, req).await) }
-            });
-            let conn = http1::Builder::new()
+                service_fn(move |req| {
+                    let app = Arc::clone(&app);
+                    async move { Ok::<_, Infallible>(handle(app, peer, req).await) }
+                })
+            };
+            let io = TokioIo::new(WriteTimeout::new(stream, WRITE_TIMEOUT));
+            let conn_fut = http1::Builder::new()
                 .timer(TokioTimer::new())
-                .header_read_timeout(Duration::from_secs(10))
+                .header_read_timeout(HEADER_TIMEOUT)
+                .keep_alive(false)
                 .max_buf_size(8192)
-                .serve_connection(TokioIo::new(stream), svc);
-            let _ = conn.await;
-            drop(slot);
+                .serve_connection(io, svc);
+            let mut conn_fut = std::pin::pin!(conn_fut);
+            let mut evicted = evicted;
+            // Served, or evicted by the budget (dropping it closes the socket).
+            std::future::poll_fn(|cx| {
+                if conn_fut.as_mut().poll(cx).is_ready()
+                    || Pin::new(&mut evicted).poll(cx).is_ready()
+                {
+                    Poll::Ready(())
+                } else {
+                    Poll::Pending
+                }
+            })
+            .await;
+            lock(&app.budget).release(peer.conn);
         });
     }
 }

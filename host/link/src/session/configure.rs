@@ -5,7 +5,7 @@
 //! what differs.
 
 use triquint_shared::protocol::{
-    CommandCode, DriveConfig, PARAM_COUNT, PARAMS, config_write_frame,
+    CommandCode, DriveConfig, FaultCode, PARAM_COUNT, PARAMS, config_write_frame,
 };
 
 use super::nodes::{NODES, NodeView, Nodes};
@@ -24,6 +24,8 @@ struct Commit {
 /// A node's configuration being read back.
 #[derive(Clone, Copy, Debug)]
 struct Readback {
+    /// Its index (axis) and node id: ids need not be 1, 2, 3 in order.
+    i: usize,
     node: u8,
     values: [Option<f32>; PARAM_COUNT],
 }
@@ -98,6 +100,18 @@ impl Configuration {
             match answer {
                 Some(a) if a.result == 0 => done += 1,
                 // The latest commit was refused.
+                // Refused for its state (not Idle), not for its values.
+                Some(a)
+                    if a.token == c.token
+                        && a.result != FaultCode::ConfigMismatch as u8
+                        && a.result != 0 =>
+                {
+                    return Err(UploadError::Refused {
+                        node: self.id(i),
+                        command: "ConfigCommit",
+                        code: FaultCode::from_u8(a.result).map_or("unknown code", FaultCode::name),
+                    });
+                }
                 Some(a) if a.token == c.token => {
                     if !can_resend {
                         return Err(UploadError::ConfigCrc {
@@ -122,6 +136,11 @@ impl Configuration {
         self.commit(i, now, resends, out);
     }
 
+    /// The node id being read back, if any (for the timeout).
+    pub fn reading_back(&self) -> Option<u8> {
+        self.readback.map(|r| r.node)
+    }
+
     /// Which node has not answered a commit (for the timeout).
     pub fn uncommitted(nodes: &Nodes) -> u8 {
         nodes.first(|v| !is_commit(v))
@@ -136,6 +155,7 @@ impl Configuration {
     pub fn read_back(&mut self, i: usize, out: &mut Outbox) {
         let node = self.id(i);
         self.readback = Some(Readback {
+            i,
             node,
             values: [None; PARAM_COUNT],
         });
@@ -160,7 +180,7 @@ impl Configuration {
         if !r.values.iter().all(Option::is_some) {
             return None;
         }
-        let i = r.node as usize - 1;
+        let i = r.i;
         let want = self.configs[i].to_values();
         for (k, p) in PARAMS.iter().enumerate() {
             let got = r.values[k].unwrap_or(f32::NAN);
@@ -178,5 +198,136 @@ impl Configuration {
             node_crc: nodes.0[i].config_crc,
             plan_crc: self.configs[i].crc(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::session::nodes::CommandAnswer;
+
+    /// Configurations of nodes `ids` (axis i on `ids[i]`), otherwise alike.
+    fn configs(ids: [u8; NODES]) -> [DriveConfig; NODES] {
+        ids.map(|id| {
+            let mut c = DriveConfig::from_values(&[0.5; PARAM_COUNT]);
+            c.node_id = f32::from(id);
+            c
+        })
+    }
+
+    /// Node index `i` reads back `values` while its heartbeat reports `crc`.
+    fn read_back(
+        ids: [u8; NODES],
+        i: usize,
+        values: [f32; PARAM_COUNT],
+        crc: u32,
+    ) -> Option<UploadError> {
+        let cfgs = configs(ids);
+        let mut nodes = Nodes::new(ids);
+        for (k, v) in nodes.0.iter_mut().enumerate() {
+            v.config_crc = cfgs[k].crc();
+        }
+        nodes.0[i].config_crc = crc;
+        let mut c = Configuration::new(cfgs);
+        assert_eq!(c.differing(&nodes), Some(i));
+        c.read_back(i, &mut Outbox::default());
+        assert_eq!(c.reading_back(), Some(ids[i]));
+        for (k, v) in values.iter().enumerate() {
+            c.value(ids[i], k as u8, *v);
+        }
+        c.read_back_error(&nodes)
+    }
+
+    #[test]
+    fn read_back_finds_the_node_by_id_not_by_number() {
+        for ids in [[4, 5, 6], [2, 1, 3], [1, 2, 3]] {
+            for i in 0..NODES {
+                let plan = configs(ids)[i];
+                // Same values, another CRC: the node did not commit them.
+                let e = read_back(ids, i, plan.to_values(), 0xDEAD_BEEF);
+                match e {
+                    Some(UploadError::ConfigCrc {
+                        node,
+                        node_crc,
+                        plan_crc,
+                    }) => {
+                        assert_eq!(node, ids[i]);
+                        assert_eq!(node_crc, 0xDEAD_BEEF);
+                        assert_eq!(plan_crc, plan.crc());
+                    }
+                    e => panic!("ids {ids:?} index {i}: {e:?}"),
+                }
+                // One value differs: named, with this node's plan value.
+                let mut v = plan.to_values();
+                v[0] = 7.0;
+                match read_back(ids, i, v, 0xDEAD_BEEF) {
+                    Some(UploadError::ConfigMismatch {
+                        node,
+                        param,
+                        node_value,
+                        plan_value,
+                    }) => {
+                        assert_eq!((node, param), (ids[i], PARAMS[0].name));
+                        assert_eq!((node_value, plan_value), (7.0, 0.5));
+                    }
+                    e => panic!("ids {ids:?} index {i}: {e:?}"),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn values_of_another_node_are_not_taken() {
+        let ids = [2, 1, 3];
+        let cfgs = configs(ids);
+        let mut nodes = Nodes::new(ids);
+        nodes.0[0].config_crc = 1;
+        let mut c = Configuration::new(cfgs);
+        c.read_back(0, &mut Outbox::default());
+        for k in 0..PARAM_COUNT {
+            c.value(1, k as u8, 0.0);
+        }
+        assert!(c.read_back_error(&nodes).is_none());
+    }
+
+    #[test]
+    fn a_commit_refused_with_the_plans_crc_is_not_called_a_crc_difference() {
+        let ids = [4, 5, 6];
+        let cfgs = configs(ids);
+        let opts = SessionOptions::default();
+        for (result, want) in [
+            (FaultCode::WrongState, "WrongState"),
+            (FaultCode::ConfigMismatch, ""),
+        ] {
+            let mut c = Configuration::new(cfgs);
+            let mut out = Outbox::default();
+            c.start(0, &mut out);
+            let mut nodes = Nodes::new(ids);
+            for (k, v) in nodes.0.iter_mut().enumerate() {
+                v.last_answer = Some(CommandAnswer {
+                    command: CommandCode::ConfigCommit as u8,
+                    token: c.commits[k].token,
+                    result: if k == 1 { result as u8 } else { 0 },
+                    value: cfgs[k].crc(),
+                });
+            }
+            let mut last = Ok(false);
+            for _ in 0..=opts.setup_resends {
+                last = c.committed(0, &nodes, &opts, &mut out);
+                nodes.0[1].last_answer.as_mut().unwrap().token = c.commits[1].token;
+                if last.is_err() {
+                    break;
+                }
+            }
+            let e = last.unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains("node 5"), "{msg}");
+            assert!(!msg.contains("differs"), "{msg}");
+            if want.is_empty() {
+                assert!(e.is_config(), "{msg}");
+            } else {
+                assert!(e.is_refusal() && msg.contains(want), "{msg}");
+            }
+        }
     }
 }

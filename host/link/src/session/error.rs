@@ -26,9 +26,7 @@ pub enum UploadError {
         node_value: f32,
         plan_value: f32,
     },
-    #[error(
-        "node {node}: configuration CRC 0x{node_crc:08X} differs from the plan's 0x{plan_crc:08X}"
-    )]
+    #[error("{}", config_crc(*node, *node_crc, *plan_crc))]
     ConfigCrc {
         node: u8,
         node_crc: u32,
@@ -69,6 +67,20 @@ pub enum UploadError {
     },
 }
 
+/// The ConfigCrc message: the same CRC on both sides means the node has
+/// the values and still refused them (one missing, or out of its range).
+fn config_crc(node: u8, node_crc: u32, plan_crc: u32) -> String {
+    if node_crc == plan_crc {
+        format!(
+            "node {node} refused the plan's configuration (CRC 0x{plan_crc:08X} on both sides): a value is missing or out of range on the node"
+        )
+    } else {
+        format!(
+            "node {node}: configuration CRC 0x{node_crc:08X} differs from the plan's 0x{plan_crc:08X}"
+        )
+    }
+}
+
 /// "axis 1 12.345 mm, axis 2 …" for the ArmTooFar message.
 fn too_far(d: &[Option<f64>; 3]) -> String {
     d.iter()
@@ -100,5 +112,35 @@ impl UploadError {
             self,
             UploadError::ConfigMismatch { .. } | UploadError::ConfigCrc { .. }
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_crc_message_never_contradicts_itself() {
+        let same = UploadError::ConfigCrc {
+            node: 2,
+            node_crc: 0xF23B_5964,
+            plan_crc: 0xF23B_5964,
+        }
+        .to_string();
+        assert!(!same.contains("differs"), "{same}");
+        assert!(
+            same.contains("node 2 refused") && same.contains("0xF23B5964"),
+            "{same}"
+        );
+        let other = UploadError::ConfigCrc {
+            node: 2,
+            node_crc: 1,
+            plan_crc: 0xF23B_5964,
+        }
+        .to_string();
+        assert!(
+            other.contains("0x00000001 differs from the plan's 0xF23B5964"),
+            "{other}"
+        );
     }
 }

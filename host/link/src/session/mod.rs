@@ -255,12 +255,12 @@ impl Session {
         }
     }
 
-    /// What the host last heard from each node (node i + 1 at index i).
+    /// What the host last heard from each node (axis i + 1's at index i).
     pub fn nodes(&self) -> &[NodeView; NODES] {
         &self.nodes.0
     }
 
-    /// Last reported state and fault code of nodes 1–3 (`None`: never heard).
+    /// Last reported state and fault code of each node, axis 1 first (`None`: never heard).
     pub fn node_states(&self) -> [(Option<State>, u8); NODES] {
         self.nodes.0.map(|v| (v.state, v.fault))
     }
@@ -387,7 +387,8 @@ impl Session {
                 if let Some(e) = self.config.read_back_error(&self.nodes) {
                     return Err(e);
                 }
-                self.timeout(now, "reading back its configuration", 1)?;
+                let node = self.config.reading_back().unwrap_or(self.nodes.id(0));
+                self.timeout(now, "reading back its configuration", node)?;
             }
             Phase::Sync => {
                 let since = self.phase_since;
@@ -412,7 +413,8 @@ impl Session {
                     self.start.arm(now, &mut self.out);
                     self.set_phase(Phase::Arm, now);
                 } else {
-                    self.timeout(now, "acknowledging the first segments", 1)?;
+                    let node = self.nodes.first(|v| (v.next_seq as usize) < want);
+                    self.timeout(now, "acknowledging the first segments", node)?;
                 }
             }
             Phase::Arm => {

@@ -291,9 +291,17 @@
 
   // ---------- data ----------
   take(INITIAL);
-  const es = new EventSource("/api/events");
-  es.onopen = () => { $("link").textContent = `${CONFIG.replay ? "replay" : "live"} · ${CONFIG.event_hz} Hz`; $("link").className = "pill ok"; };
-  es.onerror = () => { $("link").textContent = "reconnecting…"; $("link").className = "pill bad"; };
-  es.onmessage = (m) => { events++; take(JSON.parse(m.data)); };
+  // The browser reconnects a dropped stream by itself, not a refused one
+  // (503: too many streams): that one is opened again here.
+  const connect = () => {
+    const es = new EventSource("/api/events");
+    es.onopen = () => { $("link").textContent = `${CONFIG.replay ? "replay" : "live"} · ${CONFIG.event_hz} Hz`; $("link").className = "pill ok"; };
+    es.onerror = () => {
+      $("link").textContent = "reconnecting…"; $("link").className = "pill bad";
+      if (es.readyState === EventSource.CLOSED) setTimeout(connect, 2000);
+    };
+    es.onmessage = (m) => { events++; take(JSON.parse(m.data)); };
+  };
+  connect();
   window.triquintMonitor = { points: () => points, events: () => events, series: series };
 })();
