@@ -38,6 +38,7 @@
 //! until every limit holds.
 
 mod banded;
+mod bounded_read;
 mod check;
 mod error;
 pub mod evolution;
@@ -65,6 +66,7 @@ mod scale_tests;
 #[cfg(test)]
 mod search_tests;
 
+pub use bounded_read::{MAX_JOB_BYTES, MAX_PLAN_BYTES, MAX_POINTS_FILE_BYTES, read_text};
 pub use check::{CheckRow, check, max_abs};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
 pub use job::{Job, JobBuilder, LIMIT_RANGE, MAX_POINTS, MAX_SEGMENT_S};
