@@ -37,8 +37,7 @@ pub fn read_text(path: &Path, limit: u64, what: &str) -> io::Result<String> {
             format!("larger than {}, the limit for {what}", bytes(limit)),
         ));
     }
-    String::from_utf8(buf)
-        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+    String::from_utf8(buf).map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
 }
 
 #[cfg(test)]
@@ -57,7 +56,10 @@ mod tests {
         assert_eq!(read_text(&p, 1024, "x").unwrap().len(), 1024);
         assert!(read_text(&p, 1023, "x").is_err());
         std::fs::write(&p, [0xff, 0xfe]).unwrap();
-        assert_eq!(read_text(&p, 1024, "x").unwrap_err().to_string(), "not UTF-8 text");
+        assert_eq!(
+            read_text(&p, 1024, "x").unwrap_err().to_string(),
+            "not UTF-8 text"
+        );
         std::fs::remove_file(&p).unwrap();
         assert_eq!(bytes(MAX_LOG_BYTES), "256 MiB");
         assert_eq!(bytes(1000), "1000 bytes");

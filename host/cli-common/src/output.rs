@@ -109,7 +109,10 @@ fn stage(path: &Path, contents: &[u8], inputs: &[&Path]) -> io::Result<tempfile:
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir)?;
-    let prefix = format!(".{}.", path.file_name().unwrap_or_default().to_string_lossy());
+    let prefix = format!(
+        ".{}.",
+        path.file_name().unwrap_or_default().to_string_lossy()
+    );
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
@@ -138,7 +141,8 @@ pub fn replace_files(
         staged.push((path, tmp));
     }
     for (path, tmp) in staged {
-        tmp.persist(path).map_err(|e| (path.to_path_buf(), e.error))?;
+        tmp.persist(path)
+            .map_err(|e| (path.to_path_buf(), e.error))?;
     }
     Ok(())
 }
@@ -216,10 +220,8 @@ mod tests {
     use crate::exit::Status;
 
     fn scratch(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "triquint-output-{}-{name}",
-            std::process::id()
-        ));
+        let dir =
+            std::env::temp_dir().join(format!("triquint-output-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         dir
@@ -237,7 +239,10 @@ mod tests {
         let e = write_atomic(&dir.join("sub"), b"x").unwrap_err();
         assert_eq!(e.status, Status::BadInput);
         assert!(e.message.contains("a folder"), "{}", e.message);
-        let left: Vec<_> = std::fs::read_dir(dir.join("sub")).unwrap().flatten().collect();
+        let left: Vec<_> = std::fs::read_dir(dir.join("sub"))
+            .unwrap()
+            .flatten()
+            .collect();
         assert_eq!(left.len(), 1, "{left:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -253,7 +258,12 @@ mod tests {
         let e = write_atomic(&link, b"plan").unwrap_err();
         assert!(e.message.contains("a symbolic link"), "{}", e.message);
         assert_eq!(std::fs::read(&target).unwrap(), b"keep");
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
         // Links planted at the old predictable temporary names are ignored.
         let out = dir.join("plan.json");
         for pid in [std::process::id(), 1, 2] {
@@ -272,7 +282,11 @@ mod tests {
         std::fs::write(&a, b"old").unwrap();
         std::fs::create_dir(&b).unwrap();
         let e = write_outputs(&[(&a, b"new"), (&b, b"new")], &[]).unwrap_err();
-        assert!(e.message.starts_with(&b.display().to_string()), "{}", e.message);
+        assert!(
+            e.message.starts_with(&b.display().to_string()),
+            "{}",
+            e.message
+        );
         assert_eq!(std::fs::read(&a).unwrap(), b"old");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
         std::fs::remove_dir_all(&dir).unwrap();

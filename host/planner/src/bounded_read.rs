@@ -44,8 +44,7 @@ pub fn read_text(path: &Path, limit: u64, what: &str) -> io::Result<String> {
             format!("larger than {}, the limit for {what}", bytes(limit)),
         ));
     }
-    String::from_utf8(buf)
-        .map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
+    String::from_utf8(buf).map_err(|_| io::Error::new(io::ErrorKind::InvalidData, "not UTF-8 text"))
 }
 
 /// The `std::io::Error` text without the trailing " (os error N)".
@@ -64,13 +63,19 @@ mod tests {
     #[test]
     fn endless_inputs_stop_at_the_limit() {
         let e = read_text(Path::new("/dev/zero"), MAX_PLAN_BYTES, "a plan file").unwrap_err();
-        assert_eq!(e.to_string(), "larger than 16 MiB, the limit for a plan file");
+        assert_eq!(
+            e.to_string(),
+            "larger than 16 MiB, the limit for a plan file"
+        );
         let p = std::env::temp_dir().join(format!("triquint-bounded-{}", std::process::id()));
         std::fs::write(&p, "x".repeat(2048)).unwrap();
         assert_eq!(read_text(&p, 2048, "x").unwrap().len(), 2048);
         assert!(read_text(&p, 2047, "x").is_err());
         std::fs::remove_file(&p).unwrap();
         assert_eq!(bytes(MAX_JOB_BYTES), "4 MiB");
-        assert_eq!(io_reason(&io::Error::from_raw_os_error(2)), "No such file or directory");
+        assert_eq!(
+            io_reason(&io::Error::from_raw_os_error(2)),
+            "No such file or directory"
+        );
     }
 }

@@ -18,7 +18,7 @@
 //! # Ok::<(), triquint_planner::PlanError>(())
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 use triquint_shared::plan::Objective;
@@ -58,7 +58,10 @@ impl<'de> Deserialize<'de> for Point {
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("a point [x, y, z]")
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Point, A::Error> {
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Point, A::Error> {
                 let mut p = [0.0; 3];
                 let mut n = 0;
                 while let Some(x) = seq.next_element::<f64>()? {
@@ -94,24 +97,33 @@ struct JobFile {
 impl Job {
     /// Parses a job; a `[path] file` is read relative to the working directory.
     pub fn from_toml(text: &str) -> Result<Job, PlanError> {
-        parse(text, "job", Path::new("."))
+        parse(text, "job", Path::new("."), &mut Vec::new())
     }
 
     /// Reads a job file; a `[path] file` is read relative to the job file.
     /// Errors of the file itself carry its path and line.
     pub fn load(path: &Path) -> Result<Job, PlanError> {
+        Self::load_with_files(path).map(|(job, _)| job)
+    }
+
+    /// [`Job::load`], and the files it read: the job file and its points
+    /// file if it names one (so a command can refuse to overwrite them).
+    pub fn load_with_files(path: &Path) -> Result<(Job, Vec<PathBuf>), PlanError> {
         let origin = path.display().to_string();
-        let text = read_text(path, MAX_JOB_BYTES, "a job file").map_err(|e| PlanError::JobFile {
-            origin: origin.clone(),
-            line: None,
-            reason: io_reason(&e),
-        })?;
+        let text =
+            read_text(path, MAX_JOB_BYTES, "a job file").map_err(|e| PlanError::JobFile {
+                origin: origin.clone(),
+                line: None,
+                reason: io_reason(&e),
+            })?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        parse(&text, &origin, dir)
+        let mut files = vec![path.to_path_buf()];
+        let job = parse(&text, &origin, dir, &mut files)?;
+        Ok((job, files))
     }
 }
 
-fn parse(text: &str, origin: &str, dir: &Path) -> Result<Job, PlanError> {
+fn parse(text: &str, origin: &str, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Job, PlanError> {
     let file_error = |line: Option<usize>, reason: String| PlanError::JobFile {
         origin: origin.to_string(),
         line,
@@ -128,6 +140,7 @@ fn parse(text: &str, origin: &str, dir: &Path) -> Result<Job, PlanError> {
         (None, Some(name)) => {
             let path = dir.join(&name);
             let shown = path.display().to_string();
+            files.push(path.clone());
             let text = read_text(&path, MAX_POINTS_FILE_BYTES, "a points file").map_err(|e| {
                 PlanError::JobFile {
                     origin: shown.clone(),
