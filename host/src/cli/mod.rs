@@ -80,3 +80,12 @@ pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {
     triquint_planner::parse_plan(&text)
         .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", path.display())))
 }
+
+/// Text from the command line as quoted in an error: at most 32
+/// characters, so a pasted blob keeps the message one short line.
+pub fn shortened(text: &str) -> String {
+    match text.char_indices().nth(32) {
+        Some((cut, _)) => format!("{}…", &text[..cut]),
+        None => text.to_string(),
+    }
+}

@@ -17,10 +17,14 @@ use crate::exit::{CliError, CliResult, plan_error};
 /// usually plenty; a thousand is far past any use.
 pub const MAX_STARTS: usize = 1000;
 
-fn parse_starts(text: &str) -> Result<usize, String> {
+/// Parses `--starts`: bad input (exit 2) outside 1 to [`MAX_STARTS`].
+fn parse_starts(text: &str) -> CliResult<usize> {
     match text.parse::<usize>() {
         Ok(n) if (1..=MAX_STARTS).contains(&n) => Ok(n),
-        _ => Err(format!("must be a whole number 1 to {MAX_STARTS}")),
+        _ => Err(CliError::bad_input(format!(
+            "--starts `{}`: must be a whole number 1 to {MAX_STARTS}",
+            crate::cli::shortened(text)
+        ))),
     }
 }
 
@@ -35,8 +39,8 @@ pub struct PlanArgs {
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
     /// Starting interval sets of the global search (1 to 1000).
-    #[arg(long, default_value_t = Options::default().starts, value_parser = parse_starts)]
-    pub starts: usize,
+    #[arg(long, default_value_t = Options::default().starts.to_string())]
+    pub starts: String,
     /// Seed of the random starts (same seed, same plan).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -92,6 +96,7 @@ impl Watcher {
 }
 
 pub fn run(args: &PlanArgs) -> CliResult {
+    let starts = parse_starts(&args.starts)?;
     let (job, inputs) = Job::load_with_files(&args.job).map_err(plan_error)?;
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let to_stdout = args.output.as_os_str() == "-";
@@ -109,7 +114,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
         )));
     }
     let opts = Options {
-        starts: args.starts,
+        starts,
         seed: args.seed,
         ..Options::default()
     };
