@@ -102,10 +102,10 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
             return bad(format!(
                 "segment {} starts at {} s for {} s, but the intervals say {} s for {} s",
                 i + 1,
-                s.t0_s,
-                s.duration_s,
-                t,
-                h
+                exact(s.t0_s),
+                exact(s.duration_s),
+                exact(t),
+                exact(*h)
             ));
         }
         if s.coeffs.iter().flatten().any(|c| !c.is_finite()) {
@@ -115,11 +115,23 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     }
     if !plan.total_time_s.is_finite() || (plan.total_time_s - t).abs() > 1e-6 {
         return bad(format!(
-            "total_time_s is {}, the intervals add up to {t} s",
-            plan.total_time_s
+            "total_time_s is {}, the intervals add up to {} s",
+            exact(plan.total_time_s),
+            exact(t)
         ));
     }
     via_points_are_knots(plan)
+}
+
+/// `x` with every digit that tells it apart (the checks compare to 1e-9),
+/// but in scientific notation when huge or tiny, so that a number of the
+/// file (`1e250`) keeps the message one short line.
+fn exact(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 fn via_points_are_knots(plan: &Plan) -> Result<(), LoadError> {
@@ -204,6 +216,19 @@ mod tests {
             max_abs: MaxAbs::default(),
             solver: SolverStats::default(),
         }
+    }
+
+    #[test]
+    fn huge_numbers_keep_messages_short() {
+        let mut p = resting(4);
+        p.total_time_s = 1e250;
+        let e = validate_plan(&p).unwrap_err().to_string();
+        assert_eq!(e, "total_time_s is 1e250, the intervals add up to 0.004 s");
+        p.total_time_s = 0.004;
+        p.segments[1].t0_s = -1e250;
+        let e = validate_plan(&p).unwrap_err().to_string();
+        assert!(e.contains("starts at -1e250 s for 0.001 s"), "{e}");
+        assert!(e.len() < 120, "{e}");
     }
 
     #[test]
