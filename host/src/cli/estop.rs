@@ -6,6 +6,7 @@ use crate::cli::listen::open;
 use crate::cli::send::send_emergency;
 use crate::exit::{CliError, CliResult};
 use clap::Args;
+use triquint_cli_common::outln;
 
 #[derive(Args, Debug)]
 pub struct EstopArgs {
@@ -18,7 +19,7 @@ pub fn run(args: &EstopArgs) -> CliResult {
     let mut port = open(&args.iface)?;
     // The controller's queue may be full for a moment: tried for 100 ms.
     if send_emergency(&mut port)? {
-        println!("emergency stop sent on {}", args.iface);
+        outln!("emergency stop sent on {}", args.iface)?;
         return Ok(());
     }
     Err(CliError::device(format!(
