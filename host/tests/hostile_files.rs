@@ -379,3 +379,36 @@ fn a_job_point_has_exactly_three_coordinates() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn absurd_robots_are_bad_input_in_short_messages() {
+    let dir = scratch("robots");
+    let plan = planned(&dir);
+    let job = format!(
+        "[robot]\nlead = 1e300\n{}",
+        JOB.replace("objective = \"min-max-jerk\"\n", "")
+    );
+    std::fs::write(dir.join("absurd.toml"), job).unwrap();
+    let out = run_in(
+        &dir,
+        &["plan", "absurd.toml", "-o", "x.json", "--starts", "1", "-q"],
+    );
+    assert_error(
+        &out,
+        2,
+        "robot.lead: robot parameter `lead` must be in 1e-6..1e6, got 1e300",
+        "job",
+    );
+    std::fs::write(dir.join("robot.toml"), "platform_mass = -1e250\n").unwrap();
+    let out = run_in(
+        &dir,
+        &["--robot", "robot.toml", "check", plan.to_str().unwrap()],
+    );
+    assert_error(&out, 2, "must be in 0..1e6, got -1e250", "robot file");
+    assert!(
+        out.stderr.len() < 200,
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
