@@ -10,7 +10,7 @@ pub fn fuzz_plan(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    let plan = match triquint_planner::parse_plan(text) {
+    let plan = match triquint_planner::files::parse_plan(text) {
         Ok(plan) => plan,
         Err(e) => {
             let msg = e.to_string();
@@ -28,7 +28,7 @@ pub fn fuzz_plan(data: &[u8]) {
         // Loaded plans are structurally valid, so only the torque
         // evaluation may refuse one (a pose out of reach).
         Err(e) => assert!(
-            matches!(e, triquint_planner::LoadError::Invalid(_)),
+            matches!(e, triquint_planner::files::LoadError::Invalid(_)),
             "check refused a loaded plan: {e}"
         ),
     }

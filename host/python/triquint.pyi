@@ -246,8 +246,11 @@ class Plan:
     @classmethod
     def from_json(cls, text: str) -> "Plan": ...
     @classmethod
-    def load(cls, path: _PathLike) -> "Plan": ...
-    def save(self, path: _PathLike) -> None: ...
+    def load(cls, path: _PathLike) -> "Plan":
+        """Reads a plan file (at most 16 MiB); OSError if unreadable, PlanFileError if not a plan."""
+    def save(self, path: _PathLike) -> None:
+        """Writes the plan file through an exclusive temporary renamed into place;
+        OSError for a target that is not a regular file (device, FIFO, folder, symbolic link)."""
 
 def plan(
     points: Union[_ArrayLike, Job],

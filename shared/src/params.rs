@@ -1,6 +1,6 @@
 //! Machine parameters (paper Table 1) and motion limits (paper Table 3), SI units.
 
-use core::fmt::{Debug, Display};
+use core::fmt::{Debug, Display, LowerExp};
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -86,8 +86,8 @@ impl Default for Robot {
 
 /// A parameter that cannot describe a machine (the value in the parameters' precision).
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-pub enum ParamError<T: Debug + Display = f64> {
-    #[error("robot parameter `{name}` must be {rule}, got {value}")]
+pub enum ParamError<T: Debug + Display + LowerExp = f64> {
+    #[error("robot parameter `{name}` must be {rule}, got {}", Short(value))]
     Invalid {
         name: &'static str,
         rule: &'static str,
@@ -95,17 +95,47 @@ pub enum ParamError<T: Debug + Display = f64> {
     },
 }
 
-fn check<T: Real + Display>(
+/// A number for a one-line message: as written, or in scientific notation
+/// when that is long (`1e300` displays as 301 digits).
+struct Short<T>(T);
+
+impl<T: Display + LowerExp> Display for Short<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        /// Counts what `Display` would write, without writing it.
+        struct Len(usize);
+        impl core::fmt::Write for Len {
+            fn write_str(&mut self, s: &str) -> core::fmt::Result {
+                self.0 += s.len();
+                Ok(())
+            }
+        }
+        let mut len = Len(0);
+        core::fmt::write(&mut len, format_args!("{}", self.0))?;
+        if len.0 > 12 {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+/// The magnitudes a parameter may have (SI): like the limits' 1e-6..1e6,
+/// so that an absurd machine (`lead = 1e300`) is bad input, not a plan
+/// that no limit can meet.
+const PARAM_MAX: f64 = 1e6;
+const PARAM_MIN_POSITIVE: f64 = 1e-6;
+
+fn check<T: Real + Display + LowerExp>(
     name: &'static str,
     value: T,
     positive: bool,
 ) -> Result<(), ParamError<T>> {
-    let zero = T::zero();
     let ok = value.is_finite()
+        && value <= c::<T>(PARAM_MAX)
         && if positive {
-            value > zero
+            value >= c::<T>(PARAM_MIN_POSITIVE)
         } else {
-            value >= zero
+            value >= T::zero()
         };
     if ok {
         Ok(())
@@ -113,16 +143,16 @@ fn check<T: Real + Display>(
         Err(ParamError::Invalid {
             name,
             rule: if positive {
-                "finite and > 0"
+                "in 1e-6..1e6"
             } else {
-                "finite and ≥ 0"
+                "in 0..1e6"
             },
             value,
         })
     }
 }
 
-impl<T: Real + Display> RobotParams<T> {
+impl<T: Real + Display + LowerExp> RobotParams<T> {
     /// ρ = S − d − s: horizontal distance from the platform centre to a strut's
     /// lower end when the platform is centred.
     pub fn rho(&self) -> T {
@@ -250,7 +280,7 @@ impl Default for Limits {
 
 /// A limit that is not a finite positive number.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-#[error("limit `{name}` must be finite and > 0, got {value}")]
+#[error("limit `{name}` must be finite and > 0, got {}", Short(value))]
 pub struct LimitError {
     pub name: &'static str,
     pub value: f64,
@@ -329,7 +359,41 @@ mod tests {
         };
         assert_eq!(
             r.validate().unwrap_err().to_string(),
-            "robot parameter `lead` must be finite and > 0, got 0"
+            "robot parameter `lead` must be in 1e-6..1e6, got 0"
+        );
+        // Absurd magnitudes are bad parameters, named in a short message.
+        for (r, says) in [
+            (
+                Robot {
+                    lead: 1e300,
+                    ..Robot::default()
+                },
+                "robot parameter `lead` must be in 1e-6..1e6, got 1e300",
+            ),
+            (
+                Robot {
+                    platform_mass: 1e250,
+                    ..Robot::default()
+                },
+                "robot parameter `platform_mass` must be in 0..1e6, got 1e250",
+            ),
+            (
+                Robot {
+                    strut_length: 1e-300,
+                    ..Robot::default()
+                },
+                "robot parameter `strut_length` must be in 1e-6..1e6, got 1e-300",
+            ),
+        ] {
+            assert_eq!(r.validate().unwrap_err().to_string(), says);
+        }
+        let l = Limits {
+            jerk: -1e250,
+            ..Limits::default()
+        };
+        assert_eq!(
+            l.validate().unwrap_err().to_string(),
+            "limit `jerk` must be finite and > 0, got -1e250"
         );
         let l = Limits {
             jerk: f64::NAN,

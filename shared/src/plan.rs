@@ -19,6 +19,11 @@ pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 /// Value of the `format` field.
 pub const PLAN_FORMAT: &str = "triquint-plan/1";
 
+/// The most segments a plan may have: the wire numbers them from 0 in 16
+/// bits, and a number that wrapped would break the host's credit and
+/// acknowledgement bookkeeping.
+pub const MAX_SEGMENTS: usize = u16::MAX as usize;
+
 /// What the planner optimises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -183,13 +188,18 @@ impl Plan {
     }
 
     /// The segments as they go on the wire: sequence numbers from 0, first and
-    /// last flagged. On error, the index of the segment that cannot be sent.
+    /// last flagged. On error, the index of the segment that cannot be sent
+    /// (the first beyond [`MAX_SEGMENTS`] if there are more).
     pub fn wire_segments(&self) -> Result<Vec<WireSegment>, (usize, SegmentError)> {
         let n = self.segments.len();
         self.segments
             .iter()
             .enumerate()
             .map(|(i, s)| {
+                let seq = match u16::try_from(i) {
+                    Ok(seq) if i < MAX_SEGMENTS => seq,
+                    _ => return Err((i, SegmentError::TooMany(n))),
+                };
                 let mut flags = 0;
                 if i == 0 {
                     flags |= FLAG_FIRST;
@@ -197,8 +207,44 @@ impl Plan {
                 if i + 1 == n {
                     flags |= FLAG_LAST;
                 }
-                WireSegment::from_quintic(i as u16, &s.quintic(), flags).map_err(|e| (i, e))
+                WireSegment::from_quintic(seq, &s.quintic(), flags).map_err(|e| (i, e))
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resting(n: usize) -> Plan {
+        let seg = |i: usize| Segment {
+            t0_s: i as f64 * 1e-3,
+            duration_s: 1e-3,
+            coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3],
+        };
+        Plan {
+            format: PLAN_FORMAT.into(),
+            objective: Objective::MinMaxJerk,
+            robot: Robot::default(),
+            limits: Limits::default(),
+            via_points_m: Vec::new(),
+            knots_m: Vec::new(),
+            intervals_s: Vec::new(),
+            total_time_s: 0.0,
+            segments: (0..n).map(seg).collect(),
+            max_abs: MaxAbs::default(),
+            solver: SolverStats::default(),
+        }
+    }
+
+    #[test]
+    fn segment_numbers_never_wrap() {
+        let w = resting(MAX_SEGMENTS).wire_segments().unwrap();
+        assert_eq!(w.last().map(|s| s.seq), Some(u16::MAX - 1));
+        assert_eq!(
+            resting(MAX_SEGMENTS + 1).wire_segments().unwrap_err(),
+            (MAX_SEGMENTS, SegmentError::TooMany(MAX_SEGMENTS + 1))
+        );
     }
 }

@@ -3,7 +3,6 @@
 //! one line on stderr, the status from the table.
 
 use std::fmt;
-use std::path::Path;
 use std::process::ExitCode;
 
 /// Exit statuses. Keep in step with the README table.
@@ -85,31 +84,6 @@ pub fn main_exit(name: &str, result: CliResult) -> ExitCode {
     }
 }
 
-/// Writes `contents` to `path` atomically (temporary file in the same
-/// folder, then rename), so a failing command never leaves a partial output
-/// file. Creates the folder; any failure is bad input naming the path.
-pub fn write_atomic(path: &Path, contents: &[u8]) -> CliResult {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(dir) = dir {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| CliError::bad_input(format!("{}: {e}", dir.display())))?;
-    }
-    let name = path
-        .file_name()
-        .ok_or_else(|| CliError::bad_input(format!("{}: not a file path", path.display())))?;
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, contents)
-        .and_then(|_| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            CliError::bad_input(format!("{}: {e}", path.display()))
-        })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -129,19 +103,5 @@ mod tests {
         for (s, n) in table {
             assert_eq!(s as u8, n);
         }
-    }
-
-    #[test]
-    fn atomic_write_leaves_the_file_or_nothing() {
-        let dir = std::env::temp_dir().join(format!("triquint-cli-common-{}", std::process::id()));
-        let path = dir.join("sub").join("out.json");
-        write_atomic(&path, b"{}").unwrap();
-        assert_eq!(std::fs::read(&path).unwrap(), b"{}");
-        // A folder where the file should be: bad input, no temporary left.
-        let e = write_atomic(&dir.join("sub"), b"x").unwrap_err();
-        assert_eq!(e.status, Status::BadInput);
-        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().collect();
-        assert_eq!(left.len(), 1, "{left:?}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

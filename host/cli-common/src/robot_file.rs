@@ -11,6 +11,8 @@ use triquint_shared::Robot;
 use triquint_shared::protocol::config::HomingSettings;
 
 use crate::exit::{CliError, CliResult};
+use crate::input::{MAX_ROBOT_BYTES, read_text};
+use crate::output::io_reason;
 
 /// The `[homing]` table (SI units); every key optional, defaults from
 /// [`HomingSettings::default`].
@@ -113,7 +115,8 @@ pub fn read_machine(path: Option<&Path>) -> Result<(Robot, HomingSettings), Stri
     let Some(path) = path else {
         return Ok((Robot::default(), HomingSettings::default()));
     };
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text = read_text(path, MAX_ROBOT_BYTES, "a robot file")
+        .map_err(|e| format!("{}: {}", path.display(), io_reason(&e)))?;
     let err = |e: toml::de::Error| format!("{}: {}", path.display(), one_line(&e.to_string()));
     let robot = toml::from_str::<Robot>(&without_homing(&text)).map_err(err)?;
     robot.validate().map_err(|e| e.to_string())?;

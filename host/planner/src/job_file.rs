@@ -18,12 +18,13 @@
 //! # Ok::<(), triquint_planner::PlanError>(())
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 use triquint_shared::plan::Objective;
 use triquint_shared::{Limits, Robot};
 
+use crate::bounded_read::{MAX_JOB_BYTES, MAX_POINTS_FILE_BYTES, io_reason, read_text};
 use crate::error::PlanError;
 use crate::job::Job;
 use crate::points_file::parse_points;
@@ -41,8 +42,44 @@ enum Units {
 #[serde(deny_unknown_fields)]
 struct PathSpec {
     units: Units,
-    points: Option<Vec<[f64; 3]>>,
+    points: Option<Vec<Point>>,
     file: Option<String>,
+}
+
+/// A via-point `[x, y, z]`: exactly three numbers (serde's `[f64; 3]`
+/// drops a fourth), as the points file demands.
+struct Point([f64; 3]);
+
+impl<'de> Deserialize<'de> for Point {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Point;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a point [x, y, z]")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Point, A::Error> {
+                let mut p = [0.0; 3];
+                let mut n = 0;
+                while let Some(x) = seq.next_element::<f64>()? {
+                    if n < 3 {
+                        p[n] = x;
+                    }
+                    n += 1;
+                }
+                if n != 3 {
+                    return Err(serde::de::Error::custom(format!(
+                        "expected 3 values (x, y, z), found {n}"
+                    )));
+                }
+                Ok(Point(p))
+            }
+        }
+        d.deserialize_seq(Visitor)
+    }
 }
 
 #[derive(Deserialize)]
@@ -60,24 +97,33 @@ struct JobFile {
 impl Job {
     /// Parses a job; a `[path] file` is read relative to the working directory.
     pub fn from_toml(text: &str) -> Result<Job, PlanError> {
-        parse(text, "job", Path::new("."))
+        parse(text, "job", Path::new("."), &mut Vec::new())
     }
 
     /// Reads a job file; a `[path] file` is read relative to the job file.
     /// Errors of the file itself carry its path and line.
     pub fn load(path: &Path) -> Result<Job, PlanError> {
+        Self::load_with_files(path).map(|(job, _)| job)
+    }
+
+    /// [`Job::load`], and the files it read: the job file and its points
+    /// file if it names one (so a command can refuse to overwrite them).
+    pub fn load_with_files(path: &Path) -> Result<(Job, Vec<PathBuf>), PlanError> {
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| PlanError::JobFile {
-            origin: origin.clone(),
-            line: None,
-            reason: e.to_string(),
-        })?;
+        let text =
+            read_text(path, MAX_JOB_BYTES, "a job file").map_err(|e| PlanError::JobFile {
+                origin: origin.clone(),
+                line: None,
+                reason: io_reason(&e),
+            })?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        parse(&text, &origin, dir)
+        let mut files = vec![path.to_path_buf()];
+        let job = parse(&text, &origin, dir, &mut files)?;
+        Ok((job, files))
     }
 }
 
-fn parse(text: &str, origin: &str, dir: &Path) -> Result<Job, PlanError> {
+fn parse(text: &str, origin: &str, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Job, PlanError> {
     let file_error = |line: Option<usize>, reason: String| PlanError::JobFile {
         origin: origin.to_string(),
         line,
@@ -90,14 +136,17 @@ fn parse(text: &str, origin: &str, dir: &Path) -> Result<Job, PlanError> {
         file_error(line, e.message().replace('\n', " "))
     })?;
     let points = match (f.path.points, f.path.file) {
-        (Some(p), None) => p,
+        (Some(p), None) => p.into_iter().map(|p| p.0).collect(),
         (None, Some(name)) => {
             let path = dir.join(&name);
             let shown = path.display().to_string();
-            let text = std::fs::read_to_string(&path).map_err(|e| PlanError::JobFile {
-                origin: shown.clone(),
-                line: None,
-                reason: e.to_string(),
+            files.push(path.clone());
+            let text = read_text(&path, MAX_POINTS_FILE_BYTES, "a points file").map_err(|e| {
+                PlanError::JobFile {
+                    origin: shown.clone(),
+                    line: None,
+                    reason: io_reason(&e),
+                }
             })?;
             parse_points(&text).map_err(|e| PlanError::JobFile {
                 origin: shown,
@@ -158,6 +207,12 @@ mod tests {
                 .contains("not finite")
         );
         assert!(err("[path]\nunits = \"mm\"\n").contains("exactly one"));
+        // A fourth coordinate is a mistake, not dropped; so is a second.
+        let four = "[path]\nunits = \"mm\"\npoints = [[0, 0, 600],\n [10, 0, 600, 5]]\n";
+        let e = err(four);
+        assert!(e.contains("job:4") && e.contains("found 4"), "{e}");
+        let two = "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [10, 0]]\n";
+        assert!(err(two).contains("found 2"), "{}", err(two));
         let both =
             "[path]\nunits = \"mm\"\nfile = \"a.csv\"\npoints = [[0, 0, 600], [1, 0, 600]]\n";
         assert!(err(both).contains("exactly one"));

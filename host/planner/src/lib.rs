@@ -47,6 +47,7 @@
 //! bounds a job must stay within.
 
 mod banded;
+mod bounded_read;
 mod check;
 mod error;
 #[cfg(any(test, feature = "evolution"))]
@@ -80,6 +81,7 @@ mod scale_tests;
 #[cfg(test)]
 mod search_tests;
 
+pub use bounded_read::{MAX_JOB_BYTES, MAX_PLAN_BYTES, MAX_POINTS_FILE_BYTES, read_text};
 pub use check::{CheckRow, check};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
 pub use job::{Job, JobBuilder};

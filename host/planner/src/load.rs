@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{PLAN_FORMAT, Plan};
+use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, Plan};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 
 /// Why a text is not a usable plan.
@@ -55,8 +55,8 @@ fn one_line(msg: &str) -> String {
         .collect()
 }
 
-/// The structural rules of a plan: format; robot and limits valid; knots =
-/// segments + 1 = intervals + 1; each segment's start time and duration
+/// The structural rules of a plan: format; robot and limits valid; 1 to
+/// [`MAX_SEGMENTS`] segments; knots = segments + 1 = intervals + 1; each segment's start time and duration
 /// consistent, its duration whole microseconds of 1 µs..60 s (what the wire
 /// carries); finite numbers; the via-points are knots, in order, first and
 /// last included.
@@ -76,6 +76,11 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let n = plan.segments.len();
     if n == 0 {
         return bad("no segments".into());
+    }
+    if n > MAX_SEGMENTS {
+        return bad(format!(
+            "{n} segments: a plan has at most {MAX_SEGMENTS} (the drives number them in 16 bits)"
+        ));
     }
     if plan.intervals_s.len() != n || plan.knots_m.len() != n + 1 {
         return bad(format!(
@@ -110,10 +115,10 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
             return bad(format!(
                 "segment {} starts at {} s for {} s, but the intervals say {} s for {} s",
                 i + 1,
-                s.t0_s,
-                s.duration_s,
-                t,
-                h
+                exact(s.t0_s),
+                exact(s.duration_s),
+                exact(t),
+                exact(*h)
             ));
         }
         if s.coeffs.iter().flatten().any(|c| !c.is_finite()) {
@@ -123,11 +128,23 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     }
     if !plan.total_time_s.is_finite() || (plan.total_time_s - t).abs() > 1e-6 {
         return bad(format!(
-            "total_time_s is {}, the intervals add up to {t} s",
-            plan.total_time_s
+            "total_time_s is {}, the intervals add up to {} s",
+            exact(plan.total_time_s),
+            exact(t)
         ));
     }
     via_points_are_knots(plan)
+}
+
+/// `x` with every digit that tells it apart (the checks compare to 1e-9),
+/// but in scientific notation when huge or tiny, so that a number of the
+/// file (`1e250`) keeps the message one short line.
+fn exact(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 fn via_points_are_knots(plan: &Plan) -> Result<(), LoadError> {
@@ -171,4 +188,69 @@ fn via_points_are_knots(plan: &Plan) -> Result<(), LoadError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use triquint_shared::plan::{MaxAbs, Objective, Segment, SolverStats};
+    use triquint_shared::{Limits, Robot};
+
+    /// A structurally valid plan of `n` 1 ms segments at rest at one point.
+    fn resting(n: usize) -> Plan {
+        let robot = Robot::default();
+        let p = [0.0, 0.0, 0.6];
+        let q: [f64; 3] = Pose::from_cartesian(&robot.model::<f64>(), Vector3::from(p))
+            .unwrap()
+            .q
+            .into();
+        let mut t = 0.0;
+        let segments = (0..n)
+            .map(|_| {
+                let s = Segment {
+                    t0_s: t,
+                    duration_s: 1e-3,
+                    coeffs: q.map(|x| [x, 0.0, 0.0, 0.0, 0.0, 0.0]),
+                };
+                t += 1e-3;
+                s
+            })
+            .collect();
+        Plan {
+            format: PLAN_FORMAT.into(),
+            objective: Objective::MinMaxJerk,
+            robot,
+            limits: Limits::default(),
+            via_points_m: vec![p, p],
+            knots_m: vec![q; n + 1],
+            intervals_s: vec![1e-3; n],
+            total_time_s: t,
+            segments,
+            max_abs: MaxAbs::default(),
+            solver: SolverStats::default(),
+        }
+    }
+
+    #[test]
+    fn huge_numbers_keep_messages_short() {
+        let mut p = resting(4);
+        p.total_time_s = 1e250;
+        let e = validate_plan(&p).unwrap_err().to_string();
+        assert_eq!(e, "total_time_s is 1e250, the intervals add up to 0.004 s");
+        p.total_time_s = 0.004;
+        p.segments[1].t0_s = -1e250;
+        let e = validate_plan(&p).unwrap_err().to_string();
+        assert!(e.contains("starts at -1e250 s for 0.001 s"), "{e}");
+        assert!(e.len() < 120, "{e}");
+    }
+
+    #[test]
+    fn more_segments_than_the_wire_numbers_are_refused() {
+        assert_eq!(validate_plan(&resting(MAX_SEGMENTS)), Ok(()));
+        let e = validate_plan(&resting(MAX_SEGMENTS + 1)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "65536 segments: a plan has at most 65535 (the drives number them in 16 bits)"
+        );
+    }
 }

@@ -348,7 +348,8 @@ impl PyPlan {
     /// is not a usable plan).
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path)?;
+        let text =
+            triquint_planner::read_text(&path, triquint_planner::MAX_PLAN_BYTES, "a plan file")?;
         let origin = path.display().to_string();
         let plan = guard(py, || {
             triquint_planner::files::parse_plan(&text)
@@ -359,20 +360,14 @@ impl PyPlan {
 
     /// save(path)
     ///
-    /// Writes the plan file (the text of `to_json()` and a newline), through
-    /// a temporary file renamed into place, so a failure leaves no partial file.
+    /// Writes the plan file (the text of `to_json()` and a newline), as
+    /// `triquint plan -o` does: through an exclusive temporary file renamed
+    /// into place, so a failure leaves no partial file. OSError if `path` is
+    /// not a regular file (a device, FIFO, folder or symbolic link) or
+    /// cannot be written.
     fn save(&self, path: PathBuf) -> PyResult<()> {
         let text = pretty(&self.plan)? + "\n";
-        let name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "plan".into());
-        let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        std::fs::write(&tmp, text)
-            .and_then(|()| std::fs::rename(&tmp, &path))
-            .inspect_err(|_| {
-                let _ = std::fs::remove_file(&tmp);
-            })?;
+        triquint_cli_common::output::replace_file(&path, text.as_bytes(), &[])?;
         Ok(())
     }
 

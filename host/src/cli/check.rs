@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use triquint_cli_common::outln;
 
 use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult};
@@ -18,15 +19,15 @@ pub fn run(args: &CheckArgs) -> CliResult {
     let rows = triquint_planner::check(&plan).map_err(|e| {
         CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
     })?;
-    println!("{:<42} {:>14} {:>14}  result", "check", "value", "bound");
+    outln!("{:<42} {:>14} {:>14}  result", "check", "value", "bound")?;
     for r in &rows {
-        println!(
+        outln!(
             "{:<42} {:>14.6e} {:>14.6e}  {}",
             r.what,
             r.value,
             r.bound,
             if r.ok { "ok" } else { "VIOLATED" }
-        );
+        )?;
     }
     let failed = rows.iter().filter(|r| !r.ok).count();
     if failed > 0 {
@@ -36,6 +37,6 @@ pub fn run(args: &CheckArgs) -> CliResult {
             rows.len()
         )));
     }
-    println!("all {} checks hold", rows.len());
+    outln!("all {} checks hold", rows.len())?;
     Ok(())
 }

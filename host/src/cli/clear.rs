@@ -6,6 +6,7 @@
 use std::time::{Duration, Instant};
 
 use clap::Args;
+use triquint_cli_common::outln;
 use triquint_link::Listener;
 use triquint_shared::Robot;
 use triquint_shared::protocol::{CommandCode, State};
@@ -57,10 +58,10 @@ pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
         after = Listener::new(ids);
     }
     let s = after.status(robot);
-    print_text(&s);
+    print_text(&s)?;
     match s.nodes.iter().find(|n| n.state == Some("Fault")) {
         None if faulted.is_empty() => {
-            println!("no drive was faulted");
+            outln!("no drive was faulted")?;
             Ok(())
         }
         None => Ok(()),

@@ -14,6 +14,7 @@ use triquint_shared::protocol::{FaultCode, State};
 
 use crate::cli::listen::{nodes_arg, open};
 use crate::exit::{CliError, CliResult};
+use triquint_cli_common::outln;
 
 /// Longest `--wait` (ms): an emergency stop must not hang.
 const MAX_WAIT_MS: u64 = 5_000;
@@ -44,9 +45,9 @@ pub fn run(args: &EstopArgs) -> CliResult {
         std::thread::sleep(Duration::from_millis(1))
     })
     .map_err(|e| CliError::device(format!("{}: {e}", args.iface)))?;
-    println!("emergency stop sent on {}", args.iface);
+    outln!("emergency stop sent on {}", args.iface)?;
     for line in lines(&watch) {
-        println!("{line}");
+        outln!("{line}")?;
     }
     verdict(&args.iface, &watch, args.wait)
 }

@@ -3,6 +3,7 @@
 use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
+use triquint_cli_common::outln;
 use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::readable::readable;
@@ -40,19 +41,19 @@ pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
     })?;
     let q_mm = pose.q * 1000.0;
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({"position_mm": r_mm.as_slice(), "joints_mm": q_mm.as_slice()})
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "position (mm)  {}",
             fmt_triple(["x ", "y ", "z "], &r_mm, 3)
-        );
-        println!(
+        )?;
+        outln!(
             "joints (mm)    {}",
             fmt_triple(["q1", "q2", "q3"], &q_mm, 3)
-        );
+        )?;
     }
     Ok(())
 }

@@ -25,6 +25,7 @@ pub mod upload;
 
 use nalgebra::Vector3;
 
+use triquint_cli_common::output::io_reason;
 pub use triquint_cli_common::parse::{finite, parse_triple};
 
 use crate::exit::{CliError, CliResult};
@@ -73,8 +74,18 @@ pub fn same_robot(robot_file: Option<&std::path::Path>, plan: &std::path::Path) 
 /// Reads a plan file through the planner's one loader; any failure is bad
 /// input (exit 2), with the path in the one-line message.
 pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    let text =
+        triquint_planner::read_text(path, triquint_planner::MAX_PLAN_BYTES, "a plan file")
+            .map_err(|e| CliError::bad_input(format!("{}: {}", path.display(), io_reason(&e))))?;
     triquint_planner::files::parse_plan(&text)
         .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", path.display())))
+}
+
+/// Text from the command line as quoted in an error: at most 32
+/// characters, so a pasted blob keeps the message one short line.
+pub fn shortened(text: &str) -> String {
+    match text.char_indices().nth(32) {
+        Some((cut, _)) => format!("{}…", &text[..cut]),
+        None => text.to_string(),
+    }
 }

@@ -13,6 +13,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use clap::Args;
 use serde_json::{Map, Value as Json, json};
+use triquint_cli_common::outln;
 use triquint_link::SocketCanPort;
 use triquint_shared::protocol::describe::{Described, Value, describe};
 use triquint_shared::protocol::{Frame, PartEvent, Reassembler};
@@ -142,31 +143,31 @@ pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
         match describe(&f) {
             Ok(d) => {
                 if args.json {
-                    println!("{}", frame_json(t_s, &f, &d));
+                    outln!("{}", frame_json(t_s, &f, &d))?;
                 } else {
-                    println!("{t_s:12.6} {:<20} {d}", raw(&f));
+                    outln!("{t_s:12.6} {:<20} {d}", raw(&f))?;
                 }
                 if d.def.mux == Some("part")
                     && let PartEvent::Complete(w) = parts[f.fd as usize].push(f.payload(), f.fd)
                     && !args.json
                 {
-                    println!(
+                    outln!(
                         "{t_s:12.6} {:<20} segment seq={} duration={:.6} s flags=0x{:X} (CRC ok)",
                         "",
                         w.seq,
                         w.duration_us as f64 * 1e-6,
                         w.flags
-                    );
+                    )?;
                 }
             }
             Err(e) => {
                 if args.json {
-                    println!(
+                    outln!(
                         "{}",
                         json!({ "t_s": t_s, "id": f.id, "fd": f.fd, "error": e.to_string(), "raw": raw(&f) })
-                    );
+                    )?;
                 } else {
-                    println!("{t_s:12.6} {:<20} not a protocol frame: {e}", raw(&f));
+                    outln!("{t_s:12.6} {:<20} not a protocol frame: {e}", raw(&f))?;
                 }
             }
         }

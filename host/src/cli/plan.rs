@@ -1,6 +1,6 @@
 //! `triquint plan JOB.toml -o PLAN.json [--plot DIR]`: plans a job.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -8,21 +8,39 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
 
-use crate::exit::{CliError, CliResult, plan_error, write_atomic};
+use triquint_cli_common::output::{check_target, output_error, write_outputs};
+
+use crate::exit::{CliError, CliResult, plan_error};
+
+/// The most `--starts`: each start keeps an interval set per segment and
+/// the search stops taking them once two agree, so the default 8 is
+/// usually plenty; a thousand is far past any use.
+pub const MAX_STARTS: usize = 1000;
+
+/// Parses `--starts`: bad input (exit 2) outside 1 to [`MAX_STARTS`].
+fn parse_starts(text: &str) -> CliResult<usize> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=MAX_STARTS).contains(&n) => Ok(n),
+        _ => Err(CliError::bad_input(format!(
+            "--starts `{}`: must be a whole number 1 to {MAX_STARTS}",
+            crate::cli::shortened(text)
+        ))),
+    }
+}
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
     /// Job file (TOML): objective, robot, limits, path.
     pub job: PathBuf,
-    /// Where to write the plan (JSON).
+    /// Where to write the plan (JSON); `-` for standard output.
     #[arg(short, long, value_name = "PLAN.json")]
     pub output: PathBuf,
     /// Also write the report's SVG plots into DIR.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// Starting interval sets of the global search.
-    #[arg(long, default_value_t = Options::default().starts)]
-    pub starts: usize,
+    /// Starting interval sets of the global search (1 to 1000).
+    #[arg(long, default_value_t = Options::default().starts.to_string())]
+    pub starts: String,
     /// Seed of the random starts (same seed, same plan).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -78,9 +96,25 @@ impl Watcher {
 }
 
 pub fn run(args: &PlanArgs) -> CliResult {
-    let job = Job::load(&args.job).map_err(plan_error)?;
+    let starts = parse_starts(&args.starts)?;
+    let (job, inputs) = Job::load_with_files(&args.job).map_err(plan_error)?;
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let to_stdout = args.output.as_os_str() == "-";
+    // Refused outputs before the search, so they cost nothing.
+    if !to_stdout {
+        check_target(&args.output, &inputs).map_err(|e| output_error(&args.output, &e))?;
+    }
+    if let Some(dir) = &args.plot
+        && dir.exists()
+        && !dir.is_dir()
+    {
+        return Err(CliError::bad_input(format!(
+            "--plot {}: not a folder",
+            dir.display()
+        )));
+    }
     let opts = Options {
-        starts: args.starts.max(1),
+        starts,
         seed: args.seed,
         ..Options::default()
     };
@@ -89,11 +123,25 @@ pub fn run(args: &PlanArgs) -> CliResult {
     watcher.bar.finish_and_clear();
     let plan = result.map_err(plan_error)?;
     let json = serde_json::to_string_pretty(&plan)
-        .map_err(|e| CliError::bad_input(format!("cannot encode plan: {e}")))?;
-    if let Some(dir) = &args.plot {
-        write_plots(&plan, dir)?;
+        .map_err(|e| CliError::bad_input(format!("cannot encode plan: {e}")))?
+        + "\n";
+    let plots = match &args.plot {
+        Some(dir) => plots(&plan, dir)?,
+        None => Vec::new(),
+    };
+    // The plan and the plots are renamed into place together, after all
+    // are written: a failure leaves none of them.
+    let mut files: Vec<(&Path, &[u8])> = plots
+        .iter()
+        .map(|(p, svg)| (p.as_path(), svg.as_bytes()))
+        .collect();
+    if !to_stdout {
+        files.insert(0, (args.output.as_path(), json.as_bytes()));
     }
-    write_atomic(&args.output, format!("{json}\n").as_bytes())?;
+    write_outputs(&files, &inputs)?;
+    if to_stdout {
+        triquint_cli_common::out!("{json}")?;
+    }
     if !args.quiet {
         let m = &plan.max_abs;
         let max = |v: [f64; 3]| v.iter().fold(0.0f64, |a, b| a.max(*b));
@@ -108,18 +156,23 @@ pub fn run(args: &PlanArgs) -> CliResult {
             plan.solver.starts,
             plan.solver.lp_solves,
             plan.solver.seconds,
-            args.output.display()
+            if to_stdout {
+                "standard output".to_string()
+            } else {
+                args.output.display().to_string()
+            }
         );
     }
     Ok(())
 }
 
-/// Writes the report's SVG plots of a plan into `dir`.
-fn write_plots(plan: &triquint_shared::plan::Plan, dir: &std::path::Path) -> CliResult {
+/// The report's SVG plots of a plan, each with its path in `dir`.
+fn plots(plan: &triquint_shared::plan::Plan, dir: &Path) -> CliResult<Vec<(PathBuf, String)>> {
     let bad = |e: crate::report::ReportError| CliError::bad_input(format!("plots: {e}"));
     let stats = crate::report::plan_stats(plan).map_err(|e| bad(e.into()))?;
-    for (name, svg) in crate::report::plots::plots(plan, &stats).map_err(bad)? {
-        write_atomic(&dir.join(name), svg.as_bytes())?;
-    }
-    Ok(())
+    Ok(crate::report::plots::plots(plan, &stats)
+        .map_err(bad)?
+        .into_iter()
+        .map(|(name, svg)| (dir.join(name), svg))
+        .collect())
 }

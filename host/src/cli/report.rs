@@ -3,7 +3,10 @@
 use clap::Args;
 
 use crate::cli::load_plan;
-use crate::exit::{CliError, CliResult, write_atomic};
+use triquint_cli_common::output::write_outputs;
+use triquint_cli_common::{out, outln};
+
+use crate::exit::{CliError, CliResult};
 use crate::report::{ReportError, plan_stats, plots, tables};
 
 #[derive(Args, Debug)]
@@ -22,25 +25,30 @@ pub fn run(args: &ReportArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
     let bad = |e: ReportError| CliError::bad_input(format!("{}: {e}", args.plan.display()));
     let stats = plan_stats(&plan).map_err(|e| bad(e.into()))?;
-    // Plots first, so a failure leaves no half-printed report.
+    // Plots first, so a failure leaves no half-printed report; all of them
+    // or none.
     let mut written = Vec::new();
     if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| CliError::bad_input(format!("{}: {e}", dir.display())))?;
-        for (name, svg) in plots::plots(&plan, &stats).map_err(bad)? {
-            let path = dir.join(name);
-            write_atomic(&path, svg.as_bytes())?;
-            written.push(path);
-        }
+        let plots: Vec<_> = plots::plots(&plan, &stats)
+            .map_err(bad)?
+            .into_iter()
+            .map(|(name, svg)| (dir.join(name), svg))
+            .collect();
+        let files: Vec<_> = plots
+            .iter()
+            .map(|(p, svg)| (p.as_path(), svg.as_bytes()))
+            .collect();
+        write_outputs(&files, &[&args.plan])?;
+        written = plots.into_iter().map(|(p, _)| p).collect();
     }
     if args.json {
         let text = serde_json::to_string_pretty(&stats)
             .map_err(|e| CliError::bad_input(format!("statistics to JSON: {e}")))?;
-        println!("{text}");
+        outln!("{text}")?;
     } else {
-        println!("{}", tables::intervals_table(&plan, &stats));
-        println!("{}", tables::joint_table(&plan, &stats));
-        print!("{}", tables::recorded_check(&plan, &stats));
+        outln!("{}", tables::intervals_table(&plan, &stats))?;
+        outln!("{}", tables::joint_table(&plan, &stats))?;
+        out!("{}", tables::recorded_check(&plan, &stats))?;
     }
     for path in written {
         eprintln!("wrote {}", path.display());

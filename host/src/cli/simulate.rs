@@ -6,7 +6,10 @@ use clap::Args;
 use triquint_shared::plan::Plan;
 use triquint_sim::report::JsonFault;
 
-use crate::exit::{CliError, CliResult, write_atomic};
+use triquint_cli_common::outln;
+use triquint_cli_common::output::write_outputs;
+
+use crate::exit::{CliError, CliResult};
 use crate::inprocess::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 
 #[derive(Args, Debug)]
@@ -55,16 +58,16 @@ pub fn run(args: &SimulateArgs) -> CliResult {
     };
     let report = simulate(&plan, &opts).map_err(to_cli)?;
     if let Some(dir) = &args.plot {
-        write_plots(dir, &plan, &opts, &report)?;
+        write_plots(dir, &args.plan, &plan, &opts, &report)?;
     }
     let start_s = report.start_us as f64 * 1e-6;
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string(&report.run).map_err(|e| CliError::device(e.to_string()))?
-        );
+        )?;
     } else {
-        print_human(&plan, &opts, &report, &report.run.faults);
+        print_human(&plan, &opts, &report, &report.run.faults)?;
     }
     if report.run.completed && report.faults_on_nodes.is_empty() {
         Ok(())
@@ -83,8 +86,13 @@ pub fn run(args: &SimulateArgs) -> CliResult {
     }
 }
 
-fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[JsonFault]) {
-    println!(
+fn print_human(
+    plan: &Plan,
+    opts: &SimulateOptions,
+    r: &SimReport,
+    faults: &[JsonFault],
+) -> CliResult {
+    outln!(
         "{} segments, {:.3} s, {} CAN, {} Hz control, feedforward {}",
         plan.segments.len(),
         plan.total_time_s,
@@ -95,18 +103,18 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
         },
         opts.rate_hz,
         if opts.feedforward { "on" } else { "off" }
-    );
-    println!("axis   RMS error (µm)   max error (µm)   peak torque (N·m)");
+    )?;
+    outln!("axis   RMS error (µm)   max error (µm)   peak torque (N·m)")?;
     for j in 0..3 {
-        println!(
+        outln!(
             "q{}     {:>14.3}   {:>14.3}   {:>17.4}",
             j + 1,
             r.run.rms_error_m[j] * 1e6,
             r.run.max_error_m[j] * 1e6,
             r.run.peak_torque_nm[j]
-        );
+        )?;
     }
-    println!(
+    outln!(
         "bus load {:.2} % over {:.3} s (segments {:.2} %); {} frames ({} segment frames, {} per segment, {} retransmissions)",
         r.run.bus_load * 100.0,
         r.sim_time_s,
@@ -115,31 +123,44 @@ fn print_human(plan: &Plan, opts: &SimulateOptions, r: &SimReport, faults: &[Jso
         r.run.segment_frames,
         r.frames_per_segment,
         r.retransmits
-    );
-    println!(
+    )?;
+    outln!(
         "start skew {:.1} µs (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
         r.start_skew_ns as f64 * 1e-3,
         r.tick_ns as f64 * 1e-3,
         r.run.stop_ramp_s,
         r.f32_eval_error_m
-    );
+    )?;
     if faults.is_empty() {
-        println!("completed: {}, no faults", r.run.completed);
+        outln!("completed: {}, no faults", r.run.completed)?;
     } else {
         for f in faults {
-            println!(
+            outln!(
                 "fault: node {} {} ({}) at {:.3} s",
-                f.node, f.name, f.code, f.t_s
-            );
+                f.node,
+                f.name,
+                f.code,
+                f.t_s
+            )?;
         }
     }
+    Ok(())
 }
 
-fn write_plots(dir: &Path, plan: &Plan, opts: &SimulateOptions, r: &SimReport) -> CliResult {
+fn write_plots(
+    dir: &Path,
+    plan_path: &Path,
+    plan: &Plan,
+    opts: &SimulateOptions,
+    r: &SimReport,
+) -> CliResult {
     let plots = crate::report::sim_plots::sim_plots(plan, opts, r)
         .map_err(|e| CliError::bad_input(format!("plots: {e}")))?;
-    for (name, svg) in plots {
-        write_atomic(&dir.join(name), svg.as_bytes())?;
-    }
-    Ok(())
+    let paths: Vec<_> = plots.iter().map(|(name, _)| dir.join(name)).collect();
+    let files: Vec<_> = paths
+        .iter()
+        .zip(&plots)
+        .map(|(p, (_, svg))| (p.as_path(), svg.as_bytes()))
+        .collect();
+    write_outputs(&files, &[plan_path])
 }

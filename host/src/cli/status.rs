@@ -6,6 +6,7 @@
 use std::time::Duration;
 
 use clap::Args;
+use triquint_cli_common::outln;
 use triquint_link::{Listener, MachineStatus};
 use triquint_shared::Robot;
 
@@ -46,10 +47,10 @@ fn fmt_mm(x: Option<f64>) -> String {
 }
 
 /// The status for people, one line per node.
-pub fn print_text(s: &MachineStatus) {
+pub fn print_text(s: &MachineStatus) -> CliResult {
     for n in &s.nodes {
         if !n.heard {
-            println!("axis {} (node {}): silent", n.axis, n.id);
+            outln!("axis {} (node {}): silent", n.axis, n.id)?;
             continue;
         }
         let fault = if n.fault.code == 0 {
@@ -66,7 +67,7 @@ pub fn print_text(s: &MachineStatus) {
             (false, true) => ", override set",
             (false, false) => "",
         };
-        println!(
+        outln!(
             "axis {} (node {}): {}, {}, position {}, queue {}, {}{}{}",
             n.axis,
             n.id,
@@ -77,12 +78,13 @@ pub fn print_text(s: &MachineStatus) {
             if n.synced { "synced" } else { "not synced" },
             feed,
             fault
-        );
+        )?;
     }
     match s.platform_mm {
-        Some(p) => println!("platform at ({:.3}, {:.3}, {:.3}) mm", p[0], p[1], p[2]),
-        None => println!("platform position unknown (every axis must be homed and report)"),
+        Some(p) => outln!("platform at ({:.3}, {:.3}, {:.3}) mm", p[0], p[1], p[2])?,
+        None => outln!("platform position unknown (every axis must be homed and report)")?,
     }
+    Ok(())
 }
 
 pub fn run(args: &StatusArgs, robot: &Robot) -> CliResult {
@@ -95,12 +97,12 @@ pub fn run(args: &StatusArgs, robot: &Robot) -> CliResult {
     let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
     let s = machine_status(&args.iface, ids, args.wait, robot)?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&s).map_err(|e| CliError::device(e.to_string()))?
-        );
+        )?;
     } else {
-        print_text(&s);
+        print_text(&s)?;
     }
     match s.nodes.iter().find(|n| !n.heard) {
         None => Ok(()),

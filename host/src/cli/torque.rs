@@ -2,6 +2,7 @@
 
 use clap::Args;
 use serde_json::json;
+use triquint_cli_common::outln;
 use triquint_shared::{Robot, dynamics};
 
 use super::{fmt_triple, parse_triple};
@@ -31,9 +32,9 @@ pub fn run(args: &TorqueArgs, robot: &Robot) -> CliResult {
     let tau = dynamics::torque(&robot.model::<f64>(), &q, &qd, &qdd)
         .map_err(|e| CliError::bad_input(format!("--q {}: {e}", args.q)))?;
     if args.json {
-        println!("{}", json!({"torque_nm": tau.as_slice()}));
+        outln!("{}", json!({"torque_nm": tau.as_slice()}))?;
     } else {
-        println!("torque (N·m)   {}", fmt_triple(["τ1", "τ2", "τ3"], &tau, 6));
+        outln!("torque (N·m)   {}", fmt_triple(["τ1", "τ2", "τ3"], &tau, 6))?;
     }
     Ok(())
 }

@@ -30,6 +30,8 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use triquint_cli_common::input::{MAX_LOG_BYTES, read_text};
+use triquint_cli_common::output::io_reason;
 
 use triquint_shared::Robot;
 
@@ -56,8 +58,9 @@ pub struct WebOptions {
 pub fn run(opts: &WebOptions, robot: &Robot, stop: Arc<AtomicBool>) -> CliResult {
     let (source, name) = match (&opts.iface, &opts.replay) {
         (_, Some(path)) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+            let text = read_text(path, MAX_LOG_BYTES, "a replay log").map_err(|e| {
+                CliError::bad_input(format!("{}: {}", path.display(), io_reason(&e)))
+            })?;
             let log = candump::parse_log(&text)
                 .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
             let name = path

@@ -186,6 +186,8 @@ pub enum SegmentError {
     Duration(f64),
     #[error("segment coefficient {0} m (normalised) is outside ±128 m or not finite")]
     Range(f64),
+    #[error("{0} segments: a plan has at most 65535 (16-bit segment numbers)")]
+    TooMany(usize),
 }
 
 impl WireSegment {
