@@ -12,8 +12,9 @@ fn corpus_and_regressions_pass() {
     let mut loaded = 0;
     for data in corpus.iter().chain(inputs("regressions/plan").iter()) {
         fuzz_plan(data);
-        loaded +=
-            usize::from(triquint_planner::files::parse_plan(std::str::from_utf8(data).unwrap()).is_ok());
+        loaded += usize::from(
+            triquint_planner::files::parse_plan(std::str::from_utf8(data).unwrap()).is_ok(),
+        );
     }
     // The seeds reach `check`, not only the loader's refusals.
     assert!(loaded >= 3, "only {loaded} seeds load");
