@@ -6,11 +6,11 @@
 use std::io::{self, Read};
 use std::path::Path;
 
-/// A job file: [`crate::MAX_POINTS`] via-points inline at about 40 bytes
+/// A job file: [`crate::job::MAX_POINTS`] via-points inline at about 40 bytes
 /// each are under 100 KiB; the limit leaves room for a comment per point.
 pub const MAX_JOB_BYTES: u64 = 4 << 20;
 
-/// A points file (`[path] file`): [`crate::MAX_POINTS`] lines of full-precision
+/// A points file (`[path] file`): [`crate::job::MAX_POINTS`] lines of full-precision
 /// numbers (about 70 bytes) are under 150 KiB; the limit leaves room for
 /// long comments.
 pub const MAX_POINTS_FILE_BYTES: u64 = 4 << 20;
