@@ -9,7 +9,7 @@ pub use triquint_cli_common::exit::*;
 pub fn plan_error(e: triquint_planner::PlanError) -> CliError {
     use triquint_planner::PlanError as E;
     let status = match &e {
-        E::Infeasible { .. } => Status::Infeasible,
+        E::Infeasible { .. } | E::LeavesTravel { .. } => Status::Infeasible,
         E::Cancelled { .. } => Status::Cancelled,
         E::Solver(_) => Status::SolverFailure,
         _ => Status::BadInput,

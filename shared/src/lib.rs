@@ -29,7 +29,7 @@ pub mod quintic;
 pub mod readable;
 
 pub use kinematics::KinematicsError;
-pub use params::{Limits, Model, Robot};
+pub use params::{Limits, Model, Robot, Travel};
 
 /// The scalar type the generic math runs on: `f64` on the host, `f32` on the drives.
 pub trait Real: nalgebra::RealField + Copy {}

@@ -303,6 +303,104 @@ impl Limits {
     }
 }
 
+/// Slider travel: per axis, the lowest and highest joint position (m) a
+/// motion may reach. A limit like velocity or jerk: `ik` and `fk` refuse a
+/// pose outside it, the planner keeps every slider inside it in continuous
+/// time, `check` proves it.
+///
+/// The default is the paper's machine: its two cases move the sliders
+/// between 82.2 mm (Case II, P9, q3) and 402.8 mm (Case I, P10, q2) (the
+/// decoded Tables 5 and 8); the travel is 50–415 mm, that span with room
+/// for the quintics' excursions between knots, and its top is the default
+/// homing switch (0.42 m, above the travel) less its 5 mm back-off, so a
+/// plan never reaches the switch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Travel {
+    /// Lowest joint position per axis (m).
+    pub min: [f64; 3],
+    /// Highest joint position per axis (m).
+    pub max: [f64; 3],
+}
+
+impl Default for Travel {
+    fn default() -> Self {
+        Self {
+            min: [0.050; 3],
+            max: [0.415; 3],
+        }
+    }
+}
+
+/// A joint position outside the travel (axis 0-based; messages count from 1).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error(
+    "slider {} at {} mm is {} its travel {} {} mm",
+    axis + 1,
+    Short(micrometres(*position_m)),
+    if *below { "below" } else { "above" },
+    if *below { "min" } else { "max" },
+    Short(micrometres(*limit_m))
+)]
+pub struct OutsideTravel {
+    pub axis: usize,
+    pub position_m: f64,
+    pub limit_m: f64,
+    /// Below the minimum (else above the maximum).
+    pub below: bool,
+}
+
+/// A position in metres as millimetres rounded to the micrometre.
+fn micrometres(x_m: f64) -> f64 {
+    let um = x_m * 1e6;
+    let r = libm::round(um);
+    if r.is_finite() { r / 1e3 } else { um / 1e3 }
+}
+
+impl Travel {
+    /// Every bound finite, |bound| ≤ 1e6 m and min < max per axis.
+    pub fn validate(&self) -> Result<(), LimitError> {
+        for a in 0..3 {
+            for (name, v) in [("travel.min", self.min[a]), ("travel.max", self.max[a])] {
+                if !(v.is_finite() && v.abs() <= PARAM_MAX) {
+                    return Err(LimitError { name, value: v });
+                }
+            }
+            if self.min[a] >= self.max[a] {
+                return Err(LimitError {
+                    name: "travel.max (must be above travel.min)",
+                    value: self.max[a],
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The first axis of `q` outside the travel (NaN counts as outside).
+    pub fn outside(&self, q: &[f64; 3]) -> Option<OutsideTravel> {
+        (0..3).find_map(|axis| {
+            let p = q[axis];
+            if p.is_nan() || p < self.min[axis] {
+                Some(OutsideTravel {
+                    axis,
+                    position_m: p,
+                    limit_m: self.min[axis],
+                    below: true,
+                })
+            } else if p > self.max[axis] {
+                Some(OutsideTravel {
+                    axis,
+                    position_m: p,
+                    limit_m: self.max[axis],
+                    below: false,
+                })
+            } else {
+                None
+            }
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -395,6 +493,14 @@ mod tests {
             l.validate().unwrap_err().to_string(),
             "limit `jerk` must be finite and > 0, got -1e250"
         );
+        let t = Travel::default();
+        assert_eq!(t.validate(), Ok(()));
+        assert_eq!(t.outside(&[0.2, 0.3, 0.4]), None);
+        assert_eq!(
+            t.outside(&[0.2, -0.25, 0.4]).unwrap().to_string(),
+            "slider 2 at -250 mm is below its travel min 50 mm"
+        );
+        assert_eq!(t.outside(&[0.2, 0.3, f64::NAN]).map(|o| o.axis), Some(2));
         let l = Limits {
             jerk: f64::NAN,
             ..Limits::default()

@@ -13,6 +13,8 @@ use crate::quintic::Quintic;
 use crate::{Limits, Robot};
 
 pub mod eval;
+pub mod extrema;
+pub mod figures;
 
 pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 

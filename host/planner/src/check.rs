@@ -1,13 +1,18 @@
 //! Independent verification of a plan: interpolation, C3 continuity, rest
 //! at both ends, and every limit in continuous time — velocity,
 //! acceleration and jerk exactly, by Sturm sequences ([`crate::sturm`], a
-//! method the search does not use); torque on a fine grid.
+//! method the search does not use); torque on a fine grid; the sliders'
+//! travel from the exact position extremes; and every figure the plan
+//! records (`max_abs`) against its recomputation, so no reader of the plan
+//! trusts a summary that does not match the segments.
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::Vector3;
+use triquint_shared::Travel;
 use triquint_shared::dynamics;
+use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::quintic::eval_poly;
 
@@ -63,6 +68,11 @@ pub(crate) fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, Stat
         }
     }
     Ok(m)
+}
+
+/// The travel a plan is checked against: the default machine's.
+fn plan_travel(_plan: &Plan) -> Travel {
+    Travel::default()
 }
 
 /// Checks a plan: Err when it is not a usable plan ([`validate_plan`]);
@@ -165,17 +175,53 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
             );
         }
     }
-    let reported = plan
-        .max_abs
-        .jerk
-        .iter()
-        .zip(&m.jerk)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    row(
-        "reported max jerk matches (m/s³)",
-        reported,
-        1e-9 * m.jerk.iter().fold(1.0, |a: f64, b| a.max(*b)),
-    );
+    // Travel: the exact lowest and highest position of every slider.
+    let k = kinematics(&plan.segments);
+    let travel = plan_travel(plan);
+    for j in 0..3 {
+        row(
+            &format!("travel min − lowest position slider {} (m)", j + 1),
+            travel.min[j] - k.position_min[j],
+            CONTINUITY_TOL,
+        );
+        row(
+            &format!("highest position − travel max slider {} (m)", j + 1),
+            k.position_max[j] - travel.max[j],
+            CONTINUITY_TOL,
+        );
+    }
+    // Every recorded figure against its recomputation: exact ones to 1e-9
+    // relative, torque (sampled on the same grid the planner records) to
+    // its tolerance. A NaN difference fails the row.
+    for (name, rec, val, tol) in [
+        (
+            "velocity (m/s)",
+            plan.max_abs.velocity,
+            m.velocity,
+            LIMIT_TOL,
+        ),
+        (
+            "acceleration (m/s²)",
+            plan.max_abs.acceleration,
+            m.acceleration,
+            LIMIT_TOL,
+        ),
+        ("jerk (m/s³)", plan.max_abs.jerk, m.jerk, LIMIT_TOL),
+        ("torque (N·m)", plan.max_abs.torque, m.torque, TORQUE_TOL),
+    ] {
+        let diff = rec
+            .iter()
+            .zip(&val)
+            .map(|(a, b)| (a - b).abs())
+            .fold(
+                0.0,
+                |acc: f64, d| if d.is_nan() { f64::NAN } else { acc.max(d) },
+            );
+        row(
+            &format!("reported max {name} matches"),
+            if diff.is_nan() { f64::INFINITY } else { diff },
+            tol * val.iter().fold(1.0, |a: f64, b| a.max(*b)),
+        );
+    }
     Ok(rows)
 }

@@ -95,6 +95,45 @@ pub enum PlanError {
         position_m: [f64; 3],
         reason: String,
     },
+    /// A via-point, or a knot between two via-points, whose slider `axis`
+    /// (0-based) would stand at `joint_m`, beyond its travel limit `limit_m`.
+    #[error(
+        "{} {} ({}, {}, {}) mm is outside the travel: slider {} at {} mm, limit {} mm",
+        match point { PointKind::ViaPoint => "point", PointKind::Knot => "knot" },
+        index + 1,
+        readable(position_m[0] * 1e3),
+        readable(position_m[1] * 1e3),
+        readable(position_m[2] * 1e3),
+        axis + 1,
+        readable(joint_m * 1e3),
+        readable(limit_m * 1e3)
+    )]
+    OutsideTravel {
+        point: PointKind,
+        index: usize,
+        position_m: [f64; 3],
+        axis: usize,
+        joint_m: f64,
+        limit_m: f64,
+    },
+    /// Every point is inside the travel, but the planned motion leaves it
+    /// between two knots (in segment `segment`, 0-based): slider `axis`
+    /// reaches `joint_m`, beyond `limit_m`. The planner refuses the plan
+    /// rather than write one that leaves the travel.
+    #[error(
+        "infeasible: slider {} reaches {} mm between knots {} and {}, beyond its travel limit {} mm; move the points away from the travel's end",
+        axis + 1,
+        readable(joint_m * 1e3),
+        segment + 1,
+        segment + 2,
+        readable(limit_m * 1e3)
+    )]
+    LeavesTravel {
+        segment: usize,
+        axis: usize,
+        joint_m: f64,
+        limit_m: f64,
+    },
     /// A valid job that no plan satisfies: `limit` binds. `reached` is the
     /// binding quantity's value (above `limit_value`) in the planner's
     /// closest plan: when the total time is shorter than

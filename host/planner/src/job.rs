@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::Objective;
 use triquint_shared::protocol::segment::MAX_DURATION_US;
-use triquint_shared::{Limits, Model, Robot};
+use triquint_shared::{Limits, Model, Robot, Travel};
 
 use crate::error::{PlanError, PointKind};
 use triquint_shared::readable::readable;
@@ -39,16 +39,19 @@ pub struct Job {
     objective: Objective,
     robot: Robot,
     limits: Limits,
+    travel: Travel,
     points_m: Vec<[f64; 3]>,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
-/// jerk, the paper's robot (Table 1) and limits (Table 3), no points.
+/// jerk, the paper's robot (Table 1), limits (Table 3) and travel
+/// ([`Travel::default`]), no points.
 #[derive(Clone, Debug, Default)]
 pub struct JobBuilder {
     objective: Objective,
     robot: Robot,
     limits: Limits,
+    travel: Travel,
     points_m: Vec<[f64; 3]>,
 }
 
@@ -59,6 +62,12 @@ impl JobBuilder {
     }
     pub fn robot(mut self, robot: Robot) -> Self {
         self.robot = robot;
+        self
+    }
+    /// The sliders' travel: every via-point and knot, and the whole motion
+    /// between them, stays inside it.
+    pub fn travel(mut self, travel: Travel) -> Self {
+        self.travel = travel;
         self
     }
     pub fn limits(mut self, limits: Limits) -> Self {
@@ -109,6 +118,9 @@ impl JobBuilder {
                 ));
             }
         }
+        self.travel
+            .validate()
+            .map_err(|e| PlanError::invalid(e.name, e.to_string()))?;
         let pts = &self.points_m;
         if pts.len() < 2 {
             return Err(PlanError::invalid(
@@ -139,7 +151,7 @@ impl JobBuilder {
                     ),
                 ));
             }
-            reachable(&model, *p, PointKind::ViaPoint, i)?;
+            reachable(&model, &self.travel, *p, PointKind::ViaPoint, i)?;
             if i > 0 && (Vector3::from(*p) - Vector3::from(pts[i - 1])).norm() < 1e-9 {
                 return Err(PlanError::invalid(
                     "path.points",
@@ -152,7 +164,7 @@ impl JobBuilder {
         }
         let knots = knot_points(pts);
         for (i, k) in knots.iter().enumerate() {
-            reachable(&model, *k, PointKind::Knot, i)?;
+            reachable(&model, &self.travel, *k, PointKind::Knot, i)?;
         }
         let t = l.total_time;
         let segments = (knots.len() - 1) as f64;
@@ -175,25 +187,38 @@ impl JobBuilder {
             objective: self.objective,
             robot: self.robot,
             limits: self.limits,
+            travel: self.travel,
             points_m: self.points_m,
         })
     }
 }
 
+/// `p` has a pose, and its sliders are inside the travel.
 fn reachable(
     model: &Model<f64>,
+    travel: &Travel,
     p: [f64; 3],
     point: PointKind,
     index: usize,
 ) -> Result<(), PlanError> {
-    Pose::from_cartesian(model, Vector3::from(p))
-        .map(|_| ())
-        .map_err(|e| PlanError::OutsideWorkspace {
+    let pose =
+        Pose::from_cartesian(model, Vector3::from(p)).map_err(|e| PlanError::OutsideWorkspace {
             point,
             index,
             position_m: p,
             reason: e.to_string(),
-        })
+        })?;
+    match travel.outside(&pose.q.into()) {
+        None => Ok(()),
+        Some(o) => Err(PlanError::OutsideTravel {
+            point,
+            index,
+            position_m: p,
+            axis: o.axis,
+            joint_m: o.position_m,
+            limit_m: o.limit_m,
+        }),
+    }
 }
 
 impl Job {
@@ -206,6 +231,7 @@ impl Job {
             objective: self.objective,
             robot: self.robot.clone(),
             limits: self.limits.clone(),
+            travel: self.travel.clone(),
             points_m: self.points_m.clone(),
         }
     }
@@ -217,6 +243,9 @@ impl Job {
     }
     pub fn limits(&self) -> &Limits {
         &self.limits
+    }
+    pub fn travel(&self) -> &Travel {
+        &self.travel
     }
     /// Via-points in metres.
     pub fn points_m(&self) -> &[[f64; 3]] {
@@ -255,6 +284,51 @@ mod tests {
 
     fn err(b: JobBuilder) -> PlanError {
         b.build().unwrap_err()
+    }
+
+    #[test]
+    fn a_point_outside_the_travel_names_the_point_and_the_slider() {
+        // Was planned: z 100 mm puts every slider far below any guideway.
+        let e = err(Job::builder().points_mm([
+            [0.0, 0.0, 600.0],
+            [0.0, 0.0, 500.0],
+            [0.0, 0.0, 100.0],
+        ]));
+        assert!(
+            matches!(
+                e,
+                PlanError::OutsideTravel {
+                    point: PointKind::ViaPoint,
+                    index: 2,
+                    axis: 0,
+                    limit_m: 0.05,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(
+            e.to_string()
+                .starts_with("point 3 (0, 0, 100) mm is outside the travel: slider 1 at -286.78"),
+            "{e}"
+        );
+        // A narrower travel of the machine's own refuses what the default takes.
+        let job = Job::builder().points_mm([[0.0, 0.0, 600.0], [0.0, 0.0, 620.0]]);
+        assert!(job.clone().build().is_ok());
+        let travel = Travel {
+            max: [0.415, 0.22, 0.415],
+            ..Travel::default()
+        };
+        let e = err(job.clone().travel(travel));
+        assert!(
+            matches!(e, PlanError::OutsideTravel { axis: 1, .. }),
+            "{e:?}"
+        );
+        let bad = Travel {
+            min: [0.3; 3],
+            max: [0.2; 3],
+        };
+        assert!(matches!(err(job.travel(bad)), PlanError::InvalidJob { .. }));
     }
 
     #[test]

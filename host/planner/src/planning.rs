@@ -6,6 +6,8 @@ use std::sync::mpsc::{RecvTimeoutError, channel};
 use std::time::Duration;
 
 use nalgebra::Vector3;
+use triquint_shared::Travel;
+use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::{Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
 
 use crate::check::max_abs;
@@ -88,6 +90,9 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     }
     let (sol, starts) = r?;
     let mut plan = assemble(job, &p, &sol);
+    if let Some(e) = leaves_travel(&plan, job.travel()) {
+        return Err(e);
+    }
     plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
         .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
     let progress = state.progress();
@@ -97,6 +102,23 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     Ok(plan)
+}
+
+/// The first segment in which a slider leaves the travel, from the exact
+/// extremes of its quintics (the knots are inside: the job checked them).
+fn leaves_travel(plan: &Plan, travel: &Travel) -> Option<PlanError> {
+    plan.segments.iter().enumerate().find_map(|(segment, seg)| {
+        let k = kinematics(std::slice::from_ref(seg));
+        let o = travel
+            .outside(&k.position_min)
+            .or_else(|| travel.outside(&k.position_max))?;
+        Some(PlanError::LeavesTravel {
+            segment,
+            axis: o.axis,
+            joint_m: o.position_m,
+            limit_m: o.limit_m,
+        })
+    })
 }
 
 /// The planning problem of a job at its total-time limit.

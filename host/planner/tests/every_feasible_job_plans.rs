@@ -1,4 +1,4 @@
-//! Seeded random jobs in the workspace (2, 3, 4 and 5–12 via-points, both
+//! Seeded random jobs in the workspace and the travel (2, 3, 4 and 5–12 via-points, both
 //! objectives, several total times): each either plans and passes the
 //! independent check, or is infeasible with a shortest total time that is
 //! right — the job plans at 1.01 × that time and is infeasible at 0.99 × it.
@@ -43,7 +43,7 @@ fn random_job(rng: &mut ChaCha8Rng, n: usize, objective: Objective, total_time: 
             .build();
         match job {
             Ok(job) => return job,
-            Err(PlanError::OutsideWorkspace { .. }) => continue,
+            Err(PlanError::OutsideWorkspace { .. } | PlanError::OutsideTravel { .. }) => continue,
             Err(e) => panic!("{e}"),
         }
     }

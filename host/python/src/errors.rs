@@ -178,6 +178,21 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             };
             outside_instance(py, &msg, *index, kind, *position_m, units, reason)?
         }
+        PlanError::OutsideTravel {
+            point,
+            index,
+            position_m,
+            ..
+        } => {
+            // A point the robot reaches, but beyond a slider's travel: the
+            // same error for Python, its reason the whole message.
+            let kind = match point {
+                PointKind::ViaPoint => "via-point",
+                PointKind::Knot => "knot",
+                _ => "point",
+            };
+            outside_instance(py, &msg, *index, kind, *position_m, units, &msg)?
+        }
         PlanError::Infeasible {
             limit,
             limit_value,

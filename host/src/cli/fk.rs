@@ -4,9 +4,9 @@ use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
 use triquint_cli_common::outln;
-use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::readable::readable;
+use triquint_shared::{Robot, Travel};
 
 use super::{finite, fmt_triple};
 use crate::exit::{CliError, CliResult};
@@ -31,6 +31,15 @@ pub fn run(args: &FkArgs, robot: &Robot) -> CliResult {
         finite("Q2", &args.q2)?,
         finite("Q3", &args.q3)?,
     );
+    let q_m: [f64; 3] = (q_mm / 1000.0).into();
+    if let Some(o) = Travel::default().outside(&q_m) {
+        return Err(CliError::bad_input(format!(
+            "joints ({}, {}, {}) mm are outside the travel: {o}",
+            readable(q_mm.x),
+            readable(q_mm.y),
+            readable(q_mm.z)
+        )));
+    }
     let pose = Pose::from_joints(&robot.model::<f64>(), q_mm / 1000.0).map_err(|e| {
         CliError::bad_input(format!(
             "joints ({}, {}, {}) mm have no valid pose: {e}",

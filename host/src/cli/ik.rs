@@ -4,9 +4,9 @@ use clap::Args;
 use nalgebra::Vector3;
 use serde_json::json;
 use triquint_cli_common::outln;
-use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::readable::readable;
+use triquint_shared::{Robot, Travel};
 
 use super::{finite, fmt_triple};
 use crate::exit::{CliError, CliResult};
@@ -39,6 +39,15 @@ pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
             readable(r_mm.z)
         ))
     })?;
+    // A pose whose sliders stand outside their travel is no answer.
+    if let Some(o) = Travel::default().outside(&pose.q.into()) {
+        return Err(CliError::bad_input(format!(
+            "position ({}, {}, {}) mm is outside the travel: {o}",
+            readable(r_mm.x),
+            readable(r_mm.y),
+            readable(r_mm.z)
+        )));
+    }
     let q_mm = pose.q * 1000.0;
     if args.json {
         outln!(

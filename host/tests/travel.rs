@@ -1,0 +1,117 @@
+//! Slider travel is a limit like the others, and no figure a plan records
+//! is trusted: `ik`, `fk`, `plan` and `check` on the built binary.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn triquint(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// An empty directory of its own for a test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("triquint-travel-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The paper's Case II as `triquint plan` writes it.
+fn case2_plan(dir: &Path) -> serde_json::Value {
+    let job = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/paper-case2.toml");
+    let (status, _, err) = triquint(
+        dir,
+        &["plan", job.to_str().unwrap(), "-o", "case2.json", "--quiet"],
+    );
+    assert_eq!(status, 0, "{err}");
+    serde_json::from_str(&std::fs::read_to_string(dir.join("case2.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn ik_refuses_a_pose_below_the_travel() {
+    let dir = scratch("ik_refuses_a_pose_below_the_travel");
+    // Was q1 = −286.8 mm, exit 0.
+    let (status, out, err) = triquint(dir.as_path(), &["ik", "0", "0", "100"]);
+    assert_eq!(status, 2, "{out}{err}");
+    assert!(
+        err.contains("slider 1 at -286.782 mm is below its travel min 50 mm"),
+        "{err}"
+    );
+    let (status, _, err) = triquint(dir.as_path(), &["ik", "0", "0", "600"]);
+    assert_eq!(status, 0, "{err}");
+}
+
+#[test]
+fn fk_refuses_joints_outside_the_travel() {
+    let dir = scratch("fk_refuses_joints_outside_the_travel");
+    let (status, _, err) = triquint(dir.as_path(), &["fk", "100", "713", "100"]);
+    assert_eq!(status, 2, "{err}");
+    assert!(
+        err.contains("slider 2 at 713 mm is above its travel max 415 mm"),
+        "{err}"
+    );
+    let (status, _, err) = triquint(dir.as_path(), &["fk", "100", "100", "100"]);
+    assert_eq!(status, 0, "{err}");
+}
+
+#[test]
+fn a_job_down_to_z_100_mm_is_refused_naming_the_point_and_the_slider() {
+    let dir = scratch("a_job_down_to_z_100_mm_is_refused_naming_the_point_and_the_slider");
+    std::fs::write(
+        dir.as_path().join("job.toml"),
+        "[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [0, 0, 500], [0, 0, 100]]\n",
+    )
+    .unwrap();
+    let (status, out, err) = triquint(
+        dir.as_path(),
+        &["plan", "job.toml", "-o", "out.json", "--quiet"],
+    );
+    assert_eq!(status, 2, "{out}{err}");
+    assert!(
+        err.contains("point 3 (0, 0, 100) mm is outside the travel: slider 1 at"),
+        "{err}"
+    );
+    assert!(!dir.as_path().join("out.json").exists());
+}
+
+#[test]
+fn check_compares_every_recorded_maximum() {
+    let dir = scratch("check_compares_every_recorded_maximum");
+    let case2 = case2_plan(&dir);
+    let (status, _, err) = triquint(&dir, &["check", "case2.json"]);
+    assert_eq!(status, 0, "{err}");
+    for field in ["velocity", "acceleration", "torque"] {
+        let mut p = case2.clone();
+        p["max_abs"][field] = serde_json::json!([1e-9, 1e-9, 1e-9]);
+        std::fs::write(dir.as_path().join("p.json"), p.to_string()).unwrap();
+        let (status, out, err) = triquint(dir.as_path(), &["check", "p.json"]);
+        assert_eq!(status, 1, "{field}: {out}{err}");
+        assert!(
+            out.lines()
+                .any(|l| l.starts_with(&format!("reported max {field}")) && l.ends_with("VIOLATED")),
+            "{field}: {out}"
+        );
+    }
+}
+
+#[test]
+fn check_refuses_limits_no_job_could_have() {
+    let dir = scratch("check_refuses_limits_no_job_could_have");
+    let mut p = case2_plan(&dir);
+    for k in ["velocity", "acceleration", "jerk", "torque"] {
+        p["limits"][k] = serde_json::json!(1e300);
+    }
+    std::fs::write(dir.as_path().join("p.json"), p.to_string()).unwrap();
+    let (status, out, err) = triquint(dir.as_path(), &["check", "p.json"]);
+    assert_eq!(status, 2, "{out}{err}");
+    assert!(err.contains("`velocity` is 1e300, not in"), "{err}");
+}
