@@ -3,22 +3,25 @@
 //! controlled stop T_s and quick stop T_q — long enough to bring the
 //! largest velocity and acceleration of the motion to rest within the jerk
 //! budget (`stop_time`, docs/protocol.md, Stopping); for a plan, the feed
-//! override cap (`override_cap.rs`).
+//! override cap (`override_cap.rs`). A plan's maxima are computed from its
+//! segments (exactly, `triquint_shared::plan::figures`), never read from
+//! the `max_abs` it records: a tampered summary cannot shorten a stop.
 
-use triquint_shared::plan::{MaxAbs, Plan};
+use triquint_shared::plan::Plan;
+use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::DriveConfig;
 use triquint_shared::protocol::config::{DriveSettings, stop_time};
 use triquint_shared::{Limits, Robot};
 
 use crate::override_cap::{Maxima, override_scaling};
 
-/// Why a plan's recorded maxima cannot size the stop ramps.
+/// Why a plan's maxima cannot size the stop ramps.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ConfigError {
-    #[error("max_abs.{field} in the plan is {value}, not a finite number ≥ 0")]
+    #[error("the plan's largest {field} is {value}, not a finite number ≥ 0")]
     Maxima { field: &'static str, value: f64 },
-    #[error("the plan records no maxima (max_abs all zero); plan it again with `triquint plan`")]
-    NotRecorded,
+    #[error("the plan does not move (its velocity, acceleration and jerk are all zero)")]
+    NoMotion,
 }
 
 /// The three nodes' configurations (node i + 1 drives axis i).
@@ -32,10 +35,10 @@ pub struct DriveConfigs {
 }
 
 impl DriveConfigs {
-    /// For `plan`, from the exact maxima the planner recorded in it
-    /// (`plan.max_abs`, continuous-time, re-verified by `triquint check`).
+    /// For `plan`, from the exact continuous-time maxima of its segments
+    /// (not the `max_abs` it records, which nothing here trusts).
     pub fn for_plan(plan: &Plan, settings: &DriveSettings) -> Result<Self, ConfigError> {
-        let [v, a, j] = largest(&plan.max_abs)?;
+        let [v, a, j] = largest(plan)?;
         // The override cap, and the stop ramps sized for a stop from it.
         let s = override_scaling(plan, Maxima { v, a, j });
         let (robot, limits) = (&plan.robot, &plan.limits);
@@ -93,8 +96,9 @@ impl DriveConfigs {
     }
 }
 
-/// Largest |v|, |a|, |jerk| over the three joints.
-fn largest(m: &MaxAbs) -> Result<[f64; 3], ConfigError> {
+/// Largest |v|, |a|, |jerk| over the three joints of `plan`'s segments.
+fn largest(plan: &Plan) -> Result<[f64; 3], ConfigError> {
+    let m = kinematics(&plan.segments);
     let mut out = [0.0f64; 3];
     for (k, (field, per_joint)) in [
         ("velocity", m.velocity),
@@ -112,7 +116,7 @@ fn largest(m: &MaxAbs) -> Result<[f64; 3], ConfigError> {
         }
     }
     if out.iter().all(|x| *x == 0.0) {
-        return Err(ConfigError::NotRecorded);
+        return Err(ConfigError::NoMotion);
     }
     Ok(out)
 }
@@ -149,15 +153,80 @@ mod tests {
         );
     }
 
+    fn plan_with(coeffs: [[f64; 6]; 3]) -> Plan {
+        use triquint_shared::plan::{MaxAbs, Objective, PLAN_FORMAT, Segment, SolverStats};
+        Plan {
+            format: PLAN_FORMAT.into(),
+            objective: Objective::MinMaxJerk,
+            robot: Robot::default(),
+            limits: Limits::default(),
+            via_points_m: vec![],
+            knots_m: vec![],
+            intervals_s: vec![1.0],
+            total_time_s: 1.0,
+            segments: vec![Segment {
+                t0_s: 0.0,
+                duration_s: 1.0,
+                coeffs,
+            }],
+            max_abs: MaxAbs::default(),
+            solver: SolverStats::default(),
+        }
+    }
+
     #[test]
     fn bad_maxima_are_named() {
-        let mut m = MaxAbs::default();
-        assert_eq!(largest(&m), Err(ConfigError::NotRecorded));
-        m.velocity = [0.1, 0.3, 0.2];
-        m.jerk[2] = f64::NAN;
-        let e = largest(&m).unwrap_err();
-        assert!(e.to_string().starts_with("max_abs.jerk"), "{e}");
-        m.jerk = [1.0, 2.0, 0.5];
-        assert_eq!(largest(&m), Ok([0.3, 0.0, 2.0]));
+        let rest = [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3];
+        assert_eq!(largest(&plan_with(rest)), Err(ConfigError::NoMotion));
+        let mut c = rest;
+        c[2][3] = f64::NAN;
+        let e = largest(&plan_with(c)).unwrap_err();
+        assert!(
+            e.to_string().starts_with("the plan's largest velocity"),
+            "{e}"
+        );
+        // q = 0.3 + t³/6 on joint 2: v ≤ ½, a ≤ 1, jerk 1 on [0, 1].
+        let mut c = rest;
+        c[1][3] = 1.0 / 6.0;
+        assert_eq!(largest(&plan_with(c)), Ok([0.5, 1.0, 1.0]));
+    }
+
+    #[test]
+    fn a_tampered_summary_changes_no_configuration() {
+        // q = 0.3 + t³/6 − t⁴/8 + t⁵/40 on every joint: some motion.
+        let plan = plan_with([[0.3, 0.0, 0.0, 1.0 / 6.0, -1.0 / 8.0, 1.0 / 40.0]; 3]);
+        let s = DriveSettings::default();
+        let honest = DriveConfigs::for_plan(&plan, &s).unwrap();
+        let mut tampered = plan.clone();
+        tampered.max_abs.velocity = [1e-9; 3];
+        tampered.max_abs.acceleration = [1e-9; 3];
+        tampered.max_abs.jerk = [1e-9; 3];
+        assert_eq!(DriveConfigs::for_plan(&tampered, &s).unwrap(), honest);
+        // The ramps are sized from the segments' own maxima: no shorter
+        // than a stop from them at σ = 1.
+        let [v, a, j] = largest(&plan).unwrap();
+        assert!(j > 0.1 && v > 0.0 && a > 0.0);
+        let from = DriveConfigs::from_maxima(&plan.robot, &plan.limits, &s, v, a, j);
+        assert!(honest.stop_time_s >= from.stop_time_s);
+    }
+
+    #[test]
+    fn case2_with_a_tampered_summary_gets_the_honest_ramps() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../testdata/protocol/plans/case2-spline.json"
+        ))
+        .expect("paper case II plan");
+        let plan: Plan = serde_json::from_str(&text).expect("a plan");
+        let s = DriveSettings::default();
+        let honest = DriveConfigs::for_plan(&plan, &s).unwrap();
+        let mut tampered = plan.clone();
+        tampered.max_abs.velocity = [1e-9; 3];
+        tampered.max_abs.acceleration = [1e-9; 3];
+        let got = DriveConfigs::for_plan(&tampered, &s).unwrap();
+        assert_eq!(got, honest);
+        // Sized from the segments: the recorded summary would have given
+        // the 50 ms floor, a stop far above the jerk limit.
+        assert!(got.stop_time_s > 0.05, "{}", got.stop_time_s);
     }
 }

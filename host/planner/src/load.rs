@@ -5,6 +5,9 @@ use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, Plan};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
+use triquint_shared::readable::readable;
+
+use crate::job::LIMIT_RANGE;
 
 /// Why a text is not a usable plan.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -73,6 +76,25 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     plan.limits
         .validate()
         .map_err(|e| LoadError::Invalid(format!("limits: {e}")))?;
+    // The range a job's limits are held to: a plan whose limits no job
+    // could have is refused, not checked against absurd bounds.
+    let (lo, hi) = LIMIT_RANGE;
+    let l = &plan.limits;
+    for (name, value) in [
+        ("velocity", l.velocity),
+        ("acceleration", l.acceleration),
+        ("jerk", l.jerk),
+        ("torque", l.torque),
+    ] {
+        if !(lo..=hi).contains(&value) {
+            return bad(format!(
+                "limits: `{name}` is {}, not in {}..{}",
+                readable(value),
+                readable(lo),
+                readable(hi)
+            ));
+        }
+    }
     let n = plan.segments.len();
     if n == 0 {
         return bad("no segments".into());
