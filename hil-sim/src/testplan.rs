@@ -141,6 +141,7 @@ pub fn plan_through(
         objective: Objective::MinMaxJerk,
         robot: robot.clone(),
         limits: limits.clone(),
+        travel: Default::default(),
         via_points_m: points.to_vec(),
         knots_m: knots.iter().map(|k| [k[0], k[1], k[2]]).collect(),
         intervals_s: h.clone(),

@@ -115,3 +115,33 @@ fn check_refuses_limits_no_job_could_have() {
     assert_eq!(status, 2, "{out}{err}");
     assert!(err.contains("`velocity` is 1e300, not in"), "{err}");
 }
+
+#[test]
+fn check_proves_the_travel_the_plan_records() {
+    let dir = scratch("recorded-travel");
+    let mut p = case2_plan(&dir);
+    assert_eq!(p["format"], "triquint-plan/2");
+    assert_eq!(p["travel"]["max"], serde_json::json!([0.415, 0.415, 0.415]));
+    // Case II moves slider 3 down to about 82 mm: a travel from 100 mm fails.
+    p["travel"]["min"] = serde_json::json!([0.05, 0.05, 0.1]);
+    std::fs::write(dir.join("p.json"), p.to_string()).unwrap();
+    let (status, out, err) = triquint(&dir, &["check", "p.json"]);
+    assert_eq!(status, 1, "{out}{err}");
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("travel min − lowest position slider 3")
+                && l.ends_with("VIOLATED")),
+        "{out}"
+    );
+    // Format 2 without its travel is refused; format 1 loads with the default.
+    let mut p = case2_plan(&dir);
+    p.as_object_mut().unwrap().remove("travel");
+    std::fs::write(dir.join("p.json"), p.to_string()).unwrap();
+    let (status, _, err) = triquint(&dir, &["check", "p.json"]);
+    assert_eq!(status, 2, "{err}");
+    assert!(err.contains("records its `travel`"), "{err}");
+    p["format"] = serde_json::json!("triquint-plan/1");
+    std::fs::write(dir.join("p.json"), p.to_string()).unwrap();
+    let (status, out, err) = triquint(&dir, &["check", "p.json"]);
+    assert_eq!(status, 0, "{out}{err}");
+}

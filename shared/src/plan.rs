@@ -1,6 +1,8 @@
-//! The plan file (`triquint-plan/1`): what the planner writes and every other
-//! tool (check, report, simulate, upload) reads, and its evaluation at a
-//! plan time ([`Plan::at`], [`Plan::sample`]; the conventions are in [`eval`]).
+//! The plan file (`triquint-plan/2`, docs/plan-format.md): what the planner
+//! writes and every other tool (check, report, simulate, upload) reads, and
+//! its evaluation at a plan time ([`Plan::at`], [`Plan::sample`]; the
+//! conventions are in [`eval`]). Format 1 plans still load, read-only, with
+//! the default machine's values.
 
 use alloc::string::String;
 use alloc::vec::Vec;
@@ -10,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::protocol::WireSegment;
 use crate::protocol::segment::{FLAG_FIRST, FLAG_LAST, SegmentError};
 use crate::quintic::Quintic;
-use crate::{Limits, Robot};
+use crate::{Limits, Robot, Travel};
 
 pub mod eval;
 pub mod extrema;
@@ -18,8 +20,10 @@ pub mod figures;
 
 pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 
-/// Value of the `format` field.
-pub const PLAN_FORMAT: &str = "triquint-plan/1";
+/// Value of the `format` field of the plans this version writes.
+pub const PLAN_FORMAT: &str = "triquint-plan/2";
+/// The previous format: read (with the default machine's travel), never written.
+pub const PLAN_FORMAT_1: &str = "triquint-plan/1";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -82,6 +86,10 @@ pub struct Plan {
     pub objective: Objective,
     pub robot: Robot,
     pub limits: Limits,
+    /// The sliders' travel the plan was made for, which `check` proves it
+    /// against (format 2; a format 1 plan has none and gets the default).
+    #[serde(default)]
+    pub travel: Travel,
     pub via_points_m: Vec<[f64; 3]>,
     pub knots_m: Vec<[f64; 3]>,
     pub intervals_s: Vec<f64>,
@@ -98,7 +106,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
@@ -117,7 +125,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
@@ -141,7 +149,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
@@ -172,7 +180,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
@@ -230,6 +238,7 @@ mod tests {
             objective: Objective::MinMaxJerk,
             robot: Robot::default(),
             limits: Limits::default(),
+            travel: Travel::default(),
             via_points_m: Vec::new(),
             knots_m: Vec::new(),
             intervals_s: Vec::new(),

@@ -160,6 +160,7 @@ mod tests {
             objective: Objective::MinMaxJerk,
             robot: Robot::default(),
             limits: Limits::default(),
+            travel: Default::default(),
             via_points_m: vec![],
             knots_m: vec![],
             intervals_s: vec![1.0],

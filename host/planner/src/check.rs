@@ -10,7 +10,6 @@
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::Vector3;
-use triquint_shared::Travel;
 use triquint_shared::dynamics;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::{MaxAbs, Plan};
@@ -68,11 +67,6 @@ pub(crate) fn max_abs(plan: &Plan, torque_samples: usize) -> Result<MaxAbs, Stat
         }
     }
     Ok(m)
-}
-
-/// The travel a plan is checked against: the default machine's.
-fn plan_travel(_plan: &Plan) -> Travel {
-    Travel::default()
 }
 
 /// Checks a plan: Err when it is not a usable plan ([`validate_plan`]);
@@ -177,7 +171,7 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
     }
     // Travel: the exact lowest and highest position of every slider.
     let k = kinematics(&plan.segments);
-    let travel = plan_travel(plan);
+    let travel = &plan.travel;
     for j in 0..3 {
         row(
             &format!("travel min − lowest position slider {} (m)", j + 1),

@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, Plan};
+use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, Plan};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
@@ -17,7 +17,7 @@ pub enum LoadError {
     #[error("{0}")]
     Json(String),
     /// Another format or version than this library reads.
-    #[error("format is `{found}`, expected `{PLAN_FORMAT}`")]
+    #[error("format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_1}`)")]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
     #[error("{0}")]
@@ -35,8 +35,19 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
     if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
         && let Some(f) = v.get("format").and_then(|f| f.as_str())
         && f != PLAN_FORMAT
+        && f != PLAN_FORMAT_1
     {
         return Err(LoadError::Format { found: one_line(f) });
+    }
+    // Format 2 records the machine values the check needs; only format 1
+    // may lack them (it gets the default machine's).
+    if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
+        && v.get("format").and_then(|f| f.as_str()) == Some(PLAN_FORMAT)
+        && v.get("travel").is_none()
+    {
+        return Err(LoadError::Invalid(format!(
+            "a `{PLAN_FORMAT}` plan records its `travel`; this one has none"
+        )));
     }
     let plan: Plan =
         serde_json::from_str(text).map_err(|e| LoadError::Json(one_line(&e.to_string())))?;
@@ -65,7 +76,7 @@ fn one_line(msg: &str) -> String {
 /// last included.
 pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if plan.format != PLAN_FORMAT {
+    if plan.format != PLAN_FORMAT && plan.format != PLAN_FORMAT_1 {
         return Err(LoadError::Format {
             found: one_line(&plan.format),
         });
@@ -76,6 +87,9 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     plan.limits
         .validate()
         .map_err(|e| LoadError::Invalid(format!("limits: {e}")))?;
+    plan.travel
+        .validate()
+        .map_err(|e| LoadError::Invalid(e.to_string()))?;
     // The range a job's limits are held to: a plan whose limits no job
     // could have is refused, not checked against absurd bounds.
     let (lo, hi) = LIMIT_RANGE;
@@ -243,6 +257,7 @@ mod tests {
             objective: Objective::MinMaxJerk,
             robot,
             limits: Limits::default(),
+            travel: Default::default(),
             via_points_m: vec![p, p],
             knots_m: vec![q; n + 1],
             intervals_s: vec![1e-3; n],

@@ -13,8 +13,8 @@ from conftest import EXAMPLES
 def test_json_round_trip(case1):
     text = case1.to_json()
     doc = json.loads(text)
-    assert doc["format"] == "triquint-plan/1"
-    assert set(doc) == {"format", "objective", "robot", "limits", "via_points_m", "knots_m", "intervals_s",
+    assert doc["format"] == "triquint-plan/2"
+    assert set(doc) == {"format", "objective", "robot", "limits", "travel", "via_points_m", "knots_m", "intervals_s",
                         "total_time_s", "segments", "max_abs", "solver"}
     back = triquint.Plan.from_json(text)
     assert back == case1
