@@ -206,6 +206,21 @@ macro_rules! outln {
     };
 }
 
+/// Writes a message to standard error, ignoring failure: a closed or full
+/// standard error (`2>&-`) must not turn an error or a progress line into
+/// a panic (as `eprintln!` does), and there is nowhere left to report it.
+pub fn write_stderr(args: fmt::Arguments<'_>) {
+    let _ = io::stderr().lock().write_fmt(args);
+}
+
+/// `eprintln!` for commands: never panics (see [`write_stderr`]).
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::output::write_stderr(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 /// `print!` for commands, as [`outln!`] without the newline.
 #[macro_export]
 macro_rules! out {

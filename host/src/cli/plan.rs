@@ -145,7 +145,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
     if !args.quiet {
         let m = &plan.max_abs;
         let max = |v: [f64; 3]| v.iter().fold(0.0f64, |a, b| a.max(*b));
-        eprintln!(
+        triquint_cli_common::errln!(
             "planned {} segments, T = {:.6} s: max |jerk| {:.6} m/s³, |a| {:.4} m/s², |v| {:.4} m/s, |τ| {:.4} N·m ({} starts, {} LP solves, {:.3} s) → {}",
             plan.segments.len(),
             plan.total_time_s,
