@@ -12,10 +12,7 @@ use triquint_cli_common::output::{check_target, output_error, write_outputs};
 
 use crate::exit::{CliError, CliResult, plan_error};
 
-/// The most `--starts`: each start keeps an interval set per segment and
-/// the search stops taking them once two agree, so the default 8 is
-/// usually plenty; a thousand is far past any use.
-pub const MAX_STARTS: usize = 1000;
+pub use triquint_planner::MAX_STARTS;
 
 /// Parses `--starts`: bad input (exit 2) outside 1 to [`MAX_STARTS`].
 fn parse_starts(text: &str) -> CliResult<usize> {
