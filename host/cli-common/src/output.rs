@@ -14,15 +14,7 @@ use std::path::Path;
 
 use crate::exit::{CliError, CliResult};
 
-/// The `std::io::Error` text without the trailing " (os error N)", for
-/// one-line messages.
-pub fn io_reason(e: &io::Error) -> String {
-    let text = e.to_string();
-    match text.rsplit_once(" (os error ") {
-        Some((reason, _)) => reason.to_string(),
-        None => text,
-    }
-}
+pub use triquint_shared::bounded_read::io_reason;
 
 /// What kind of file system object a non-regular file is, for messages.
 fn kind_of(meta: &std::fs::Metadata) -> &'static str {
