@@ -1,7 +1,8 @@
 //! Hostile files around the built `triquint` binary: outputs that are not
 //! regular files or are the command's inputs, links planted at temporary
 //! names, plots of a plan that is not written, inputs without an end,
-//! standard output closed or full, and job points of the wrong length.
+//! standard output closed or full, standard error closed, and job points
+//! of the wrong length.
 //! Each case ends with the README's exit status and one line on stderr, no
 //! panic, and nothing written where it must not be.
 
