@@ -169,7 +169,7 @@ fn run(args: &Args) -> CliResult {
     cfg.rate_hz = args.rate;
     let stop = stop_on_signals()?;
     let port = realtime::open(&cfg).map_err(CliError::device)?;
-    eprintln!(
+    triquint_cli_common::errln!(
         "triquint-sim: nodes {:?} (axis 1 first{}) on {} ({}), {} Hz; SIGINT/SIGTERM to stop",
         cfg.nodes,
         if args.unhomed { ", unhomed" } else { "" },
@@ -183,7 +183,7 @@ fn run(args: &Args) -> CliResult {
         Err(e @ RealtimeError::Bus(_)) => Some(CliError::device(e)),
         Err(e @ RealtimeError::Machine(_)) => Some(CliError::motion_fault(e)),
     };
-    eprintln!(
+    triquint_cli_common::errln!(
         "triquint-sim: {} runs, {} ticks, {} missed deadlines ({} skipped, max late {:.0} µs), {} frames",
         r.runs.len(),
         r.ticks,

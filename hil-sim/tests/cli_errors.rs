@@ -2,7 +2,7 @@
 //! the exit status of the README's table, exactly one stderr line naming
 //! what is wrong, no panic.
 
-use std::process::Command;
+use std::process::{Command, Stdio};
 
 #[test]
 fn bad_input_and_unknown_interfaces_get_one_line_and_their_exit_status() {
@@ -45,6 +45,21 @@ fn bad_input_and_unknown_interfaces_get_one_line_and_their_exit_status() {
         ),
     ];
     let mut failures = Vec::new();
+    for (args, status, _) in cases {
+        // Standard error a pipe whose reader is gone: the status stays.
+        let mut reader = Command::new("true").stdin(Stdio::piped()).spawn().unwrap();
+        let closed = reader.stdin.take().unwrap();
+        reader.wait().unwrap();
+        let code = Command::new(env!("CARGO_BIN_EXE_triquint-sim"))
+            .args(*args)
+            .stderr(Stdio::from(closed))
+            .status()
+            .unwrap()
+            .code();
+        if code != Some(*status) {
+            failures.push(format!("{args:?} with stderr closed: exit {code:?}"));
+        }
+    }
     for (args, status, says) in cases {
         let out = Command::new(env!("CARGO_BIN_EXE_triquint-sim"))
             .args(*args)

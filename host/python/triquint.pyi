@@ -270,6 +270,7 @@ def plan(
     """Plans a globally min-max-jerk (or minimum-time) trajectory through via-points.
 
     With a Job, only ``starts``, ``seed`` and ``progress`` may be given.
+    ``starts`` is 1 to 1000 (ValueError otherwise), as the CLI's ``--starts``.
     """
 
 def ik(

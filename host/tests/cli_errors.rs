@@ -31,6 +31,17 @@ fn paper_plan_json() -> String {
     .unwrap()
 }
 
+/// The paper's plan with one segment moved 5 mm on every axis: a plan file
+/// that loads, which the drives reject as Discontinuous.
+fn discontinuous_plan_json() -> String {
+    let mut plan: serde_json::Value = serde_json::from_str(&paper_plan_json()).unwrap();
+    for axis in plan["segments"][4]["coeffs"].as_array_mut().unwrap() {
+        let q0 = axis[0].as_f64().unwrap();
+        axis[0] = (q0 + 0.005).into();
+    }
+    serde_json::to_string(&plan).unwrap()
+}
+
 fn cases() -> Vec<Case> {
     let plan_args = vec![
         "plan", "job.toml", "-o", "out.json", "--starts", "1", "--quiet",
@@ -60,6 +71,13 @@ fn cases() -> Vec<Case> {
             args: vec!["simulate", "plan.json"],
             status: 2,
             says: "plan.json",
+        },
+        Case {
+            name: "a plan the drives reject as discontinuous",
+            files: vec![("plan.json", discontinuous_plan_json())],
+            args: vec!["simulate", "plan.json"],
+            status: 2,
+            says: "Discontinuous",
         },
         Case {
             name: "unknown units",

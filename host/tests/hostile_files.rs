@@ -1,7 +1,8 @@
 //! Hostile files around the built `triquint` binary: outputs that are not
 //! regular files or are the command's inputs, links planted at temporary
 //! names, plots of a plan that is not written, inputs without an end,
-//! standard output closed or full, and job points of the wrong length.
+//! standard output closed or full, standard error closed, and job points
+//! of the wrong length.
 //! Each case ends with the README's exit status and one line on stderr, no
 //! panic, and nothing written where it must not be.
 
@@ -326,6 +327,61 @@ fn a_closed_pipe_ends_quietly_with_status_0() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
         assert!(err.is_empty(), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `triquint ARGS` with standard error a pipe whose reader is gone
+/// (`closed_pipe`) or closed outright (`2>&-`).
+fn without_stderr(dir: &Path, args: &[&str], closed_pipe: bool) -> Output {
+    let mut cmd = if closed_pipe {
+        let mut reader = Command::new("true").stdin(Stdio::piped()).spawn().unwrap();
+        let write_end = reader.stdin.take().unwrap();
+        reader.wait().unwrap();
+        let mut c = Command::new(bin());
+        c.stderr(Stdio::from(write_end));
+        c
+    } else {
+        let mut c = Command::new("sh");
+        c.arg("-c").arg("exec \"$0\" \"$@\" 2>&-").arg(bin());
+        c.stderr(Stdio::null());
+        c
+    };
+    cmd.args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .output()
+        .unwrap()
+}
+
+/// An error, a progress line or a note on a standard error nobody reads
+/// keeps its exit status instead of a panic (101): standard output is
+/// covered above.
+#[test]
+fn a_closed_standard_error_keeps_the_exit_status() {
+    let dir = scratch("stderr");
+    let plan = planned(&dir);
+    let plan = plan.to_str().unwrap();
+    let plots = dir.join("plots");
+    let cases: [(&[&str], i32); 4] = [
+        (&["check", "missing.json"], 2),
+        (
+            &["plan", "missing.toml", "-o", "x.json", "--starts", "1"],
+            2,
+        ),
+        (&["plan", "job.toml", "-o", "y.json", "--starts", "1"], 0),
+        (&["report", plan, "--plot", plots.to_str().unwrap()], 0),
+    ];
+    for closed_pipe in [true, false] {
+        for (args, status) in cases {
+            let out = without_stderr(&dir, args, closed_pipe);
+            assert_eq!(
+                out.status.code(),
+                Some(status),
+                "{args:?} (stderr a closed pipe: {closed_pipe})"
+            );
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

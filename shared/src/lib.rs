@@ -17,6 +17,8 @@ extern crate alloc;
 #[cfg(any(feature = "std", test))]
 extern crate std;
 
+#[cfg(feature = "std")]
+pub mod bounded_read;
 pub mod dynamics;
 pub mod kinematics;
 pub mod lagrangian;

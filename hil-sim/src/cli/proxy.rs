@@ -166,7 +166,7 @@ pub fn run(args: &ProxyArgs) -> CliResult {
     let windows = schedule(args)?;
     let stop = stop_on_signals()?;
     let ports = proxy::open(&args.a, &args.b, args.fd).map_err(CliError::device)?;
-    eprintln!(
+    triquint_cli_common::errln!(
         "triquint-sim proxy: {} <-> {} ({}), seed {}, {} fault windows; SIGINT/SIGTERM to stop",
         args.a,
         args.b,
@@ -177,9 +177,13 @@ pub fn run(args: &ProxyArgs) -> CliResult {
     let mut bridge = Bridge::new(windows, args.seed);
     let result = proxy::run(ports, &mut bridge, &stop);
     let r = &bridge.report;
-    eprintln!(
+    triquint_cli_common::errln!(
         "triquint-sim proxy: A→B {} in, {} out; B→A {} in, {} out; {:?}",
-        r.from_a, r.to_b, r.from_b, r.to_a, r.faults
+        r.from_a,
+        r.to_b,
+        r.from_b,
+        r.to_a,
+        r.faults
     );
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(r).unwrap_or_default();

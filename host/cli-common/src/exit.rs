@@ -78,7 +78,7 @@ pub fn main_exit(name: &str, result: CliResult) -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             let msg: Vec<&str> = e.message.lines().map(str::trim).collect();
-            eprintln!("{name}: error: {}", msg.join(" "));
+            crate::errln!("{name}: error: {}", msg.join(" "));
             ExitCode::from(e.status as u8)
         }
     }

@@ -14,15 +14,7 @@ use std::path::Path;
 
 use crate::exit::{CliError, CliResult};
 
-/// The `std::io::Error` text without the trailing " (os error N)", for
-/// one-line messages.
-pub fn io_reason(e: &io::Error) -> String {
-    let text = e.to_string();
-    match text.rsplit_once(" (os error ") {
-        Some((reason, _)) => reason.to_string(),
-        None => text,
-    }
-}
+pub use triquint_shared::bounded_read::io_reason;
 
 /// What kind of file system object a non-regular file is, for messages.
 fn kind_of(meta: &std::fs::Metadata) -> &'static str {
@@ -203,6 +195,21 @@ macro_rules! outln {
     };
     ($($arg:tt)*) => {
         $crate::output::write_stdout(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// Writes a message to standard error, ignoring failure: a closed or full
+/// standard error (`2>&-`) must not turn an error or a progress line into
+/// a panic (as `eprintln!` does), and there is nowhere left to report it.
+pub fn write_stderr(args: fmt::Arguments<'_>) {
+    let _ = io::stderr().lock().write_fmt(args);
+}
+
+/// `eprintln!` for commands: never panics (see [`write_stderr`]).
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::output::write_stderr(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
 

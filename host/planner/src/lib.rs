@@ -85,7 +85,7 @@ pub use bounded_read::{MAX_JOB_BYTES, MAX_PLAN_BYTES, MAX_POINTS_FILE_BYTES, rea
 pub use check::{CheckRow, check};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
 pub use job::{Job, JobBuilder};
-pub use options::{Control, Observer, Options, Progress, Stage};
+pub use options::{Control, MAX_STARTS, Observer, Options, Progress, Stage};
 pub use planning::{plan, plan_with};
 pub use triquint_shared::plan::{Objective, Plan};
 pub use triquint_shared::{Limits, Robot};

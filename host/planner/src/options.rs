@@ -2,6 +2,12 @@
 
 use std::time::Duration;
 
+/// The most starts a caller should ask for (the CLI's `--starts`, the
+/// Python `plan(starts=)`): each start keeps an interval set per segment
+/// and the search stops taking them once two agree, so the default 8 is
+/// usually plenty; a thousand is far past any use.
+pub const MAX_STARTS: usize = 1000;
+
 /// Search settings. The same job, `starts` and `seed` give the same plan
 /// byte for byte (apart from `solver.seconds`), whatever `threads` is.
 #[derive(Clone, Debug, PartialEq)]

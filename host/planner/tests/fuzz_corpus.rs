@@ -8,34 +8,13 @@ include!("../../../fuzz/harness/corpus.rs");
 
 #[test]
 fn corpus_and_regressions_pass() {
-    let corpus = inputs("corpus/job");
-    assert!(corpus.len() >= 4);
-    for data in corpus.iter().chain(inputs("regressions/job").iter()) {
-        fuzz_job(data);
-    }
+    replay("job", 4, fuzz_job);
 }
 
 #[test]
 fn seeded_mutations_pass() {
-    let mut next = seeded(0x2545_F491_4F6C_DD1D);
-    let corpus = inputs("corpus/job");
     let alphabet = b"[]=,.-+0123456789eEnaifINF\"\n #xyzmpu";
-    for i in 0..2000 {
-        let mut data = corpus[i % corpus.len()].clone();
-        for _ in 0..(1 + next() % 6) {
-            let k = (next() as usize) % data.len().max(1);
-            let c = alphabet[(next() as usize) % alphabet.len()];
-            match next() % 3 {
-                0 if k < data.len() => data[k] = c,
-                1 => data.insert(k.min(data.len()), c),
-                _ if k < data.len() => {
-                    data.remove(k);
-                }
-                _ => {}
-            }
-        }
-        fuzz_job(&data);
-    }
+    mutations("job", 0x2545_F491_4F6C_DD1D, 2000, 6, alphabet, fuzz_job);
 }
 
 /// Bytes that make up points files, so that random inputs get past the first line often.
@@ -44,12 +23,7 @@ const POINTS_ALPHABET: &[u8] =
 
 #[test]
 fn points_corpus_and_random_inputs_pass() {
-    for data in inputs("corpus/points")
-        .iter()
-        .chain(inputs("regressions/points").iter())
-    {
-        fuzz_points(data);
-    }
+    replay("points", 1, fuzz_points);
     let mut next = seeded(0x9E37_79B9_7F4A_7C15);
     let mut oks = 0;
     for i in 0..100_000 {

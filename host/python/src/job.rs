@@ -261,8 +261,9 @@ impl From<&Progress> for PyProgress {
 /// (`units="m"` for metres), or a `Job`; with a Job only `starts`, `seed`
 /// and `progress` may be given (TypeError otherwise). `robot` is a
 /// `Robot` (default: the paper's Table 1). `starts` starting interval sets
-/// of the global search, random ones seeded by `seed`: the same job, starts
-/// and seed give the same plan. `progress`, if given, is called about every
+/// of the global search (1 to 1000, as the CLI's `--starts`; ValueError
+/// otherwise), random ones seeded by `seed`: the same job, starts and seed
+/// give the same plan. `progress`, if given, is called about every
 /// 25 ms with a `Progress`; returning False cancels (CancelledError), and
 /// an exception it raises cancels and propagates.
 ///
@@ -303,8 +304,11 @@ pub fn plan(
         torque,
         robot: robot.as_ref(),
     };
-    if starts == 0 {
-        return Err(PyValueError::new_err("starts must be at least 1"));
+    if !(1..=triquint_planner::MAX_STARTS).contains(&starts) {
+        return Err(PyValueError::new_err(format!(
+            "starts {starts}: must be a whole number 1 to {}",
+            triquint_planner::MAX_STARTS
+        )));
     }
     if let Some(p) = &progress
         && !p.is_callable()

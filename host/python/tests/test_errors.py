@@ -115,6 +115,17 @@ def test_wrong_types_and_keywords():
         triquint.plan([[0, 0, 600], [10, 0]])  # ragged
 
 
+def test_starts_are_bounded_as_on_the_command_line():
+    pts = [[0, 0, 600], [20, 0, 600]]
+    for starts in (0, 1001, 10**9):
+        with pytest.raises(ValueError, match="1 to 1000"):
+            triquint.plan(pts, starts=starts)
+    job = triquint.Job(pts)
+    with pytest.raises(ValueError, match="1 to 1000"):
+        triquint.plan(job, starts=10**9)
+    assert triquint.plan(pts, starts=1).solver["starts"] >= 1
+
+
 def test_a_rust_panic_is_an_internal_error_not_a_panic_exception():
     with pytest.raises(triquint.InternalError, match="deliberate panic"):
         triquint.triquint._raise_rust_panic()

@@ -12,10 +12,7 @@ use triquint_cli_common::output::{check_target, output_error, write_outputs};
 
 use crate::exit::{CliError, CliResult, plan_error};
 
-/// The most `--starts`: each start keeps an interval set per segment and
-/// the search stops taking them once two agree, so the default 8 is
-/// usually plenty; a thousand is far past any use.
-pub const MAX_STARTS: usize = 1000;
+pub use triquint_planner::MAX_STARTS;
 
 /// Parses `--starts`: bad input (exit 2) outside 1 to [`MAX_STARTS`].
 fn parse_starts(text: &str) -> CliResult<usize> {
@@ -145,7 +142,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
     if !args.quiet {
         let m = &plan.max_abs;
         let max = |v: [f64; 3]| v.iter().fold(0.0f64, |a, b| a.max(*b));
-        eprintln!(
+        triquint_cli_common::errln!(
             "planned {} segments, T = {:.6} s: max |jerk| {:.6} m/s³, |a| {:.4} m/s², |v| {:.4} m/s, |τ| {:.4} N·m ({} starts, {} LP solves, {:.3} s) → {}",
             plan.segments.len(),
             plan.total_time_s,

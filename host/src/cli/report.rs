@@ -51,7 +51,7 @@ pub fn run(args: &ReportArgs) -> CliResult {
         out!("{}", tables::recorded_check(&plan, &stats))?;
     }
     for path in written {
-        eprintln!("wrote {}", path.display());
+        triquint_cli_common::errln!("wrote {}", path.display());
     }
     Ok(())
 }

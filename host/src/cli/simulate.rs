@@ -36,7 +36,7 @@ pub struct SimulateArgs {
 
 fn to_cli(e: SimulateError) -> CliError {
     match e {
-        SimulateError::Upload(u) if u.is_config() => CliError::bad_input(u),
+        SimulateError::Upload(u) if u.is_config() || u.is_bad_plan() => CliError::bad_input(u),
         SimulateError::Upload(u @ triquint_link::UploadError::Segment { .. }) => {
             CliError::bad_input(u)
         }
@@ -124,9 +124,12 @@ fn print_human(
         r.frames_per_segment,
         r.retransmits
     )?;
+    let skew = match r.start_skew_ns {
+        Some(ns) => format!("{:.1} µs", ns as f64 * 1e-3),
+        None => "none (not every drive started)".to_string(),
+    };
     outln!(
-        "start skew {:.1} µs (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
-        r.start_skew_ns as f64 * 1e-3,
+        "start skew {skew} (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
         r.tick_ns as f64 * 1e-3,
         r.run.stop_ramp_s,
         r.f32_eval_error_m

@@ -74,15 +74,26 @@ pub struct SimReport {
     pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
     pub frames_per_segment: usize,
     pub retransmits: u64,
-    /// True-time spread of the nodes' first Running tick (ns; `u64::MAX`
-    /// when not every node started).
-    pub start_skew_ns: u64,
+    /// True-time spread of the nodes' first Running tick (ns; `None` when
+    /// not every node started).
+    pub start_skew_ns: Option<u64>,
     pub tick_ns: u64,
     pub f32_eval_error_m: f64,
     /// Host time (µs) of the start.
     pub start_us: u64,
     pub sim_time_s: f64,
     pub samples: Vec<Sample>,
+}
+
+/// The spread of the drives' start times, `None` unless every drive
+/// started (a spread over some of them would look like a good start).
+pub(crate) fn start_skew_ns(started: impl IntoIterator<Item = Option<u64>>) -> Option<u64> {
+    let mut range: Option<(u64, u64)> = None;
+    for t in started {
+        let t = t?;
+        range = Some(range.map_or((t, t), |(lo, hi)| (lo.min(t), hi.max(t))));
+    }
+    range.map(|(lo, hi)| hi - lo)
 }
 
 /// Uploads `plan` through the host session to three simulated drives and runs it.
@@ -128,11 +139,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         }
         sim.run_until(t)?;
     };
-    let started: Vec<u64> = sim.nodes.iter().filter_map(|n| n.started_ns).collect();
-    let skew = match (started.iter().min(), started.iter().max()) {
-        (Some(a), Some(b)) if started.len() == 3 => b - a,
-        _ => u64::MAX,
-    };
+    let skew = start_skew_ns(sim.nodes.iter().map(|n| n.started_ns));
     let now = sim.now_ns().max(1);
     let mut run = run_report(
         plan,

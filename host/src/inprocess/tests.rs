@@ -11,7 +11,7 @@ use triquint_sim::{Sim, SimConfig, testplan};
 use triquint_link::{DriveConfigs, Session, SessionOptions, UploadError};
 use triquint_sim::host_port::SimPort;
 
-use super::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
+use super::simulate::{SimReport, SimulateError, SimulateOptions, simulate, start_skew_ns};
 
 fn run(plan: &Plan, f: impl FnOnce(&mut SimulateOptions)) -> Result<SimReport, SimulateError> {
     let mut o = SimulateOptions::default();
@@ -31,8 +31,8 @@ fn assert_clean(r: &SimReport, what: &str) {
         r.faults
     );
     assert!(
-        r.start_skew_ns <= r.tick_ns,
-        "{what}: axes started {} ns apart (tick {} ns)",
+        r.start_skew_ns.is_some_and(|s| s <= r.tick_ns),
+        "{what}: axes started {:?} ns apart (tick {} ns)",
         r.start_skew_ns,
         r.tick_ns
     );
@@ -263,8 +263,21 @@ fn case2_at_10_khz_tracks_as_well_as_at_1_khz() {
     let plan = testplan::paper_case2().unwrap();
     let fast = run(&plan, |o| o.rate_hz = 10_000.0).unwrap();
     assert_clean(&fast, "10 kHz");
-    assert!(fast.start_skew_ns <= 100_000);
+    assert!(fast.start_skew_ns.is_some_and(|s| s <= 100_000));
     for j in 0..3 {
         assert!(fast.run.max_error_m[j] < 10e-6, "{:?}", fast.run.tracking());
     }
+}
+
+#[test]
+fn start_skew_is_none_unless_every_drive_started() {
+    assert_eq!(start_skew_ns([Some(30), Some(10), Some(25)]), Some(20));
+    assert_eq!(start_skew_ns([Some(7), Some(7), Some(7)]), Some(0));
+    // One drive never started: no figure, not a wrapped one.
+    assert_eq!(start_skew_ns([Some(10), None, Some(25)]), None);
+    assert_eq!(start_skew_ns([None, None, None]), None);
+    assert_eq!(
+        start_skew_ns([Some(u64::MAX), Some(0), Some(1)]),
+        Some(u64::MAX)
+    );
 }

@@ -344,6 +344,25 @@ pub async fn handle(app: Arc<App>, peer: Peer, req: Request<Incoming>) -> Resp {
     }
 }
 
+/// One connection served over `io` with the server's HTTP settings (the
+/// listener's sockets; the `web` fuzz target's in-memory pipes).
+pub async fn connection<I>(io: I, app: Arc<App>, peer: Peer) -> hyper::Result<()>
+where
+    I: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + 'static,
+{
+    let svc = service_fn(move |req| {
+        let app = Arc::clone(&app);
+        async move { Ok::<_, Infallible>(handle(app, peer, req).await) }
+    });
+    http1::Builder::new()
+        .timer(TokioTimer::new())
+        .header_read_timeout(HEADER_TIMEOUT)
+        .keep_alive(false)
+        .max_buf_size(8192)
+        .serve_connection(TokioIo::new(io), svc)
+        .await
+}
+
 /// Serves on `listener` until `stop` (checked every 100 ms).
 pub async fn serve(listener: TcpListener, app: Arc<App>, stop: Arc<AtomicBool>) {
     while !stop.load(Ordering::Relaxed) {
@@ -373,20 +392,8 @@ pub async fn serve(listener: TcpListener, app: Arc<App>, stop: Arc<AtomicBool>) 
         };
         let app = Arc::clone(&app);
         tokio::spawn(async move {
-            let svc = {
-                let app = Arc::clone(&app);
-                service_fn(move |req| {
-                    let app = Arc::clone(&app);
-                    async move { Ok::<_, Infallible>(handle(app, peer, req).await) }
-                })
-            };
-            let io = TokioIo::new(WriteTimeout::new(stream, WRITE_TIMEOUT));
-            let conn_fut = http1::Builder::new()
-                .timer(TokioTimer::new())
-                .header_read_timeout(HEADER_TIMEOUT)
-                .keep_alive(false)
-                .max_buf_size(8192)
-                .serve_connection(io, svc);
+            let io = WriteTimeout::new(stream, WRITE_TIMEOUT);
+            let conn_fut = connection(io, Arc::clone(&app), peer);
             let mut conn_fut = std::pin::pin!(conn_fut);
             let mut evicted = evicted;
             // Served, or evicted by the budget (dropping it closes the socket).

@@ -1,5 +1,6 @@
 //! Why an upload cannot go on.
 
+use triquint_shared::protocol::Reject;
 use triquint_shared::protocol::segment::SegmentError;
 
 use crate::PortError;
@@ -106,6 +107,20 @@ impl UploadError {
         )
     }
 
+    /// Is this a drive rejecting the plan's own contents (bad input, exit
+    /// 2): a segment invalid, not continuous with the one before, or
+    /// outside the axis's soft limits? Other rejections are the bus's or
+    /// the machine's.
+    pub fn is_bad_plan(&self) -> bool {
+        const PLAN_REJECTS: [Reject; 3] = [
+            Reject::Invalid,
+            Reject::Discontinuous,
+            Reject::OutsideSoftLimits,
+        ];
+        matches!(self, UploadError::Rejected { reason, .. }
+            if PLAN_REJECTS.iter().any(|r| r.name() == *reason))
+    }
+
     /// Is this the plan's or the machine's configuration (bad input, exit 2)?
     pub fn is_config(&self) -> bool {
         matches!(
@@ -142,5 +157,29 @@ mod tests {
             other.contains("0x00000001 differs from the plan's 0xF23B5964"),
             "{other}"
         );
+    }
+
+    #[test]
+    fn a_rejected_plan_is_bad_input_a_lost_part_is_not() {
+        let rejected = |r: Reject| UploadError::Rejected {
+            node: 1,
+            seq: 4,
+            reason: r.name(),
+        };
+        for r in [
+            Reject::Invalid,
+            Reject::Discontinuous,
+            Reject::OutsideSoftLimits,
+        ] {
+            assert!(rejected(r).is_bad_plan(), "{r:?}");
+        }
+        for r in [Reject::WrongState, Reject::NotHomed] {
+            assert!(!rejected(r).is_bad_plan(), "{r:?}");
+        }
+        let timeout = UploadError::Timeout {
+            node: 1,
+            what: "streaming",
+        };
+        assert!(!timeout.is_bad_plan());
     }
 }
