@@ -261,10 +261,10 @@ impl CanPort for SocketCanPort {
     }
     fn recv(&mut self) -> Result<Option<Received>, PortError> {
         Ok(SocketCanPort::recv(self)?.map(|r| Received {
-                frame: r.frame,
-                t_us: r.t_ns / 1000,
-                own: r.own,
-            }))
+            frame: r.frame,
+            t_us: r.t_ns / 1000,
+            own: r.own,
+        }))
     }
 }
 

@@ -1,7 +1,7 @@
 //! Why an upload cannot go on.
 
-use triquint_shared::protocol::{CommandCode, FaultCode, Reject};
 use triquint_shared::protocol::segment::SegmentError;
+use triquint_shared::protocol::{CommandCode, FaultCode, Reject};
 
 use crate::PortError;
 

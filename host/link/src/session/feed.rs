@@ -7,7 +7,7 @@
 
 use triquint_shared::protocol::{Command, CommandAck, CommandCode, FaultCode, State};
 
-use super::nodes::{CommandAnswer, AXES};
+use super::nodes::{AXES, CommandAnswer};
 use super::outbox::Outbox;
 
 /// Feed commands whose answers are kept (the latest).

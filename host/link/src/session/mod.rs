@@ -22,7 +22,7 @@ mod time_sync;
 
 pub use error::UploadError;
 pub use feed::Feed;
-pub use nodes::{CommandAnswer, AXES, NodeView};
+pub use nodes::{AXES, CommandAnswer, NodeView};
 pub use options::SessionOptions;
 pub use start::{ARM_RESENDS, START_RETRY_US};
 
