@@ -1,4 +1,5 @@
-//! What `hold`, `resume`, `stop` and `override` share: listen to the bus
+//! What `hold`, `resume`, `stop`, `override` and the web page's buttons
+//! share: listen to the bus
 //! (the drives' states, and the host time from the TimeSync frames of the
 //! running upload), send one Command to every drive carrying that host
 //! time, so all of them apply it at the same instant, resend it unchanged
@@ -10,8 +11,8 @@ use std::time::{Duration, Instant};
 use triquint_link::{CanPort, Feed, HostClock, Listener};
 use triquint_shared::protocol::{CommandAck, FaultCode, Msg, State, decode};
 
-use crate::cli::listen::{nodes_arg, open};
 use crate::exit::{CliError, CliResult};
+use crate::ops::listen::nodes_arg;
 
 /// How long to listen first: a heartbeat from every drive (100 ms apart)
 /// and two TimeSyncs (100 ms apart while an upload runs).
@@ -99,7 +100,7 @@ pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<S
 }
 
 /// Name of a state in an acknowledgement.
-fn state_name(s: u8) -> &'static str {
+pub fn state_name(s: u8) -> &'static str {
     State::from_u8(s).map_or("unknown", State::name)
 }
 
@@ -107,49 +108,6 @@ fn state_name(s: u8) -> &'static str {
 pub fn percent(pm: u32) -> String {
     let s = format!("{:.1}", pm as f64 / 10.0);
     s.trim_end_matches(".0").to_string()
-}
-
-/// `what` to every drive on `iface`: prints each drive's answer; exit 0 when
-/// every drive did it, 8 when one refused (the cap for an override above
-/// it), 4 when one did not answer.
-pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
-    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", nodes)?;
-    let mut port = open(iface)?;
-    let sent = send_feed(&mut port, ids, f)?;
-    match sent.host_us {
-        Some(t) => println!("{what} at host time {t} µs (from the running upload's time sync)"),
-        None => println!("{what} on receipt (no time sync on the bus: no upload is running)"),
-    }
-    for (i, a) in sent.answers.iter().enumerate() {
-        match a {
-            Some(a) => println!(
-                "node {}: {} → {}{}",
-                ids[i],
-                sent.states_before[i].map_or("unknown", State::name),
-                state_name(a.state),
-                match FaultCode::from_u8(a.result) {
-                    Some(FaultCode::None) => String::new(),
-                    Some(c) => format!(", refused: {}", c.name()),
-                    None => format!(", refused: code {}", a.result),
-                }
-            ),
-            None => println!("node {}: no answer", ids[i]),
-        }
-    }
-    verdict(iface, ids, f, &sent.answers)?;
-    if let (Feed::Override(_), Some(a)) = (f, sent.answers.iter().flatten().next()) {
-        println!("cap of the configured plan: {} %", percent(a.value));
-    }
-    let latched = sent.answers.iter().flatten().all(|a| {
-        matches!(
-            State::from_u8(a.state),
-            Some(State::Idle | State::Loaded | State::Armed)
-        )
-    });
-    if latched && matches!(f, Feed::Hold | Feed::Override(_)) {
-        println!("no plan is running: kept, the next plan starts with it");
-    }
-    Ok(())
 }
 
 /// The exit status of the drives' `answers` to `f`: a refusal is 8 (with

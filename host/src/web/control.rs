@@ -1,12 +1,12 @@
 //! The page's control buttons: feed hold, resume and stop for every drive,
-//! sent as `triquint hold | resume | stop` send them (`cli/feed.rs`: one
+//! sent as `triquint hold | resume | stop` send them (`ops/feed.rs`: one
 //! Command to node 0 dated by the running upload's host time, resent until
 //! every drive answered; a refusal or a silent drive is an error).
 
 use triquint_link::Feed;
 use triquint_shared::protocol::CommandCode;
 
-use crate::cli::feed::{send_feed, verdict};
+use crate::ops::feed::{send_feed, verdict};
 
 /// A control request of the page.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
