@@ -237,7 +237,7 @@ async fn control(app: Arc<App>, peer: Peer, req: Request<Incoming>, action: Acti
             StatusCode::OK,
             &json!({ "sent": format!("{:?}", action.code()) }),
         ),
-        Ok(Err(e)) => text(StatusCode::SERVICE_UNAVAILABLE, e),
+        Ok(Err(e)) => text(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
         Err(e) => text(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     }
 }
