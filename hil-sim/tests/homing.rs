@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use nalgebra::Vector3;
-use triquint_link::session::NODES;
+use triquint_link::session::AXES;
 use triquint_link::{DriveConfigs, Listener, Session, SessionOptions, UploadError};
 use triquint_shared::kinematics::Pose;
 use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
@@ -59,7 +59,7 @@ fn configure(sim: &mut Sim) {
 }
 
 fn home_all(sim: &mut Sim) {
-    for id in 1..=NODES as u8 {
+    for id in 1..=AXES as u8 {
         sim.host_send(
             Command {
                 command: CommandCode::Home as u8,

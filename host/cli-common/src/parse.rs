@@ -12,8 +12,8 @@ use crate::exit::{CliError, CliResult};
 /// the two share one range.
 pub const RATE_HZ: std::ops::RangeInclusive<f64> = 1000.0..=10000.0;
 
-/// The default node ids of the drives of axes 1–3.
-pub const NODES: [u8; 3] = [1, 2, 3];
+/// The default node ids of the drives of axes 1–3 (the protocol's).
+pub use triquint_shared::protocol::NODES;
 /// Node ids the drives may have.
 pub const NODE_IDS: std::ops::RangeInclusive<u8> = 1..=15;
 

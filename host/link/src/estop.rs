@@ -8,7 +8,7 @@
 
 use triquint_shared::protocol::{Emergency, FaultCode, Frame, Msg, State, decode};
 
-use crate::session::NODES;
+use crate::session::AXES;
 use crate::{CanPort, PortError, Received};
 
 /// The frame is sent again this long after the previous one while a drive
@@ -49,15 +49,15 @@ pub fn emergency_frame() -> Frame {
 /// The answers of the drives on `ids` (axis i on `ids[i]`) to an emergency stop.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EstopWatch {
-    ids: [u8; NODES],
-    answers: [Option<EstopAnswer>; NODES],
+    ids: [u8; AXES],
+    answers: [Option<EstopAnswer>; AXES],
 }
 
 impl EstopWatch {
-    pub fn new(ids: [u8; NODES]) -> Self {
+    pub fn new(ids: [u8; AXES]) -> Self {
         Self {
             ids,
-            answers: [None; NODES],
+            answers: [None; AXES],
         }
     }
 
@@ -100,18 +100,18 @@ impl EstopWatch {
     }
 
     /// Each drive's answer (`None`: nothing yet), axis 1 first.
-    pub fn answers(&self) -> [Option<EstopAnswer>; NODES] {
+    pub fn answers(&self) -> [Option<EstopAnswer>; AXES] {
         self.answers
     }
 
     /// The node ids the answers are for.
-    pub fn ids(&self) -> [u8; NODES] {
+    pub fn ids(&self) -> [u8; AXES] {
         self.ids
     }
 
     /// Node ids of the drives that have not answered.
     pub fn silent(&self) -> Vec<u8> {
-        (0..NODES)
+        (0..AXES)
             .filter(|&i| self.answers[i].is_none())
             .map(|i| self.ids[i])
             .collect()
@@ -129,7 +129,7 @@ impl EstopWatch {
 /// (a short sleep on a real port). Fails only if the frame never went out.
 pub fn emergency_stop<P: CanPort>(
     port: &mut P,
-    ids: [u8; NODES],
+    ids: [u8; AXES],
     wait_us: u64,
     mut idle: impl FnMut(),
 ) -> Result<EstopWatch, EstopError> {

@@ -51,8 +51,11 @@ pub struct Received {
 
 /// A transport failure (device gone, bus off).
 #[derive(Debug, thiserror::Error)]
-#[error("CAN port: {0}")]
-pub struct PortError(pub String);
+pub enum PortError {
+    /// The SocketCAN interface failed to send or receive.
+    #[error("CAN port: {0}")]
+    SocketCan(#[from] SocketCanError),
+}
 
 /// What the session needs from a CAN interface.
 pub trait CanPort {

@@ -257,16 +257,14 @@ impl CanPort for SocketCanPort {
         self.now_ns() / 1000
     }
     fn send(&mut self, frame: &Frame) -> Result<bool, PortError> {
-        SocketCanPort::send(self, frame).map_err(|e| PortError(e.to_string()))
+        Ok(SocketCanPort::send(self, frame)?)
     }
     fn recv(&mut self) -> Result<Option<Received>, PortError> {
-        Ok(SocketCanPort::recv(self)
-            .map_err(|e| PortError(e.to_string()))?
-            .map(|r| Received {
-                frame: r.frame,
-                t_us: r.t_ns / 1000,
-                own: r.own,
-            }))
+        Ok(SocketCanPort::recv(self)?.map(|r| Received {
+            frame: r.frame,
+            t_us: r.t_ns / 1000,
+            own: r.own,
+        }))
     }
 }
 

@@ -10,7 +10,7 @@ use triquint_shared::kinematics::Pose;
 use triquint_shared::protocol::{FaultCode, Msg, PROTOCOL_VERSION, State, decode, flags};
 
 use crate::Received;
-use crate::session::nodes::{NODES, NodeView, Nodes};
+use crate::session::nodes::{AXES, NodeView, Nodes};
 
 /// The machine as its drives report it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -153,7 +153,7 @@ pub struct Listener {
 
 impl Listener {
     /// The drives of axes 1–3 on node ids `ids`.
-    pub fn new(ids: [u8; NODES]) -> Self {
+    pub fn new(ids: [u8; AXES]) -> Self {
         Self {
             nodes: Nodes::new(ids),
         }

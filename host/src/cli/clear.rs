@@ -11,10 +11,10 @@ use triquint_link::Listener;
 use triquint_shared::Robot;
 use triquint_shared::protocol::{CommandCode, State};
 
-use crate::cli::listen::{listen, open};
-use crate::cli::send::send_command;
 use crate::cli::status::print_text;
 use crate::exit::{CliError, CliResult};
+use crate::ops::listen::{listen, open};
+use crate::ops::send::send_command;
 
 #[derive(Args, Debug)]
 pub struct ClearArgs {

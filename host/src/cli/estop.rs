@@ -12,8 +12,8 @@ use clap::Args;
 use triquint_link::{EstopAnswer, EstopWatch, emergency_stop};
 use triquint_shared::protocol::{FaultCode, State};
 
-use crate::cli::listen::{nodes_arg, open};
 use crate::exit::{CliError, CliResult};
+use crate::ops::listen::{nodes_arg, open};
 use triquint_cli_common::outln;
 
 /// Longest `--wait` (ms): an emergency stop must not hang.

@@ -8,8 +8,8 @@
 use clap::Args;
 use triquint_link::Feed;
 
-use crate::cli::feed::percent;
 use crate::exit::{CliError, CliResult};
+use crate::ops::feed::percent;
 
 #[derive(Args, Debug)]
 pub struct OverrideArgs {

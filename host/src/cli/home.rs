@@ -9,52 +9,22 @@
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use triquint_link::{DriveConfigs, Listener, Session, SessionOptions, UploadError};
-use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
+use triquint_cli_common::outln;
+use triquint_link::Listener;
+use triquint_shared::Robot;
+use triquint_shared::protocol::config::HomingSettings;
 use triquint_shared::protocol::{CommandCode, FaultCode, State, flags};
-use triquint_shared::{Limits, Robot};
 
-use crate::cli::listen::{drain, nodes_arg, open};
-use crate::cli::send::{send_command, send_emergency};
-use crate::cli::upload::{BusArgs, check_bus_args, upload_error};
 use crate::exit::{CliError, CliResult};
+use crate::ops::bus::{BusArgs, check_bus_args};
+use crate::ops::configure::configure;
+use crate::ops::listen::{drain, nodes_arg, open};
+use crate::ops::send::{send_command, send_emergency};
 
 #[derive(Args, Debug)]
 pub struct HomeArgs {
     #[command(flatten)]
     pub bus: BusArgs,
-}
-
-/// Writes and commits the drives' configuration (limits-sized, with the
-/// homing settings), without motion.
-pub fn configure(robot: &Robot, homing: &HomingSettings, bus: &BusArgs) -> CliResult {
-    let settings = DriveSettings {
-        control_rate: bus.rate,
-        node_ids: bus.ids()?,
-        homing: homing.clone(),
-        ..DriveSettings::default()
-    };
-    let configs = DriveConfigs::for_limits(robot, &Limits::default(), &settings).nodes;
-    let opts = SessionOptions {
-        fd: bus.fd,
-        response_timeout_us: (bus.timeout * 1e6) as u64,
-        ..SessionOptions::default()
-    };
-    let mut session = Session::configure(configs, opts);
-    let mut port = triquint_link::open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
-    loop {
-        match session.poll(&mut port) {
-            Ok(Some(_)) => return Ok(()),
-            Ok(None) => std::thread::sleep(Duration::from_millis(1)),
-            Err(e @ (UploadError::Timeout { .. } | UploadError::Port(_))) => {
-                return Err(CliError::device(format!(
-                    "{}: configuring the drives: {e}",
-                    bus.iface
-                )));
-            }
-            Err(e) => return Err(upload_error(e, bus)),
-        }
-    }
 }
 
 /// The host's emergency frame: every drive stops.
@@ -214,7 +184,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
             .iter()
             .all(|p| matches!(p, Some(Progress::Homed { .. })))
         {
-            println!("all axes homed in {:.1} s", t0.elapsed().as_secs_f64());
+            outln!("all axes homed in {:.1} s", t0.elapsed().as_secs_f64())?;
             return Ok(());
         }
         if t0.elapsed() > limit {

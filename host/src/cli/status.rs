@@ -10,8 +10,8 @@ use triquint_cli_common::outln;
 use triquint_link::{Listener, MachineStatus};
 use triquint_shared::Robot;
 
-use crate::cli::listen::{listen, open};
 use crate::exit::{CliError, CliResult};
+use crate::ops::listen::{listen, open};
 
 #[derive(Args, Debug)]
 pub struct StatusArgs {

@@ -9,16 +9,20 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use triquint_cli_common::outln;
 use triquint_shared::Robot;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
 use triquint_shared::protocol::{FaultCode, State};
 
-use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, UploadError, open_host};
+use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, open_host};
 
 use crate::cli::keys::Keys;
 use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult, Status};
+use crate::ops::bus::{BusArgs, check_bus_args, upload_error};
+use crate::ops::joints::reported_joints;
+use crate::ops::plan_move::plan_move;
 
 #[derive(Args, Debug)]
 pub struct UploadArgs {
@@ -37,33 +41,6 @@ pub struct UploadArgs {
     /// report the platform to the plan's start, then the plan.
     #[arg(long)]
     pub approach: bool,
-}
-
-/// The bus options shared by `upload` and `move-to`.
-#[derive(Args, Debug, Clone)]
-pub struct BusArgs {
-    /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
-    /// CAN-FD: 64-byte segment frames (the interface needs MTU 72).
-    #[arg(long)]
-    pub fd: bool,
-    /// Control tick rate the drives are configured for (Hz), 1000 to 10000.
-    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
-    pub rate: f64,
-    /// How long a node may stay silent before the upload fails (s).
-    #[arg(long, default_value_t = 2.0, value_name = "S")]
-    pub timeout: f64,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
-}
-
-impl BusArgs {
-    /// The node ids of `--nodes`.
-    pub fn ids(&self) -> CliResult<[u8; 3]> {
-        triquint_cli_common::parse::parse_axis_nodes("--nodes", &self.nodes)
-    }
 }
 
 /// What an upload did.
@@ -101,58 +78,6 @@ pub struct FaultSummary {
     pub name: &'static str,
 }
 
-pub fn check_bus_args(b: &BusArgs) -> CliResult {
-    triquint_cli_common::parse::check_rate("--rate", b.rate)?;
-    if !(b.timeout.is_finite() && b.timeout > 0.0) {
-        return Err(CliError::bad_input(format!(
-            "--timeout {}: must be a positive number of seconds",
-            b.timeout
-        )));
-    }
-    b.ids()?;
-    Ok(())
-}
-
-/// An upload's error for people: refusals say what to run.
-pub fn upload_error(e: UploadError, bus: &BusArgs) -> CliError {
-    let iface = &bus.iface;
-    let n = crate::cli::listen::nodes_arg(bus.ids().unwrap_or([1, 2, 3]));
-    match e {
-        e if e.is_config() => CliError::bad_input(e),
-        e @ UploadError::Segment { .. } => CliError::bad_input(e),
-        e @ UploadError::Faulted { .. } => CliError::refused(format!(
-            "{iface}: {e}: see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}` (or upload with --clear)"
-        )),
-        e @ UploadError::NotHomed { .. } => CliError::refused(format!(
-            "{iface}: {e}: run `triquint home --iface {iface}{n}` first"
-        )),
-        ref e @ UploadError::ArmTooFar { start_mm, .. } => CliError::refused(format!(
-            "{iface}: {e}; run `triquint move-to {} {} {} --iface {iface}{n}` first",
-            mm(start_mm[0]),
-            mm(start_mm[1]),
-            mm(start_mm[2])
-        )),
-        e @ (UploadError::Refused { .. } | UploadError::Version { .. }) => {
-            CliError::refused(format!("{iface}: {e}"))
-        }
-        e @ UploadError::Timeout { .. } => {
-            CliError::device(format!("{iface}: {e} (silent for {} s)", bus.timeout))
-        }
-        e => CliError::device(format!("{iface}: {e}")),
-    }
-}
-
-/// A millimetre figure as a command argument: 3 decimals, no trailing zeros.
-fn mm(x: f64) -> String {
-    let s = format!("{x:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".to_string()
-    } else {
-        s.to_string()
-    }
-}
-
 /// The progress line's message: phase, hold, override, stop, keys.
 fn progress_message(p: &triquint_link::Progress, keys: bool) -> String {
     let mut m = p.phase.to_string();
@@ -169,7 +94,7 @@ fn progress_message(p: &triquint_link::Progress, keys: bool) -> String {
         m += ", HELD";
     }
     if let Some(pm) = p.override_permille.filter(|pm| *pm != 1000) {
-        m += &format!(", override {} %", crate::cli::feed::percent(pm));
+        m += &format!(", override {} %", crate::ops::feed::percent(pm));
     }
     if keys {
         m += &format!("  [{}]", Keys::help());
@@ -287,12 +212,12 @@ pub fn run_plan(
 /// Prints the summary; exit 0 only when every node completed without a fault.
 pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
     if json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string(s).map_err(|e| CliError::device(e.to_string()))?
-        );
+        )?;
     } else {
-        println!(
+        outln!(
             "{} segments over {} ({}): {} frames ({} segment frames, {} retransmissions); all acknowledged after {:.3} s, done after {:.3} s",
             s.segments,
             bus.iface,
@@ -302,12 +227,15 @@ pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
             s.retransmits,
             s.upload_s,
             s.total_s
-        );
+        )?;
         for n in &s.nodes {
-            println!(
+            outln!(
                 "node {}: {}, fault {} ({})",
-                n.node, n.state, n.fault_name, n.fault
-            );
+                n.node,
+                n.state,
+                n.fault_name,
+                n.fault
+            )?;
         }
     }
     if s.completed && s.faults.is_empty() {
@@ -369,6 +297,6 @@ fn approach_plan(
             "--approach: the plan is for another robot than --robot's",
         ));
     }
-    let q0 = crate::cli::move_to::reported_joints(robot, homing, bus)?;
-    crate::cli::move_to::plan_move(robot, q0, start.into())
+    let q0 = reported_joints(robot, homing, bus)?;
+    plan_move(robot, q0, start.into())
 }

@@ -1,12 +1,25 @@
 //! The page's control buttons: feed hold, resume and stop for every drive,
-//! sent as `triquint hold | resume | stop` send them (`cli/feed.rs`: one
+//! sent as `triquint hold | resume | stop` send them (`ops/feed.rs`: one
 //! Command to node 0 dated by the running upload's host time, resent until
 //! every drive answered; a refusal or a silent drive is an error).
 
-use triquint_link::Feed;
+use triquint_link::{Feed, SocketCanError};
 use triquint_shared::protocol::CommandCode;
 
-use crate::cli::feed::{send_feed, verdict};
+use crate::exit::CliError;
+use crate::ops::feed::{send_feed, verdict};
+
+/// Why a control request was not carried out (the page shows the message).
+#[derive(Debug, thiserror::Error)]
+pub enum ControlError {
+    /// The interface could not be opened.
+    #[error(transparent)]
+    Open(#[from] SocketCanError),
+    /// Sending failed, or a drive refused or stayed silent, as the
+    /// `hold`, `resume` and `stop` commands report it.
+    #[error(transparent)]
+    Feed(#[from] CliError),
+}
 
 /// A control request of the page.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,9 +55,9 @@ impl Action {
 
 /// Sends `action` to the drives `ids` on `iface` (node 0: all nodes); the
 /// drives answer with CommandAck frames, seen on the page like any frame.
-pub fn send(iface: &str, ids: [u8; 3], action: Action) -> Result<(), String> {
+pub fn send(iface: &str, ids: [u8; 3], action: Action) -> Result<(), ControlError> {
     let mut port = super::source::open_live(iface)?;
     let f = action.feed();
-    let sent = send_feed(&mut port, ids, f).map_err(|e| e.to_string())?;
-    verdict(iface, ids, f, &sent.answers).map_err(|e| e.to_string())
+    let sent = send_feed(&mut port, ids, f)?;
+    Ok(verdict(iface, ids, f, &sent.answers)?)
 }

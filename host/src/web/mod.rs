@@ -15,6 +15,7 @@
 pub mod budget;
 pub mod candump;
 pub mod control;
+pub mod event;
 pub mod guard;
 pub mod model;
 pub mod page;

@@ -5,9 +5,9 @@
 
 use serde_json::json;
 
+use super::event::{EVENT_HZ, event};
 use super::guard::Policy;
 use super::model::Model;
-use super::server::{EVENT_HZ, event};
 
 const HTML: &str = include_str!("assets/index.html");
 const STYLE: &str = include_str!("assets/style.css");

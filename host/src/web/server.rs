@@ -2,7 +2,7 @@
 //! and its routes:
 //! - `GET /`: the page, with the current state embedded;
 //! - `GET /api/state`: the state as JSON (`status --json`'s schema plus);
-//! - `GET /api/events`: server-sent events at [`EVENT_HZ`], each the state
+//! - `GET /api/events`: server-sent events at [`super::event::EVENT_HZ`], each the state
 //!   and the trace samples new since the client's previous event, through a
 //!   bounded queue per client (a slow client misses events, never stalls
 //!   the frame source);
@@ -35,18 +35,15 @@ use tokio::sync::{Semaphore, mpsc};
 
 use super::budget::{Budget, Busy, Kind};
 use super::control::{self, Action};
+use super::event::{EVENT_HZ, event};
 use super::guard::{Policy, RateLimit};
 use super::model::Model;
 use super::page;
 use super::traces::QUANTITIES;
 use super::write_timeout::WriteTimeout;
 
-/// Events per second on `/api/events`.
-pub const EVENT_HZ: u64 = 20;
 /// Events a client may have waiting before it misses some.
 const CLIENT_QUEUE: usize = 4;
-/// Samples per series in one event (the first one carries the history).
-const MAX_EVENT_SAMPLES: usize = 20_000;
 /// Time to send a complete request head; then the connection is closed.
 pub const HEADER_TIMEOUT: Duration = Duration::from_secs(3);
 /// A write that makes no progress this long closes the connection.
@@ -115,20 +112,6 @@ impl Body for EventBody {
             .poll_recv(cx)
             .map(|o| o.map(|b| Ok(BodyFrame::data(b))))
     }
-}
-
-/// One event: the state and what is new since `cursor` (bus time, µs).
-pub fn event(model: &Model, cursor: Option<u64>, planned_seen: Option<u64>) -> Json {
-    let mut state = model.state_json();
-    let delta = model.traces.delta(cursor, MAX_EVENT_SAMPLES);
-    if let Some(o) = state.as_object_mut() {
-        o.insert("traces".into(), json!(delta.series));
-        o.insert("trail".into(), json!(model.trail_since(cursor)));
-        if planned_seen != Some(model.planned_version) {
-            o.insert("planned".into(), json!(model.planned));
-        }
-    }
-    state
 }
 
 fn events(app: Arc<App>) -> Resp {
@@ -254,7 +237,7 @@ async fn control(app: Arc<App>, peer: Peer, req: Request<Incoming>, action: Acti
             StatusCode::OK,
             &json!({ "sent": format!("{:?}", action.code()) }),
         ),
-        Ok(Err(e)) => text(StatusCode::SERVICE_UNAVAILABLE, e),
+        Ok(Err(e)) => text(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
         Err(e) => text(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     }
 }

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime};
 
-use triquint_link::{CanPort, Received, SocketCanPort};
+use triquint_link::{CanPort, PortError, Received, SocketCanError, SocketCanPort};
 
 use super::candump::Logged;
 use super::model::Model;
@@ -21,8 +21,8 @@ pub enum Source {
 }
 
 /// Opens `iface` for listening with its clock's epoch now.
-pub fn open_live(iface: &str) -> Result<SocketCanPort, String> {
-    SocketCanPort::open(iface, true, false, SystemTime::now()).map_err(|e| e.to_string())
+pub fn open_live(iface: &str) -> Result<SocketCanPort, SocketCanError> {
+    SocketCanPort::open(iface, true, false, SystemTime::now())
 }
 
 fn lock(model: &Mutex<Model>) -> std::sync::MutexGuard<'_, Model> {
@@ -31,11 +31,15 @@ fn lock(model: &Mutex<Model>) -> std::sync::MutexGuard<'_, Model> {
 
 /// Feeds `model` from `source` until `stop`; a live port error ends it
 /// (the page then shows every node stale).
-pub fn run(source: Source, model: Arc<Mutex<Model>>, stop: Arc<AtomicBool>) -> Result<(), String> {
+pub fn run(
+    source: Source,
+    model: Arc<Mutex<Model>>,
+    stop: Arc<AtomicBool>,
+) -> Result<(), PortError> {
     match source {
         Source::Live(mut port) => {
             while !stop.load(Ordering::Relaxed) {
-                match CanPort::recv(&mut port).map_err(|e| e.to_string())? {
+                match CanPort::recv(&mut port)? {
                     Some(rx) => lock(&model).take(&rx),
                     None => {
                         let now = CanPort::now_us(&mut port);

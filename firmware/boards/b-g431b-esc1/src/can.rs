@@ -9,16 +9,13 @@ use embassy_stm32::can::frame::{FdFrame, Header};
 use embassy_stm32::can::{self, CanRx, CanTx};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
-use embassy_sync::signal::Signal;
 use heapless::spsc::{Consumer, Producer};
 use triquint_firmware::inbox::offer;
 use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
 
-use crate::control::SNAPSHOT;
+use crate::control::{SNAPSHOT, TX_READY};
 
-/// Raised by the tick when it queued frames.
-pub static TX_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
 /// Frames replayed from flash (the kept configuration), received like bus frames.
 pub static RESTORE: Channel<CriticalSectionRawMutex, RxFrame, 4> = Channel::new();
 

@@ -10,6 +10,8 @@ use core::sync::atomic::{AtomicPtr, AtomicU32, Ordering};
 use critical_section::Mutex;
 use embassy_stm32::interrupt;
 use embassy_stm32::pac;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::signal::Signal;
 use heapless::spsc::{Consumer, Producer};
 use triquint_firmware::{Drive, Item, TickSnapshot};
 use triquint_shared::protocol::{Frame, PARAM_COUNT};
@@ -17,6 +19,11 @@ use triquint_shared::protocol::{Frame, PARAM_COUNT};
 use crate::encoder::QuadratureEncoder;
 use crate::homing::Switch;
 use crate::motor::TorqueToCurrent;
+
+/// Raised by the tick when it queued frames; the CAN transmit task waits
+/// on it. Kept here, with the tick that raises it, so the CAN task uses
+/// the tick and not the other way round.
+pub static TX_READY: Signal<CriticalSectionRawMutex, ()> = Signal::new();
 
 /// Everything the tick owns.
 pub struct Tick {
@@ -70,7 +77,7 @@ fn TIM6_DAC() {
         }
         t.drive.pop_tx();
     }
-    crate::can::TX_READY.signal(());
+    TX_READY.signal(());
     let crc = snapshot.config_crc;
     if crc != *LAST_CRC {
         *LAST_CRC = crc;

@@ -8,7 +8,7 @@ use triquint_shared::protocol::{
     CommandCode, DriveConfig, FaultCode, PARAM_COUNT, PARAMS, config_write_frame,
 };
 
-use super::nodes::{NODES, NodeView, Nodes};
+use super::nodes::{AXES, NodeView, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
 
@@ -32,8 +32,8 @@ struct Readback {
 
 #[derive(Debug)]
 pub(crate) struct Configuration {
-    configs: [DriveConfig; NODES],
-    commits: [Commit; NODES],
+    configs: [DriveConfig; AXES],
+    commits: [Commit; AXES],
     readback: Option<Readback>,
 }
 
@@ -43,10 +43,10 @@ fn is_commit(v: &NodeView) -> bool {
 }
 
 impl Configuration {
-    pub fn new(configs: [DriveConfig; NODES]) -> Self {
+    pub fn new(configs: [DriveConfig; AXES]) -> Self {
         Self {
             configs,
-            commits: [Commit::default(); NODES],
+            commits: [Commit::default(); AXES],
             readback: None,
         }
     }
@@ -58,10 +58,10 @@ impl Configuration {
 
     /// Writes every node's configuration, then commits each.
     pub fn start(&mut self, now: u64, out: &mut Outbox) {
-        for i in 0..NODES {
+        for i in 0..AXES {
             self.write(i, out);
         }
-        for i in 0..NODES {
+        for i in 0..AXES {
             self.commit(i, now, 0, out);
         }
     }
@@ -91,7 +91,7 @@ impl Configuration {
         out: &mut Outbox,
     ) -> Result<bool, UploadError> {
         let mut done = 0;
-        for i in 0..NODES {
+        for i in 0..AXES {
             let c = self.commits[i];
             let can_resend = c.resends < opts.setup_resends;
             let answer = nodes.0[i]
@@ -108,8 +108,8 @@ impl Configuration {
                 {
                     return Err(UploadError::Refused {
                         node: self.id(i),
-                        command: "ConfigCommit",
-                        code: FaultCode::from_u8(a.result).map_or("unknown code", FaultCode::name),
+                        command: CommandCode::ConfigCommit,
+                        code: FaultCode::from_u8(a.result),
                     });
                 }
                 Some(a) if a.token == c.token => {
@@ -128,7 +128,7 @@ impl Configuration {
                 _ => {}
             }
         }
-        Ok(done == NODES)
+        Ok(done == AXES)
     }
 
     fn resend(&mut self, i: usize, now: u64, resends: u32, out: &mut Outbox) {
@@ -148,7 +148,7 @@ impl Configuration {
 
     /// The first node whose active configuration CRC is not its plan's.
     pub fn differing(&self, nodes: &Nodes) -> Option<usize> {
-        (0..NODES).find(|&i| nodes.0[i].config_crc != self.configs[i].crc())
+        (0..AXES).find(|&i| nodes.0[i].config_crc != self.configs[i].crc())
     }
 
     /// Asks node index `i` for its configuration, value by value.
@@ -207,7 +207,7 @@ mod tests {
     use crate::session::nodes::CommandAnswer;
 
     /// Configurations of nodes `ids` (axis i on `ids[i]`), otherwise alike.
-    fn configs(ids: [u8; NODES]) -> [DriveConfig; NODES] {
+    fn configs(ids: [u8; AXES]) -> [DriveConfig; AXES] {
         ids.map(|id| {
             let mut c = DriveConfig::from_values(&[0.5; PARAM_COUNT]);
             c.node_id = f32::from(id);
@@ -217,7 +217,7 @@ mod tests {
 
     /// Node index `i` reads back `values` while its heartbeat reports `crc`.
     fn read_back(
-        ids: [u8; NODES],
+        ids: [u8; AXES],
         i: usize,
         values: [f32; PARAM_COUNT],
         crc: u32,
@@ -241,7 +241,7 @@ mod tests {
     #[test]
     fn read_back_finds_the_node_by_id_not_by_number() {
         for ids in [[4, 5, 6], [2, 1, 3], [1, 2, 3]] {
-            for i in 0..NODES {
+            for i in 0..AXES {
                 let plan = configs(ids)[i];
                 // Same values, another CRC: the node did not commit them.
                 let e = read_back(ids, i, plan.to_values(), 0xDEAD_BEEF);

@@ -1,7 +1,7 @@
 //! Why an upload cannot go on.
 
-use triquint_shared::protocol::Reject;
 use triquint_shared::protocol::segment::SegmentError;
+use triquint_shared::protocol::{CommandCode, FaultCode, Reject};
 
 use crate::PortError;
 
@@ -35,8 +35,12 @@ pub enum UploadError {
     },
     #[error("node {node} speaks protocol version {got}, this host version {want}: update {}", if got < want { "the drive's firmware (or triquint-sim)" } else { "the host (triquint)" })]
     Version { node: u8, got: u8, want: u8 },
-    #[error("node {node} is in Fault ({code}); nothing was sent")]
-    Faulted { node: u8, code: &'static str },
+    #[error("node {node} is in Fault ({}); nothing was sent", code_name(*code, "unknown"))]
+    Faulted {
+        node: u8,
+        /// `None`: a code this host does not know.
+        code: Option<FaultCode>,
+    },
     #[error(
         "node {node} refused: NotHomed (its position is unknown until it is homed); nothing moved"
     )]
@@ -52,20 +56,33 @@ pub enum UploadError {
         /// The plan's start (mm).
         start_mm: [f64; 3],
     },
-    #[error("node {node} rejected segment {seq}: {reason}")]
+    #[error("node {node} rejected segment {seq}: {}", reject_name(*reason))]
     Rejected {
         node: u8,
         seq: u16,
-        reason: &'static str,
+        /// `None`: a reason this host does not know.
+        reason: Option<Reject>,
     },
     #[error("segment {seq}: not acknowledged by node {node} after {tries} transmissions")]
     Retransmits { node: u8, seq: usize, tries: u32 },
-    #[error("node {node} refused {command}: {code}")]
+    #[error("node {node} refused {}: {}", command.name(), code_name(*code, "unknown code"))]
     Refused {
         node: u8,
-        command: &'static str,
-        code: &'static str,
+        command: CommandCode,
+        /// `None`: a code this host does not know.
+        code: Option<FaultCode>,
     },
+}
+
+/// A fault code's protocol name, or `unknown` for a byte this host does
+/// not know.
+fn code_name(code: Option<FaultCode>, unknown: &'static str) -> &'static str {
+    code.map_or(unknown, FaultCode::name)
+}
+
+/// A rejection reason's protocol name.
+fn reject_name(reason: Option<Reject>) -> &'static str {
+    reason.map_or("unknown reason", Reject::name)
 }
 
 /// The ConfigCrc message: the same CRC on both sides means the node has
@@ -112,13 +129,13 @@ impl UploadError {
     /// outside the axis's soft limits? Other rejections are the bus's or
     /// the machine's.
     pub fn is_bad_plan(&self) -> bool {
-        const PLAN_REJECTS: [Reject; 3] = [
-            Reject::Invalid,
-            Reject::Discontinuous,
-            Reject::OutsideSoftLimits,
-        ];
-        matches!(self, UploadError::Rejected { reason, .. }
-            if PLAN_REJECTS.iter().any(|r| r.name() == *reason))
+        matches!(
+            self,
+            UploadError::Rejected {
+                reason: Some(Reject::Invalid | Reject::Discontinuous | Reject::OutsideSoftLimits),
+                ..
+            }
+        )
     }
 
     /// Is this the plan's or the machine's configuration (bad input, exit 2)?
@@ -164,7 +181,7 @@ mod tests {
         let rejected = |r: Reject| UploadError::Rejected {
             node: 1,
             seq: 4,
-            reason: r.name(),
+            reason: Some(r),
         };
         for r in [
             Reject::Invalid,
@@ -181,5 +198,45 @@ mod tests {
             what: "streaming",
         };
         assert!(!timeout.is_bad_plan());
+    }
+
+    /// The messages print the protocol's names of the typed codes, and a
+    /// byte the host does not know as unknown.
+    #[test]
+    fn typed_codes_print_their_protocol_names() {
+        let faulted = UploadError::Faulted {
+            node: 1,
+            code: Some(FaultCode::FollowingError),
+        };
+        assert_eq!(
+            faulted.to_string(),
+            "node 1 is in Fault (FollowingError); nothing was sent"
+        );
+        let unknown = UploadError::Faulted {
+            node: 1,
+            code: FaultCode::from_u8(250),
+        };
+        assert_eq!(
+            unknown.to_string(),
+            "node 1 is in Fault (unknown); nothing was sent"
+        );
+        let refused = UploadError::Refused {
+            node: 3,
+            command: CommandCode::ConfigCommit,
+            code: Some(FaultCode::WrongState),
+        };
+        assert_eq!(
+            refused.to_string(),
+            "node 3 refused ConfigCommit: WrongState"
+        );
+        let rejected = UploadError::Rejected {
+            node: 2,
+            seq: 7,
+            reason: None,
+        };
+        assert_eq!(
+            rejected.to_string(),
+            "node 2 rejected segment 7: unknown reason"
+        );
     }
 }

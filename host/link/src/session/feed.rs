@@ -7,7 +7,7 @@
 
 use triquint_shared::protocol::{Command, CommandAck, CommandCode, FaultCode, State};
 
-use super::nodes::{CommandAnswer, NODES};
+use super::nodes::{AXES, CommandAnswer};
 use super::outbox::Outbox;
 
 /// Feed commands whose answers are kept (the latest).
@@ -68,7 +68,7 @@ pub(crate) struct FeedState {
     /// A drive acknowledged a stop (or reported Stopping without a fault).
     pub stopped: bool,
     /// Each drive's answer to the session's own feed commands, by token.
-    answers: Vec<(u8, [Option<CommandAnswer>; NODES])>,
+    answers: Vec<(u8, [Option<CommandAnswer>; AXES])>,
 }
 
 impl FeedState {
@@ -77,7 +77,7 @@ impl FeedState {
         let token = out.next_token();
         self.pending.push((f, token));
         self.answers.retain(|(t, _)| *t != token);
-        self.answers.push((token, [None; NODES]));
+        self.answers.push((token, [None; AXES]));
         if self.answers.len() > KEPT {
             self.answers.remove(0);
         }
@@ -108,7 +108,7 @@ impl FeedState {
     }
 
     /// Each drive's answer to the session's feed command `token`.
-    pub fn answers(&self, token: u8) -> Option<[Option<CommandAnswer>; NODES]> {
+    pub fn answers(&self, token: u8) -> Option<[Option<CommandAnswer>; AXES]> {
         self.answers.iter().find(|(t, _)| *t == token).map(|x| x.1)
     }
 

@@ -22,7 +22,7 @@ mod time_sync;
 
 pub use error::UploadError;
 pub use feed::Feed;
-pub use nodes::{CommandAnswer, NODES, NodeView};
+pub use nodes::{AXES, CommandAnswer, NodeView};
 pub use options::SessionOptions;
 pub use start::{ARM_RESENDS, START_RETRY_US};
 
@@ -137,7 +137,7 @@ impl Session {
     /// A session for `plan` with the given per-node configurations.
     pub fn new(
         plan: &Plan,
-        configs: [DriveConfig; NODES],
+        configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Result<Self, UploadError> {
         let segments = plan
@@ -156,7 +156,7 @@ impl Session {
 
     /// A session that only writes and checks the configurations (no motion):
     /// drives report their position once configured.
-    pub fn configure(configs: [DriveConfig; NODES], mut opts: SessionOptions) -> Self {
+    pub fn configure(configs: [DriveConfig; AXES], mut opts: SessionOptions) -> Self {
         opts.configure_only = true;
         opts.require_homed = false;
         Self::with_segments(Vec::new(), configs, opts)
@@ -164,7 +164,7 @@ impl Session {
 
     fn with_segments(
         segments: Vec<WireSegment>,
-        configs: [DriveConfig; NODES],
+        configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Self {
         let stream = Stream::new(segments, opts.fd);
@@ -198,7 +198,7 @@ impl Session {
     }
 
     /// Each drive's answer to the command with `token`, once it gave one.
-    pub fn answers(&self, token: u8) -> [Option<CommandAnswer>; NODES] {
+    pub fn answers(&self, token: u8) -> [Option<CommandAnswer>; AXES] {
         self.feed.answers(token).unwrap_or_else(|| {
             self.nodes
                 .0
@@ -256,12 +256,12 @@ impl Session {
     }
 
     /// What the host last heard from each node (axis i + 1's at index i).
-    pub fn nodes(&self) -> &[NodeView; NODES] {
+    pub fn nodes(&self) -> &[NodeView; AXES] {
         &self.nodes.0
     }
 
     /// Last reported state and fault code of each node, axis 1 first (`None`: never heard).
-    pub fn node_states(&self) -> [(Option<State>, u8); NODES] {
+    pub fn node_states(&self) -> [(Option<State>, u8); AXES] {
         self.nodes.0.map(|v| (v.state, v.fault))
     }
 
@@ -479,7 +479,7 @@ impl Session {
             return e;
         };
         match (code, self.plan_start) {
-            ("ArmTooFar", Some(start)) => UploadError::ArmTooFar {
+            (Some(FaultCode::ArmTooFar), Some(start)) => UploadError::ArmTooFar {
                 node,
                 distances_mm: [0, 1, 2].map(|i| {
                     self.nodes.0[i]
@@ -488,7 +488,7 @@ impl Session {
                 }),
                 start_mm: start.r.map(|x| x * 1e3),
             },
-            ("NotHomed", _) => UploadError::NotHomed { node },
+            (Some(FaultCode::NotHomed), _) => UploadError::NotHomed { node },
             _ => e,
         }
     }
@@ -515,7 +515,7 @@ impl Session {
             if !self.opts.clear_faults {
                 return Err(UploadError::Faulted {
                     node: v.id,
-                    code: FaultCode::from_u8(v.fault).map_or("unknown", FaultCode::name),
+                    code: FaultCode::from_u8(v.fault),
                 });
             }
             self.out.command(0, CommandCode::ClearFault, 0);

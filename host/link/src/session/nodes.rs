@@ -4,7 +4,7 @@ use triquint_shared::protocol::{CommandAck, Heartbeat, HeartbeatExt, State, flag
 
 /// Drives of a robot (index `i` drives axis `i + 1`; its node id is
 /// configured, by default `i + 1`).
-pub const NODES: usize = 3;
+pub const AXES: usize = 3;
 
 /// A node's answer to a command (its latest CommandAck).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,7 +107,7 @@ impl NodeView {
 
 /// The views of every node.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Nodes(pub [NodeView; NODES]);
+pub struct Nodes(pub [NodeView; AXES]);
 
 impl Default for Nodes {
     fn default() -> Self {
@@ -117,7 +117,7 @@ impl Default for Nodes {
 
 impl Nodes {
     /// The drives of axes 1–3 on node ids `ids`.
-    pub fn new(ids: [u8; NODES]) -> Self {
+    pub fn new(ids: [u8; AXES]) -> Self {
         Self(ids.map(|id| NodeView {
             id,
             ..NodeView::default()
@@ -143,7 +143,7 @@ impl Nodes {
     }
 
     /// Each node's answer to the command with `token`.
-    pub fn answers_to(&self, token: u8) -> [Option<u8>; NODES] {
+    pub fn answers_to(&self, token: u8) -> [Option<u8>; AXES] {
         self.0.map(|v| v.answer_to(token))
     }
 

@@ -6,7 +6,7 @@
 
 use triquint_shared::protocol::{CommandCode, FaultCode};
 
-use super::nodes::{NODES, Nodes};
+use super::nodes::{AXES, Nodes};
 use super::outbox::{Outbox, command_frame};
 use super::{SessionOptions, UploadError};
 
@@ -48,7 +48,7 @@ impl StartSequence {
     }
 
     /// Each node's answer to the Arm.
-    pub fn arm_answers(&self, nodes: &Nodes) -> [Option<u8>; NODES] {
+    pub fn arm_answers(&self, nodes: &Nodes) -> [Option<u8>; AXES] {
         nodes.answers_to(self.arm.token)
     }
 
@@ -73,7 +73,7 @@ impl StartSequence {
         {
             // The same command (same token) to each silent node: one
             // that did arm answers again, one that missed it arms.
-            for i in (0..NODES).filter(|&i| acks[i].is_none()) {
+            for i in (0..AXES).filter(|&i| acks[i].is_none()) {
                 out.push_back(command_frame(nodes.id(i), CommandCode::Arm, token, 0));
             }
             self.arm = Pending {
@@ -91,8 +91,8 @@ impl StartSequence {
                 .unwrap_or(FaultCode::None);
             return Err(UploadError::Refused {
                 node: nodes.id(i),
-                command: "Arm",
-                code: code.name(),
+                command: CommandCode::Arm,
+                code: Some(code),
             });
         }
         let start = now + opts.start_lead_us;
@@ -114,7 +114,7 @@ impl StartSequence {
             return;
         }
         let acks = nodes.answers_to(token);
-        for i in (0..NODES).filter(|&i| acks[i].is_none()) {
+        for i in (0..AXES).filter(|&i| acks[i].is_none()) {
             out.push_front(command_frame(
                 nodes.id(i),
                 CommandCode::Start,

@@ -6,7 +6,7 @@
 
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
-use super::nodes::{NODES, Nodes};
+use super::nodes::{AXES, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
 
@@ -23,7 +23,7 @@ struct InFlight {
     seq: usize,
     sent_at: u64,
     tries: u32,
-    acked: [bool; NODES],
+    acked: [bool; AXES],
     /// Resend requested by a rejection (not counted as a try).
     early: bool,
 }
@@ -105,7 +105,7 @@ impl Stream {
                 return Err(UploadError::Rejected {
                     node,
                     seq: a.seq,
-                    reason: other.map_or("unknown reason", |r| r.name()),
+                    reason: other,
                 });
             }
         }
@@ -137,7 +137,7 @@ impl Stream {
                 && out.len() < OUTBOX_LIMIT
             {
                 if f.tries > opts.max_retransmits {
-                    let node = (0..NODES)
+                    let node = (0..AXES)
                         .find(|&i| !f.acked[i])
                         .map_or(nodes.id(0), |i| nodes.id(i));
                     return Err(UploadError::Retransmits {
@@ -172,7 +172,7 @@ impl Stream {
                 seq,
                 sent_at: now,
                 tries: 1,
-                acked: [false; NODES],
+                acked: [false; AXES],
                 early: false,
             });
             self.next_to_send += 1;

@@ -1,0 +1,65 @@
+//! Where the drives report the machine is.
+
+use std::time::Duration;
+
+use nalgebra::Vector3;
+use triquint_link::{Listener, SocketCanPort};
+use triquint_shared::Robot;
+use triquint_shared::protocol::config::HomingSettings;
+
+use crate::exit::{CliError, CliResult};
+use crate::ops::bus::BusArgs;
+use crate::ops::configure::configure;
+use crate::ops::listen::{listen, nodes_arg, open};
+
+/// Joint positions (m) from every drive's Telemetry within `wait`, and
+/// whether each is homed.
+fn listen_positions(
+    port: &mut SocketCanPort,
+    ids: [u8; 3],
+    wait: Duration,
+) -> CliResult<([Option<f64>; 3], [bool; 3])> {
+    let mut l = Listener::new(ids);
+    listen(port, &mut l, wait, true)?;
+    Ok((
+        l.nodes.0.map(|v| v.position.map(f64::from)),
+        l.nodes.0.map(|v| v.homed && v.sync_seen_at.is_some()),
+    ))
+}
+
+/// Where the drives on `bus` report the joints (m), configuring them first
+/// if they do not report a position; refused when one is not homed.
+pub fn reported_joints(
+    robot: &Robot,
+    homing: &HomingSettings,
+    bus: &BusArgs,
+) -> CliResult<Vector3<f64>> {
+    let ids = bus.ids()?;
+    let mut port = open(&bus.iface)?;
+    let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
+    if q.iter().any(Option::is_none) {
+        configure(robot, homing, bus)?;
+        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout))?;
+    }
+    drop(port);
+    if let Some(i) = homed.iter().position(|h| !h) {
+        let n = nodes_arg(ids);
+        return Err(CliError::refused(format!(
+            "{}: node {} is not homed (its position is unknown): run `triquint home --iface {}{n}` first",
+            bus.iface, ids[i], bus.iface
+        )));
+    }
+    match q {
+        [Some(a), Some(b), Some(c)] => Ok(Vector3::new(a, b, c)),
+        _ => {
+            let node = q
+                .iter()
+                .position(Option::is_none)
+                .map_or(ids[0], |i| ids[i]);
+            Err(CliError::device(format!(
+                "{}: node {node}: no position (Telemetry) within {} s",
+                bus.iface, bus.timeout
+            )))
+        }
+    }
+}
