@@ -15,6 +15,7 @@ pub mod derived_config;
 pub mod drive;
 pub mod f32_cast;
 pub mod hal;
+pub mod handoff;
 pub mod homing;
 pub mod inbox;
 pub mod law;

@@ -17,6 +17,7 @@ const LAYERS: &[&str] = &[
     "derived_config", // what a configuration derives once
     "inbox",          // the hand-off between the receive side and the tick
     "hal",            // the hardware traits
+    "handoff",        // the receive task's hand-off behind a full inbox
     "law",            // the control law, a pure step function
     "homing",         // the homing state machine, a pure step function
     "receiver",       // the CAN receive side
