@@ -8,7 +8,8 @@
 #     deliberately bad build (feature bad-tick) is rejected by the same check;
 #  4. where the tick's instructions go (tick_profile.py), and image sizes;
 #  5. the B-G431B-ESC1 board image builds (no hardware here); its current
-#     loop reaches no wait loop, its CAN receive task hands off through `offer`.
+#     loop reaches no wait loop, its CAN receive side hands off through
+#     `HandOff::accept`.
 # Installs what it needs (apt qemu-system-arm, rustup target and llvm-tools).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -74,9 +75,10 @@ cargo fmt --check
 cargo clippy --locked --release -- -D warnings
 cargo build --locked --release
 # The current loop (ADC1_2, raised when TIM1's injected conversions are done)
-# waits on nothing; the CAN receive task hands items over through the inbox's
-# offer (reserved slots: Stop, Emergency, ClearFault never dropped).
+# waits on nothing; whatever runs the receive side on a frame (the CAN receive
+# task, the hand-off draining the receive FIFO) hands the item over through
+# the core's HandOff::accept (reserved slots, urgent items never dropped).
 python3 "$root/scripts/elf_check.py" --self-test
-python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver4part=inbox5offer' \
+python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver8on_frame=HandOff6accept' \
     "$objdump" target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1
 "$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 | grep -E "^(section|\.vector_table|\.text|\.rodata|\.ccmram_text|\.data|\.bss) "
