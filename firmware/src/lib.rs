@@ -24,6 +24,7 @@ pub mod receiver;
 pub mod scaling;
 pub mod segment;
 pub mod sync;
+pub mod watchdog;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
 pub use hal::{CanBus, Encoder, LimitSwitch, MotorOutput, NoSwitch, RxFrame};

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 /// Bottom first. A new module goes where its dependencies allow.
 const LAYERS: &[&str] = &[
     "f32_cast",       // integer ↔ f32 conversions of the tick
+    "watchdog",       // when a board feeds its hardware watchdog
     "segment",        // a queued segment and its evaluation
     "scaling",        // the jerk-limited time-scaling of stops and resumes
     "sync",           // host time from TimeSync frames
