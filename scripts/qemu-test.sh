@@ -6,9 +6,12 @@
 #  3. the control tick's and the CAN receive side's call graphs reach no f64
 #     soft-float and no panic, the image links no f64 routine at all, and a
 #     deliberately bad build (feature bad-tick) is rejected by the same check;
+#     the watchdog, fed by the core's policy, stays quiet in the replay, and an
+#     image whose tick stops (feature watchdog-test) must end in its NMI;
 #  4. where the tick's instructions go (tick_profile.py), and image sizes;
 #  5. the B-G431B-ESC1 board image builds (no hardware here); its current
-#     loop reaches no wait loop, its CAN receive task hands off through `offer`.
+#     loop reaches no wait loop, its CAN receive side hands off through
+#     `HandOff::accept`.
 # Installs what it needs (apt qemu-system-arm, rustup target and llvm-tools).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -46,6 +49,15 @@ cargo build --locked --release
 step "QEMU mps2-an386: golden replay and tick budget (exit status from the image)"
 cargo run --locked --release
 
+step "QEMU mps2-an386: watchdog test (the tick stops; the watchdog's NMI must end the run)"
+cargo build --locked --release --features watchdog-test 2>&1 | tail -1
+if ! timeout 300 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic -monitor none -serial none \
+    -semihosting-config enable=on,target=native -icount shift=10 -kernel "$elf"; then
+    echo "FAIL: the watchdog did not fire when the tick stopped" >&2
+    exit 1
+fi
+cargo build --locked --release 2>&1 | tail -1
+
 step "ELF check: tick (with the hand-off) and CAN receive side reach no f64 and no panic; no f64 in the image"
 python3 "$root/scripts/elf_check.py" --no-double "$objdump" "$elf" triquint_control_tick triquint_can_rx
 
@@ -74,9 +86,10 @@ cargo fmt --check
 cargo clippy --locked --release -- -D warnings
 cargo build --locked --release
 # The current loop (ADC1_2, raised when TIM1's injected conversions are done)
-# waits on nothing; the CAN receive task hands items over through the inbox's
-# offer (reserved slots: Stop, Emergency, ClearFault never dropped).
+# waits on nothing; whatever runs the receive side on a frame (the CAN receive
+# task, the hand-off draining the receive FIFO) hands the item over through
+# the core's HandOff::accept (reserved slots, urgent items never dropped).
 python3 "$root/scripts/elf_check.py" --self-test
-python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver4part=inbox5offer' \
+python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver8on_frame=HandOff6accept' \
     "$objdump" target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1
 "$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 | grep -E "^(section|\.vector_table|\.text|\.rodata|\.ccmram_text|\.data|\.bss) "

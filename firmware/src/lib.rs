@@ -15,6 +15,7 @@ pub mod derived_config;
 pub mod drive;
 pub mod f32_cast;
 pub mod hal;
+pub mod handoff;
 pub mod homing;
 pub mod inbox;
 pub mod law;
@@ -23,6 +24,7 @@ pub mod receiver;
 pub mod scaling;
 pub mod segment;
 pub mod sync;
+pub mod watchdog;
 
 pub use drive::{Drive, QUEUE_CAPACITY};
 pub use hal::{CanBus, Encoder, LimitSwitch, MotorOutput, NoSwitch, RxFrame};

@@ -11,12 +11,14 @@ use std::path::{Path, PathBuf};
 /// Bottom first. A new module goes where its dependencies allow.
 const LAYERS: &[&str] = &[
     "f32_cast",       // integer ↔ f32 conversions of the tick
+    "watchdog",       // when a board feeds its hardware watchdog
     "segment",        // a queued segment and its evaluation
     "scaling",        // the jerk-limited time-scaling of stops and resumes
     "sync",           // host time from TimeSync frames
     "derived_config", // what a configuration derives once
     "inbox",          // the hand-off between the receive side and the tick
     "hal",            // the hardware traits
+    "handoff",        // the receive task's hand-off behind a full inbox
     "law",            // the control law, a pure step function
     "homing",         // the homing state machine, a pure step function
     "receiver",       // the CAN receive side

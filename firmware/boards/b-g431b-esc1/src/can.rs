@@ -10,7 +10,7 @@ use embassy_stm32::can::{self, CanRx, CanTx};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use heapless::spsc::{Consumer, Producer};
-use triquint_firmware::inbox::offer;
+use triquint_firmware::handoff::{HandOff, RxFifo};
 use triquint_firmware::{Item, Receiver, RxFrame};
 use triquint_shared::protocol::Frame;
 
@@ -43,6 +43,7 @@ pub async fn receive(
     mut receiver: Receiver,
     mut to_tick: Producer<'static, Item>,
 ) {
+    let mut handoff = HandOff::new();
     loop {
         let frame = match select(rx.read_fd(), RESTORE.receive()).await {
             Either::First(Ok(env)) => to_core(&env.frame).map(|frame| RxFrame {
@@ -59,25 +60,52 @@ pub async fn receive(
         };
         let snapshot = critical_section::with(|cs| SNAPSHOT.borrow(cs).get());
         if let Some(item) = receiver.on_frame(&frame, snapshot) {
-            hand_off(&mut to_tick, item).await;
+            hand_off(&mut handoff, &mut to_tick, &mut rx, &mut receiver, item).await;
         }
     }
 }
 
-/// Queues an item for the tick. An ordinary item finding only the reserved
-/// slots left is dropped (the host's flow control resends segments); an
-/// urgent one (Stop, QuickStop, ClearFault, Emergency) is never dropped: it
-/// waits for the tick, which frees a slot every 100 µs.
-async fn hand_off(to_tick: &mut Producer<'static, Item>, mut item: Item) {
-    loop {
-        match offer(to_tick, item) {
-            Ok(()) => return,
-            Err(back) if back.is_urgent() => {
-                item = back;
-                embassy_futures::yield_now().await;
+/// The controller's receive FIFO read without waiting (the read is
+/// cancel-safe: a pending poll registers the waker and takes nothing).
+struct Fifo<'a>(&'a mut CanRx<'static>);
+
+impl RxFifo for Fifo<'_> {
+    fn try_take(&mut self) -> Option<RxFrame> {
+        loop {
+            match embassy_futures::poll_once(self.0.read_fd()) {
+                core::task::Poll::Ready(Ok(env)) => {
+                    if let Some(frame) = to_core(&env.frame) {
+                        return Some(RxFrame {
+                            frame,
+                            timestamp_us: env.ts.as_micros(),
+                        });
+                    }
+                }
+                core::task::Poll::Ready(Err(_bus_error)) => {}
+                core::task::Poll::Pending => return None,
             }
-            Err(_) => return,
         }
+    }
+}
+
+/// Queues an item for the tick through the core's [`HandOff`]: an urgent
+/// item finding the inbox full waits for the tick, which frees a slot
+/// every 100 µs, and the receive FIFO is drained meanwhile so no later
+/// Stop or Emergency is lost in the controller.
+async fn hand_off(
+    handoff: &mut HandOff,
+    to_tick: &mut Producer<'static, Item>,
+    rx: &mut CanRx<'static>,
+    receiver: &mut Receiver,
+    item: Item,
+) {
+    handoff.accept(to_tick, item);
+    while handoff.waiting() {
+        embassy_futures::yield_now().await;
+        handoff.service(to_tick, &mut Fifo(rx), |f| {
+            let snapshot = critical_section::with(|cs| SNAPSHOT.borrow(cs).get());
+            receiver.on_frame(f, snapshot)
+        });
     }
 }
 

@@ -69,6 +69,7 @@ fn TIM6_DAC() {
     t.drive.set_error_counters(errors);
     t.drive
         .tick_with_switch(now_us(), &mut t.encoder, &mut t.motor, &mut Switch);
+    crate::watchdog::tick_checked_in();
     let snapshot = t.drive.snapshot();
     critical_section::with(|cs| SNAPSHOT.borrow(cs).set(snapshot));
     while let Some(f) = t.drive.peek_tx() {

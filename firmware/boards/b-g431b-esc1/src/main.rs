@@ -18,6 +18,7 @@ mod foc;
 mod homing;
 mod motor;
 mod storage;
+mod watchdog;
 
 use embassy_embedded_hal::adapter::BlockingAsync;
 use embassy_executor::Spawner;
@@ -194,4 +195,5 @@ async fn main(spawner: Spawner) {
     spawner.spawn(can::transmit(can_tx, tx_cons).expect("spawn can tx"));
     spawner.spawn(homing::watch(home).expect("spawn limit switch"));
     spawner.spawn(storage::keep(flash, node_id).expect("spawn storage"));
+    spawner.spawn(watchdog::feed(p.IWDG).expect("spawn watchdog"));
 }

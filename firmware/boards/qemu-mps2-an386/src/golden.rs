@@ -281,6 +281,14 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                     triquint_control_tick(n, inbox, now, &mut Counts(counts), &mut motor)
                 });
                 let took_segment = n.next_seq() != seq;
+                // Outside the counted tick: the single context here is the
+                // CAN side too.
+                if !crate::watchdog::started() {
+                    crate::watchdog::start();
+                }
+                crate::watchdog::tick_checked_in();
+                crate::watchdog::can_checked_in();
+                crate::watchdog::offer_feed();
                 r.expect("motor torque", motor.torque.to_bits())?;
                 let flags = r.u8()?;
                 let got = motor.enabled as u8 | (n.state() as u8) << 1;
