@@ -339,8 +339,6 @@ mod tests {
                 assert!((e.qddd - s.qddd).norm() < 1e-7, "jerk continuous");
             }
             for j in 0..3 {
-                eprintln!("{:?}", plan.max_abs);
-                eprintln!("{:?}", plan.max_abs);
                 assert!(plan.max_abs.velocity[j] < plan.limits.velocity);
                 assert!(
                     plan.max_abs.acceleration[j] < plan.limits.acceleration,

@@ -17,7 +17,7 @@ use crate::override_cap::{Maxima, override_scaling};
 
 /// Why a plan's maxima cannot size the stop ramps.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ConfigError {
+pub enum PlanConfigError {
     #[error("the plan's largest {field} is {value}, not a finite number ≥ 0")]
     Maxima { field: &'static str, value: f64 },
     #[error("the plan does not move (its velocity, acceleration and jerk are all zero)")]
@@ -37,7 +37,7 @@ pub struct DriveConfigs {
 impl DriveConfigs {
     /// For `plan`, from the exact continuous-time maxima of its segments
     /// (not the `max_abs` it records, which nothing here trusts).
-    pub fn for_plan(plan: &Plan, settings: &DriveSettings) -> Result<Self, ConfigError> {
+    pub fn for_plan(plan: &Plan, settings: &DriveSettings) -> Result<Self, PlanConfigError> {
         let [v, a, j] = largest(plan)?;
         // The override cap, and the stop ramps sized for a stop from it.
         let s = override_scaling(plan, Maxima { v, a, j });
@@ -97,7 +97,7 @@ impl DriveConfigs {
 }
 
 /// Largest |v|, |a|, |jerk| over the three joints of `plan`'s segments.
-fn largest(plan: &Plan) -> Result<[f64; 3], ConfigError> {
+fn largest(plan: &Plan) -> Result<[f64; 3], PlanConfigError> {
     let m = kinematics(&plan.segments);
     let mut out = [0.0f64; 3];
     for (k, (field, per_joint)) in [
@@ -110,13 +110,13 @@ fn largest(plan: &Plan) -> Result<[f64; 3], ConfigError> {
     {
         for value in per_joint {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(ConfigError::Maxima { field, value });
+                return Err(PlanConfigError::Maxima { field, value });
             }
             out[k] = out[k].max(value);
         }
     }
     if out.iter().all(|x| *x == 0.0) {
-        return Err(ConfigError::NoMotion);
+        return Err(PlanConfigError::NoMotion);
     }
     Ok(out)
 }
@@ -178,7 +178,7 @@ mod tests {
     #[test]
     fn bad_maxima_are_named() {
         let rest = [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3];
-        assert_eq!(largest(&plan_with(rest)), Err(ConfigError::NoMotion));
+        assert_eq!(largest(&plan_with(rest)), Err(PlanConfigError::NoMotion));
         let mut c = rest;
         c[2][3] = f64::NAN;
         let e = largest(&plan_with(c)).unwrap_err();

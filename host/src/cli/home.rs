@@ -153,7 +153,7 @@ pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult
                         format!("failed: {} ({})", c.name(), triquint_link::status::hint(c))
                     }
                 };
-                eprintln!("axis {} (node {}): {what}", i + 1, ids[i]);
+                triquint_cli_common::errln!("axis {} (node {}): {what}", i + 1, ids[i]);
                 shown[i] = Some(p);
             }
         }

@@ -266,14 +266,14 @@ pub fn run(args: &UploadArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
         })?;
         let approach = approach_plan(&plan, robot, homing, &args.bus, start)?;
         if let Some(p) = approach {
-            eprintln!(
+            triquint_cli_common::errln!(
                 "approach: {} segments, {:.3} s, to the plan's start",
                 p.segments.len(),
                 p.total_time_s
             );
             let s = run_plan(&p, &args.bus, homing, args.clear, keys.as_mut())?;
             if !(s.completed && s.faults.is_empty()) {
-                eprintln!("the approach did not complete; the plan is not run");
+                triquint_cli_common::errln!("the approach did not complete; the plan is not run");
                 return report(&s, &args.bus, args.json);
             }
         }

@@ -2,7 +2,7 @@
 //! over the in-process bus to three simulated drives and the plant.
 
 use nalgebra::Vector3;
-use triquint_link::configs::ConfigError;
+use triquint_link::configs::PlanConfigError;
 use triquint_link::{DriveConfigs, FaultReport, Session, SessionOptions, UploadError};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
@@ -58,7 +58,7 @@ pub enum SimulateError {
     #[error("plan: {0}")]
     Plan(String),
     #[error("plan: {0}")]
-    Config(#[from] ConfigError),
+    Config(#[from] PlanConfigError),
     #[error("the simulation did not finish within {0:.1} s of simulated time")]
     Timeout(f64),
 }

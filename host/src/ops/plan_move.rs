@@ -19,7 +19,7 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         ))
     })?;
     let goal = Pose::from_cartesian(&m, target).map_err(|e| CliError::bad_input(e.to_string()))?;
-    eprintln!(
+    triquint_cli_common::errln!(
         "at ({:.3}, {:.3}, {:.3}) mm, moving to ({:.3}, {:.3}, {:.3}) mm",
         start.r.x * 1e3,
         start.r.y * 1e3,
@@ -43,7 +43,7 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         ..Options::default()
     };
     let p = plan(&job, &opts).map_err(plan_error)?;
-    eprintln!(
+    triquint_cli_common::errln!(
         "planned {} segments, {:.3} s",
         p.segments.len(),
         p.total_time_s

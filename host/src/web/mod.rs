@@ -140,7 +140,7 @@ pub fn run(opts: &WebOptions, robot: &Robot, stop: Arc<AtomicBool>) -> CliResult
     let read = reader
         .join()
         .map_err(|_| CliError::device("the frame source thread panicked"))?;
-    eprintln!(
+    triquint_cli_common::errln!(
         "triquint monitor: {} events sent, {} missed (slow clients)",
         app.events_sent.load(Ordering::Relaxed),
         app.events_missed.load(Ordering::Relaxed)
