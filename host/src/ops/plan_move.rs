@@ -3,13 +3,18 @@
 use nalgebra::Vector3;
 use triquint_planner::{Job, Objective, Options, Plan, plan};
 use triquint_shared::kinematics::Pose;
-use triquint_shared::{Limits, Robot};
+use triquint_shared::{Limits, Robot, Travel};
 
 use crate::exit::{CliError, CliResult, plan_error};
 
 /// The minimum-time, minimum-jerk move within the default limits from
 /// joints `q0` (m) to the platform at `target` (m); `None` when every axis
 /// is within 1 µm of it already.
+///
+/// The target must lie inside the travel. The start may not: homing leaves
+/// a slider between the travel's end and its switch, so the move's travel
+/// is widened to take in where the sliders are, and the move only heads
+/// back inside.
 pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliResult<Option<Plan>> {
     let m = robot.model::<f64>();
     let start = Pose::from_joints(&m, q0).map_err(|e| {
@@ -28,6 +33,15 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         target.y * 1e3,
         target.z * 1e3
     );
+    let travel = Travel::default();
+    if let Some(e) = travel.outside(&goal.q.into()) {
+        return Err(CliError::bad_input(format!(
+            "the target ({:.3}, {:.3}, {:.3}) mm is outside the travel: {e}",
+            target.x * 1e3,
+            target.y * 1e3,
+            target.z * 1e3
+        )));
+    }
     if (goal.q - q0).amax() < 1e-6 {
         return Ok(None);
     }
@@ -35,6 +49,7 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         .objective(Objective::MinTime)
         .robot(robot.clone())
         .limits(Limits::default())
+        .travel(travel_from(&travel, q0))
         .points_m([start.r.into(), target.into()])
         .build()
         .map_err(plan_error)?;
@@ -49,4 +64,50 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         p.total_time_s
     );
     Ok(Some(p))
+}
+
+/// `travel` widened per axis to take in the joints `q0` (m), with room for
+/// the rounding of the forward and inverse kinematics the start goes through.
+fn travel_from(travel: &Travel, q0: Vector3<f64>) -> Travel {
+    const ROUNDING_M: f64 = 1e-9;
+    Travel {
+        min: std::array::from_fn(|a| travel.min[a].min(q0[a] - ROUNDING_M)),
+        max: std::array::from_fn(|a| travel.max[a].max(q0[a] + ROUNDING_M)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where homing leaves the sliders: above the travel's end, below the
+    /// switch.
+    const HOMED_M: f64 = 0.4163;
+
+    #[test]
+    fn a_move_from_the_homing_rest_heads_back_inside_the_travel() {
+        let robot = Robot::default();
+        let travel = Travel::default();
+        assert!(HOMED_M > travel.max[0]);
+        let q0 = Vector3::repeat(HOMED_M);
+        let p = plan_move(&robot, q0, Vector3::new(-0.09, 0.09, 0.68))
+            .expect("planned")
+            .expect("a move");
+        let end = p.segments.last().unwrap().quintic().end();
+        assert!(travel.outside(&end.q.into()).is_none());
+    }
+
+    #[test]
+    fn a_target_outside_the_travel_is_bad_input() {
+        let robot = Robot::default();
+        let e = plan_move(&robot, Vector3::repeat(0.3), Vector3::new(0.0, 0.0, 0.1)).unwrap_err();
+        assert!(e.to_string().contains("outside the travel"), "{e}");
+    }
+
+    #[test]
+    fn the_widened_travel_takes_in_the_start_and_nothing_else() {
+        let t = travel_from(&Travel::default(), Vector3::new(0.4163, 0.2, 0.04));
+        assert_eq!(t.max, [0.4163 + 1e-9, 0.415, 0.415]);
+        assert_eq!(t.min, [0.05, 0.05, 0.04 - 1e-9]);
+    }
 }
