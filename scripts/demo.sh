@@ -6,18 +6,21 @@ cd "$(dirname "$0")/.."
 cargo build --release --locked -p triquint-host -p triquint-sim
 bin="${CARGO_TARGET_DIR:-target}/release"
 mkdir -p out
+# The machine: the paper's, written out as a machine file (every key at
+# its default; docs/machine.md). A real robot has its own.
+machine=examples/machines/paper.toml
 
 for case in paper-case1 paper-case2; do
     echo "== $case: plan"
-    $bin/triquint plan "examples/$case.toml" -o "out/$case.json" --plot "out/$case"
+    $bin/triquint plan "examples/$case.toml" -o "out/$case.json" --plot "out/$case" --machine $machine
     echo "== $case: independent check"
-    $bin/triquint check "out/$case.json" | tail -n 1
+    $bin/triquint check "out/$case.json" --machine $machine | tail -n 1
     echo "== $case: report (plots in out/$case/)"
     $bin/triquint report "out/$case.json"
     echo "== $case: run on the virtual hardware (3 drives + plant, in-process CAN bus)"
-    $bin/triquint simulate "out/$case.json" --json --plot "out/$case/sim" > "out/$case.sim.json"
-    $bin/triquint simulate "out/$case.json" --json --no-feedforward > "out/$case.sim-noff.json"
-    $bin/triquint simulate "out/$case.json" --json --fd > "out/$case.sim-fd.json"
+    $bin/triquint simulate "out/$case.json" --machine $machine --json --plot "out/$case/sim" > "out/$case.sim.json"
+    $bin/triquint simulate "out/$case.json" --machine $machine --json --no-feedforward > "out/$case.sim-noff.json"
+    $bin/triquint simulate "out/$case.json" --machine $machine --json --fd > "out/$case.sim-fd.json"
 done
 
 echo

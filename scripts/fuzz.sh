@@ -11,7 +11,7 @@
 #    crash within FUZZ_CANARY_SECONDS, or the instrumentation is broken and
 #    the run fails.
 # 2. `frames`, `job` and `points` each run FUZZ_SECONDS (default 45), and
-#    `plan`, `link_rx`, `candump`, `robot_file` and `web` FUZZ_SHORT_SECONDS
+#    `plan`, `link_rx`, `candump`, `machine_file` and `web` FUZZ_SHORT_SECONDS
 #    (default half of it: they are smaller surfaces, and CI's whole fuzz
 #    step must stay short), from their committed corpus and
 #    fuzz/regressions/, with fuzz/TARGET.dict when there is one; any crash
@@ -77,7 +77,7 @@ grep -E "^#[0-9]+|Done|panicked" "$OUT/canary.log" | tail -2
 rm -f "$OUT"/crashes/canary-*
 
 status=0
-for t in frames job points plan link_rx candump robot_file web; do
+for t in frames job points plan link_rx candump machine_file web; do
     case $t in
         frames | job | points) secs=$SECONDS_PER_TARGET ;;
         *) secs=$SHORT_SECONDS ;;

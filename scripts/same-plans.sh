@@ -3,8 +3,9 @@
 # not change (examples/, both paper cases as min-max-jerk and min-time, the
 # no-regression jobs, the 10/40/100-point scaling curves) with BASE and NEW
 # and compares the plan JSON with `solver.seconds` removed. A format 1 plan
-# is first read as the loader reads it (docs/plan-format.md): format 2 with
-# the default machine's travel, so a format bump alone is no difference.
+# is first read as the loader reads it (docs/plan-format.md): the current
+# format with the default machine's travel and ceilings, so a format bump
+# alone is no difference.
 #
 #   scripts/same-plans.sh BASE_TRIQUINT NEW_TRIQUINT [WORKDIR]
 #
@@ -30,9 +31,10 @@ strip() { python3 -c '
 import json, sys
 d = json.load(open(sys.argv[1]))
 d.get("solver", {}).pop("seconds", None)
-if d.get("format") == "triquint-plan/1":
-    d["format"] = "triquint-plan/2"
+if d.get("format") in ("triquint-plan/1", "triquint-plan/2"):
+    d["format"] = "triquint-plan/3"
     d.setdefault("travel", {"min": [0.05] * 3, "max": [0.415] * 3})
+    d.setdefault("ceilings", {"velocity": 1.0, "acceleration": 10.0, "jerk": 100.0, "torque": 10.0})
 print(json.dumps(d, sort_keys=True))' "$1"; }
 
 fail=0

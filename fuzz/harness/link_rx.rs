@@ -46,7 +46,14 @@ fn link_plan() -> &'static (Plan, DriveConfigs) {
             .expect("testdata/hil/paper-case1.json above the crate");
         let text = std::fs::read_to_string(&path).expect("reading the HIL plan");
         let plan: Plan = serde_json::from_str(&text).expect("the HIL plan parses");
-        let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default())
+        // The settings testdata/hil was recorded with: its drives' frames
+        // carry that configuration's CRC (soft limits 0–0.8 m, before the
+        // machine file set them from the travel).
+        let settings = DriveSettings {
+            soft_limits: [[0.0, 0.8]; 3],
+            ..DriveSettings::default()
+        };
+        let configs = DriveConfigs::for_plan(&plan, &settings)
             .expect("the HIL plan has configurations");
         (plan, configs)
     })

@@ -17,8 +17,8 @@ use std::sync::atomic::AtomicBool;
 
 use clap::{Parser, Subcommand};
 use serde::Serialize;
+use triquint_cli_common::machine_file::load_machine;
 use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
-use triquint_cli_common::robot_file::load_machine;
 use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
 use triquint_shared::kinematics::Pose;
 use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
@@ -74,9 +74,11 @@ struct Args {
     /// Control tick rate (Hz), 1000 to 10000; must match the rate the host configures.
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     rate: f64,
-    /// Machine parameters overriding the paper's Table 1 (TOML, SI units).
-    #[arg(long, value_name = "FILE.toml")]
-    robot: Option<PathBuf>,
+    /// Machine file (TOML, SI units; docs/machine.md): the simulated
+    /// robot, switches, encoder scales and motor directions. Without it,
+    /// the paper's machine.
+    #[arg(long = "machine", visible_alias = "robot", value_name = "FILE.toml")]
+    machine: Option<PathBuf>,
     /// Write the report (JSON) here on exit.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
@@ -142,7 +144,7 @@ fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
 fn run(args: &Args) -> CliResult {
     check_rate("--rate", args.rate)?;
     let nodes = parse_nodes("--nodes", &args.nodes)?;
-    let (robot, homing) = load_machine(args.robot.as_deref())?;
+    let machine = load_machine(args.machine.as_deref())?;
     let mut switches = [SwitchMode::Working; 3];
     for (opt, axis, mode) in [
         ("--stuck-switch", args.stuck_switch, SwitchMode::Stuck),
@@ -157,13 +159,12 @@ fn run(args: &Args) -> CliResult {
         }
     }
     let r0 = parse_triple("--start", &args.start)? * 1e-3;
-    let pose = Pose::from_cartesian(&robot.model::<f64>(), r0)
+    let pose = Pose::from_cartesian(&machine.robot.model::<f64>(), r0)
         .map_err(|e| CliError::bad_input(format!("--start {}: {e}", args.start)))?;
     let iface = args.iface.as_deref().unwrap_or_default();
-    let mut cfg = RealtimeConfig::new(iface, robot, pose.q);
+    let mut cfg = RealtimeConfig::new(iface, machine, pose.q);
     cfg.nodes = nodes;
     cfg.unhomed = args.unhomed.then_some(args.seed);
-    cfg.homing = homing;
     cfg.switches = switches;
     cfg.fd = args.fd;
     cfg.rate_hz = args.rate;

@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_firmware::node::service;
-use triquint_shared::Robot;
+use triquint_shared::machine::Machine;
 use triquint_shared::plan::{Segment, eval};
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{
@@ -28,7 +28,6 @@ use crate::plant::{Plant, PlantConfig};
 use crate::report::{JsonFault, RunReport};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode, SimSwitch, SwitchMode};
 use triquint_link::socketcan::{SocketCanError, SocketCanPort};
-use triquint_shared::protocol::config::HomingSettings;
 
 /// What runs, where.
 #[derive(Clone, Debug)]
@@ -39,17 +38,16 @@ pub struct RealtimeConfig {
     pub nodes: Vec<u8>,
     /// Power on unhomed, each encoder with an unknown offset from this seed.
     pub unhomed: Option<u64>,
-    /// Switch heights and homing direction (the robot file's `[homing]`).
-    pub homing: HomingSettings,
+    /// The machine simulated: its robot, switches (heights and homing
+    /// direction), encoder scales and motor directions.
+    pub machine: Machine,
     /// How each axis's switch behaves.
     pub switches: [SwitchMode; 3],
     pub fd: bool,
     pub rate_hz: f64,
-    pub robot: Robot,
     pub plant: PlantConfig,
     /// Joint positions at power-on (m).
     pub q0: Vector3<f64>,
-    pub counts_per_metre: f64,
     pub clock_seed: u64,
     pub max_drift_ppm: f64,
     pub nominal_bps: u64,
@@ -57,19 +55,17 @@ pub struct RealtimeConfig {
 }
 
 impl RealtimeConfig {
-    pub fn new(iface: &str, robot: Robot, q0: Vector3<f64>) -> Self {
+    pub fn new(iface: &str, machine: Machine, q0: Vector3<f64>) -> Self {
         Self {
             iface: iface.to_string(),
             nodes: vec![1, 2, 3],
             unhomed: None,
-            homing: HomingSettings::default(),
+            machine,
             switches: [SwitchMode::Working; 3],
             fd: false,
             rate_hz: 1000.0,
-            robot,
             plant: PlantConfig::default(),
             q0,
-            counts_per_metre: 131_072.0 / 0.010,
             clock_seed: 7,
             max_drift_ppm: 200.0,
             nominal_bps: 1_000_000,
@@ -227,8 +223,8 @@ pub fn run(
                 .map(|r| r.random_range(-130_000_000..130_000_000i64));
             let mut n = SimNode::on_axis(id, axis, clock, offset);
             n.switch = Some(SimSwitch::new(
-                cfg.homing.switch_height[axis.min(2)],
-                cfg.homing.direction,
+                cfg.machine.axes[axis.min(2)].switch_height,
+                cfg.machine.homing.direction,
                 cfg.switches[axis.min(2)],
             ));
             n
@@ -239,7 +235,7 @@ pub fn run(
     // stable and accurate for this plant at 1 kHz, and affordable in real time.
     let mut plant_cfg = cfg.plant.clone();
     plant_cfg.max_step_s = plant_cfg.max_step_s.max(tick_ns as f64 * 1e-9);
-    let mut plant = Plant::new(&cfg.robot, plant_cfg, cfg.q0);
+    let mut plant = Plant::new(&cfg.machine.robot, plant_cfg, cfg.q0);
     let mut watch = Watch::default();
     let start_ns = port.now_ns();
     let mut plant_ns = start_ns;
@@ -319,7 +315,9 @@ pub fn run(
                 error: None,
             };
             service(&mut n.node, &mut p);
-            plant.tau[axis] = n.control_tick(local, plant.q[axis], cfg.counts_per_metre, t);
+            let cpm = cfg.machine.counts_per_metre(axis);
+            plant.tau[axis] =
+                cfg.machine.axes[axis].direction * n.control_tick(local, plant.q[axis], cpm, t);
             n.note_fault(t);
             service(&mut n.node, &mut p);
             if let Some(e) = p.error {
@@ -500,7 +498,7 @@ mod tests {
         use triquint_shared::protocol::WireSegment;
         use triquint_shared::protocol::segment::FLAG_LAST;
         let plan = crate::testplan::paper_case1().unwrap();
-        let cfg = RealtimeConfig::new("vcan0", Robot::default(), Vector3::zeros());
+        let cfg = RealtimeConfig::new("vcan0", Machine::default(), Vector3::zeros());
         let n = plan.segments.len();
         for fd in [false, true] {
             let mut w = Watch::default();

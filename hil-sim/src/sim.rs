@@ -26,8 +26,12 @@ pub struct SimConfig {
     pub clock_seed: u64,
     /// Clock drift bound (ppm): each node draws a drift in ±this.
     pub max_drift_ppm: f64,
-    /// Encoder counts per metre (the drives are configured with the same value).
-    pub counts_per_metre: f64,
+    /// Encoder counts per metre of each axis, signed (the drives are
+    /// configured with the same values).
+    pub counts_per_metre: [f64; 3],
+    /// The sign of each motor's torque on its slider (+1 lifts): the
+    /// machine's wiring, which the drives' `direction` must match.
+    pub motor_direction: [f64; 3],
     /// Communication service interval of the nodes (µs of local time).
     pub comm_interval_us: u64,
     /// Record a sample every this many control ticks of node 1 (0 = every tick).
@@ -45,7 +49,8 @@ impl Default for SimConfig {
             bus: BusConfig::default(),
             clock_seed: 7,
             max_drift_ppm: 200.0,
-            counts_per_metre: 131_072.0 / 0.010,
+            counts_per_metre: [131_072.0 / 0.010; 3],
+            motor_direction: [1.0; 3],
             comm_interval_us: 50,
             record_every: 1,
             tx_mailboxes: 3,
@@ -507,9 +512,10 @@ impl Sim {
     }
 
     fn control_tick(&mut self, i: usize, local_us: u64) {
-        let cpm = self.cfg.counts_per_metre;
+        let cpm = self.cfg.counts_per_metre[i];
         let t_ns = self.t_ns;
-        self.plant.tau[i] = self.nodes[i].control_tick(local_us, self.plant.q[i], cpm, t_ns);
+        self.plant.tau[i] = self.cfg.motor_direction[i]
+            * self.nodes[i].control_tick(local_us, self.plant.q[i], cpm, t_ns);
         self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
         if i == 0 {
             self.tick_count += 1;

@@ -142,6 +142,7 @@ pub fn plan_through(
         robot: robot.clone(),
         limits: limits.clone(),
         travel: Default::default(),
+        ceilings: Default::default(),
         via_points_m: points.to_vec(),
         knots_m: knots.iter().map(|k| [k[0], k[1], k[2]]).collect(),
         intervals_s: h.clone(),

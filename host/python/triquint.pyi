@@ -128,6 +128,28 @@ class Robot:
     @classmethod
     def from_dict(cls, fields: Dict[str, float]) -> "Robot": ...
 
+class Machine:
+    """A machine file (docs/machine.md): robot, homing, axes, travel, ceilings."""
+
+    def __init__(self) -> None: ...
+    @classmethod
+    def from_toml(cls, path: _PathLike) -> "Machine":
+        """Reads a machine file, as ``--machine`` does."""
+    @classmethod
+    def from_text(cls, text: str) -> "Machine":
+        """A machine file's contents."""
+    @property
+    def robot(self) -> Robot: ...
+    @property
+    def travel(self) -> Dict[str, List[float]]:
+        """{'min': [...], 'max': [...]}, metres."""
+    @property
+    def ceilings(self) -> Dict[str, float]:
+        """velocity, acceleration, jerk, torque: what no plan may exceed."""
+    @property
+    def counts_per_metre(self) -> List[float]:
+        """Encoder counts per metre of slider travel, per axis (signed)."""
+
 class Job:
     """A planning job, validated when it is made."""
 
@@ -143,9 +165,10 @@ class Job:
         jerk: float = 5.0,
         torque: float = 10.0,
         robot: Optional[Robot] = None,
+        machine: Optional[Machine] = None,
     ) -> None: ...
     @classmethod
-    def from_toml(cls, path: _PathLike) -> "Job":
+    def from_toml(cls, path: _PathLike, *, machine: Optional[Machine] = None) -> "Job":
         """Reads a job file of ``triquint plan``."""
     @property
     def objective(self) -> _Objective: ...
@@ -263,6 +286,7 @@ def plan(
     jerk: float = 5.0,
     torque: float = 10.0,
     robot: Optional[Robot] = None,
+    machine: Optional[Machine] = None,
     starts: int = 8,
     seed: int = 1,
     progress: Optional[Callable[[Progress], Optional[bool]]] = None,

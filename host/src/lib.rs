@@ -6,7 +6,7 @@
 pub mod cli;
 pub mod exit;
 pub mod inprocess;
+pub mod machine_arg;
 pub mod ops;
 pub mod report;
-pub mod robot_file;
 pub mod web;

@@ -1,19 +1,14 @@
 //! `triquint`: plan, check and run minimum-jerk trajectories for a 3-PUU robot.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use triquint_host::cli;
 use triquint_host::exit::CliResult;
-use triquint_host::robot_file::{load_machine, load_robot};
 
 #[derive(Parser, Debug)]
 #[command(name = "triquint", version, about, propagate_version = true)]
 struct Cli {
-    /// Machine parameters overriding the paper's Table 1 (TOML, SI units).
-    #[arg(long, global = true, value_name = "FILE.toml")]
-    robot: Option<PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -60,35 +55,19 @@ enum Command {
 
 fn run(cli: Cli) -> CliResult {
     match &cli.command {
-        Command::Ik(a) => cli::ik::run(a, &load_robot(cli.robot.as_deref())?),
-        Command::Fk(a) => cli::fk::run(a, &load_robot(cli.robot.as_deref())?),
-        Command::Torque(a) => cli::torque::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Ik(a) => cli::ik::run(a, &a.machine.load()?),
+        Command::Fk(a) => cli::fk::run(a, &a.machine.load()?),
+        Command::Torque(a) => cli::torque::run(a, &a.machine.load()?.robot),
         Command::Plan(a) => cli::plan::run(a),
-        Command::Check(a) => {
-            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::check::run(a))
-        }
-        Command::Report(a) => {
-            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::report::run(a))
-        }
-        Command::Simulate(a) => {
-            cli::same_robot(cli.robot.as_deref(), &a.plan).and_then(|()| cli::simulate::run(a))
-        }
-        Command::Upload(a) => {
-            let (robot, homing) = load_machine(cli.robot.as_deref())?;
-            cli::same_robot(cli.robot.as_deref(), &a.plan)
-                .and_then(|()| cli::upload::run(a, &robot, &homing))
-        }
-        Command::MoveTo(a) => {
-            let (robot, homing) = load_machine(cli.robot.as_deref())?;
-            cli::move_to::run(a, &robot, &homing)
-        }
-        Command::Monitor(a) => cli::monitor::run(a, &load_robot(cli.robot.as_deref())?),
-        Command::Status(a) => cli::status::run(a, &load_robot(cli.robot.as_deref())?),
-        Command::Home(a) => {
-            let (robot, homing) = load_machine(cli.robot.as_deref())?;
-            cli::home::run(a, &robot, &homing)
-        }
-        Command::Clear(a) => cli::clear::run(a, &load_robot(cli.robot.as_deref())?),
+        Command::Check(a) => cli::check::run(a),
+        Command::Report(a) => cli::report::run(a),
+        Command::Simulate(a) => cli::simulate::run(a),
+        Command::Upload(a) => cli::upload::run(a, &a.machine.load()?),
+        Command::MoveTo(a) => cli::move_to::run(a, &a.machine.load()?),
+        Command::Monitor(a) => cli::monitor::run(a, &a.machine.load()?.robot),
+        Command::Status(a) => cli::status::run(a, &a.machine.load()?.robot),
+        Command::Home(a) => cli::home::run(a, &a.machine.load()?),
+        Command::Clear(a) => cli::clear::run(a, &a.machine.load()?.robot),
         Command::Estop(a) => cli::estop::run(a),
         Command::Hold(a) => cli::hold::run(a),
         Command::Resume(a) => cli::resume::run(a),

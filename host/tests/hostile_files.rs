@@ -237,9 +237,9 @@ fn endless_inputs_are_refused_at_their_limit() {
             "the limit for a plan file",
         ),
         (
-            "robot",
-            vec!["--robot", "/dev/zero", "check", plan],
-            "larger than 64 KiB, the limit for a robot file",
+            "machine",
+            vec!["check", plan, "--machine", "/dev/zero"],
+            "larger than 64 KiB, the limit for a machine file",
         ),
         (
             "starts",
@@ -455,12 +455,17 @@ fn absurd_robots_are_bad_input_in_short_messages() {
         "robot.lead: robot parameter `lead` must be in 1e-6..1e6, got 1e300",
         "job",
     );
-    std::fs::write(dir.join("robot.toml"), "platform_mass = -1e250\n").unwrap();
+    std::fs::write(dir.join("robot.toml"), "[robot]\nplatform_mass = -1e250\n").unwrap();
     let out = run_in(
         &dir,
-        &["--robot", "robot.toml", "check", plan.to_str().unwrap()],
+        &["check", plan.to_str().unwrap(), "--robot", "robot.toml"],
     );
-    assert_error(&out, 2, "must be in 0..1e6, got -1e250", "robot file");
+    assert_error(
+        &out,
+        2,
+        "line 2: `robot.platform_mass` = -1e250: must be in 0..1e6",
+        "machine file",
+    );
     assert!(
         out.stderr.len() < 200,
         "{}",

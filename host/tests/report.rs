@@ -51,6 +51,7 @@ fn rest_to_rest_plan(points_mm: &[[f64; 3]], h: &[f64]) -> Plan {
         robot,
         limits: Limits::default(),
         travel: Default::default(),
+        ceilings: Default::default(),
         via_points_m: via,
         knots_m: knots,
         intervals_s: h.to_vec(),

@@ -2,27 +2,13 @@
 //! is trusted: `ik`, `fk`, `plan` and `check` on the built binary.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn triquint(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
 
-/// An empty directory of its own for a test.
+use common::triquint;
+
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("triquint-travel-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("travel", name)
 }
 
 /// The paper's Case II as `triquint plan` writes it.
@@ -120,7 +106,7 @@ fn check_refuses_limits_no_job_could_have() {
 fn check_proves_the_travel_the_plan_records() {
     let dir = scratch("recorded-travel");
     let mut p = case2_plan(&dir);
-    assert_eq!(p["format"], "triquint-plan/2");
+    assert_eq!(p["format"], "triquint-plan/3");
     assert_eq!(p["travel"]["max"], serde_json::json!([0.415, 0.415, 0.415]));
     // Case II moves slider 3 down to about 82 mm: a travel from 100 mm fails.
     p["travel"]["min"] = serde_json::json!([0.05, 0.05, 0.1]);

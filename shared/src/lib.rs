@@ -2,6 +2,7 @@
 //! and the virtual hardware must agree on, bit for bit.
 //!
 //! One concept per module:
+//! - [`machine`]: the machine file's machine: robot, homing, axes, ceilings.
 //! - [`params`]: machine parameters (paper Table 1) and motion limits (Table 3).
 //! - [`kinematics`]: inverse/forward kinematics and Jacobians of the 3-PUU.
 //! - [`dynamics`]: inverse dynamics by virtual work (the feedforward the drives run).
@@ -22,6 +23,7 @@ pub mod bounded_read;
 pub mod dynamics;
 pub mod kinematics;
 pub mod lagrangian;
+pub mod machine;
 pub mod params;
 #[cfg(feature = "alloc")]
 pub mod plan;

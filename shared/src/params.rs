@@ -97,7 +97,7 @@ pub enum ParamError<T: Debug + Display + LowerExp = f64> {
 
 /// A number for a one-line message: as written, or in scientific notation
 /// when that is long (`1e300` displays as 301 digits).
-struct Short<T>(T);
+pub(crate) struct Short<T>(pub(crate) T);
 
 impl<T: Display + LowerExp> Display for Short<T> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -211,6 +211,33 @@ impl<T: Real + Display + LowerExp> RobotParams<T> {
 }
 
 impl Robot {
+    /// The first parameter that differs from `other`'s (bit for bit): its
+    /// name and both values.
+    pub fn first_difference(&self, other: &Robot) -> Option<(&'static str, f64, f64)> {
+        let fields = |r: &Robot| {
+            [
+                ("platform_radius", r.platform_radius),
+                ("base_radius", r.base_radius),
+                ("strut_length", r.strut_length),
+                ("slider_offset", r.slider_offset),
+                ("platform_mass", r.platform_mass),
+                ("payload_mass", r.payload_mass),
+                ("strut_mass", r.strut_mass),
+                ("slider_mass", r.slider_mass),
+                ("motor_inertia", r.motor_inertia),
+                ("coupling_inertia", r.coupling_inertia),
+                ("leadscrew_inertia", r.leadscrew_inertia),
+                ("lead", r.lead),
+                ("gravity", r.gravity),
+            ]
+        };
+        fields(self)
+            .into_iter()
+            .zip(fields(other))
+            .find(|((_, x), (_, y))| x.to_bits() != y.to_bits())
+            .map(|((k, x), (_, y))| (k, x, y))
+    }
+
     /// The model computed in f64 and delivered in precision `U`.
     pub fn model<U: Real>(&self) -> Model<U> {
         let m = self.native_model();
@@ -287,6 +314,16 @@ pub struct LimitError {
 }
 
 impl Limits {
+    /// The four motion limits by name (velocity, acceleration, jerk, torque).
+    pub fn named(&self) -> [(&'static str, f64); 4] {
+        [
+            ("velocity", self.velocity),
+            ("acceleration", self.acceleration),
+            ("jerk", self.jerk),
+            ("torque", self.torque),
+        ]
+    }
+
     pub fn validate(&self) -> Result<(), LimitError> {
         for (name, value) in [
             ("velocity", self.velocity),

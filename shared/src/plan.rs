@@ -1,14 +1,15 @@
-//! The plan file (`triquint-plan/2`, docs/plan-format.md): what the planner
+//! The plan file (`triquint-plan/3`, docs/plan-format.md): what the planner
 //! writes and every other tool (check, report, simulate, upload) reads, and
 //! its evaluation at a plan time ([`Plan::at`], [`Plan::sample`]; the
-//! conventions are in [`eval`]). Format 1 plans still load, read-only, with
-//! the default machine's values.
+//! conventions are in [`eval`]). Format 1 and 2 plans still load,
+//! read-only, with the default machine's values for what they lack.
 
 use alloc::string::String;
 use alloc::vec::Vec;
 
 use serde::{Deserialize, Serialize};
 
+use crate::machine::Ceilings;
 use crate::protocol::WireSegment;
 use crate::protocol::segment::{FLAG_FIRST, FLAG_LAST, SegmentError};
 use crate::quintic::Quintic;
@@ -21,9 +22,11 @@ pub mod figures;
 pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 
 /// Value of the `format` field of the plans this version writes.
-pub const PLAN_FORMAT: &str = "triquint-plan/2";
-/// The previous format: read (with the default machine's travel), never written.
+pub const PLAN_FORMAT: &str = "triquint-plan/3";
+/// Earlier formats: read (with the default machine's values for what they
+/// lack: travel before 2, ceilings before 3), never written.
 pub const PLAN_FORMAT_1: &str = "triquint-plan/1";
+pub const PLAN_FORMAT_2: &str = "triquint-plan/2";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -90,6 +93,10 @@ pub struct Plan {
     /// against (format 2; a format 1 plan has none and gets the default).
     #[serde(default)]
     pub travel: Travel,
+    /// The machine's ceilings the plan's limits were held to, which `check`
+    /// proves them against (format 3; earlier ones get the default machine's).
+    #[serde(default)]
+    pub ceilings: Ceilings,
     pub via_points_m: Vec<[f64; 3]>,
     pub knots_m: Vec<[f64; 3]>,
     pub intervals_s: Vec<f64>,
@@ -106,7 +113,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
@@ -125,7 +132,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
@@ -149,7 +156,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
@@ -180,7 +187,7 @@ impl Plan {
     /// ```
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
-    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
+    /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
@@ -239,6 +246,7 @@ mod tests {
             robot: Robot::default(),
             limits: Limits::default(),
             travel: Travel::default(),
+            ceilings: Ceilings::default(),
             via_points_m: Vec::new(),
             knots_m: Vec::new(),
             intervals_s: Vec::new(),

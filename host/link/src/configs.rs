@@ -161,6 +161,7 @@ mod tests {
             robot: Robot::default(),
             limits: Limits::default(),
             travel: Default::default(),
+            ceilings: Default::default(),
             via_points_m: vec![],
             knots_m: vec![],
             intervals_s: vec![1.0],

@@ -169,6 +169,10 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
             );
         }
     }
+    // The limits within the machine's ceilings (exactly: both are inputs).
+    for ((name, lim), (_, ceiling)) in l.named().into_iter().zip(plan.ceilings.named()) {
+        row(&format!("limit {name} − ceiling"), lim - ceiling, 0.0);
+    }
     // Travel: the exact lowest and highest position of every slider.
     let k = kinematics(&plan.segments);
     let travel = &plan.travel;

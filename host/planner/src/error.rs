@@ -80,6 +80,21 @@ pub enum PlanError {
         line: Option<usize>,
         reason: String,
     },
+    /// The job's `[robot]` differs from the machine's: the first
+    /// parameter that does, in the job and in the machine.
+    #[error("robot.{key} is {} in the job and {} in the machine file: the job is for another machine", readable(*job), readable(*machine))]
+    OtherMachine {
+        key: &'static str,
+        job: f64,
+        machine: f64,
+    },
+    /// A limit above the machine's ceiling for it.
+    #[error("limits.{limit} = {} is above the machine's ceiling {}", readable(*value), readable(*ceiling))]
+    AboveCeiling {
+        limit: &'static str,
+        value: f64,
+        ceiling: f64,
+    },
     /// A via-point, or a knot between two via-points, that the robot cannot reach.
     #[error(
         "{} {} ({}, {}, {}) mm is outside the workspace: {reason}",

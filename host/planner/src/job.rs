@@ -13,6 +13,7 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
+use triquint_shared::machine::{Ceilings, Machine};
 use triquint_shared::plan::Objective;
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::{Limits, Model, Robot, Travel};
@@ -40,18 +41,22 @@ pub struct Job {
     robot: Robot,
     limits: Limits,
     travel: Travel,
+    ceilings: Ceilings,
     points_m: Vec<[f64; 3]>,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
-/// jerk, the paper's robot (Table 1), limits (Table 3) and travel
-/// ([`Travel::default`]), no points.
+/// jerk, the paper's robot (Table 1), limits (Table 3), and the default
+/// machine's travel and ceilings ([`Machine::default`]), no points.
 #[derive(Clone, Debug, Default)]
 pub struct JobBuilder {
     objective: Objective,
-    robot: Robot,
+    robot: Option<Robot>,
     limits: Limits,
     travel: Travel,
+    ceilings: Ceilings,
+    /// The machine's robot, which a robot given with the job must equal.
+    machine_robot: Option<Robot>,
     points_m: Vec<[f64; 3]>,
 }
 
@@ -61,7 +66,15 @@ impl JobBuilder {
         self
     }
     pub fn robot(mut self, robot: Robot) -> Self {
-        self.robot = robot;
+        self.robot = Some(robot);
+        self
+    }
+    /// Plans for `machine`: its robot (a robot given with the job must
+    /// equal it), its travel and its ceilings, which the limits may not exceed.
+    pub fn machine(mut self, machine: &Machine) -> Self {
+        self.machine_robot = Some(machine.robot.clone());
+        self.travel = machine.travel();
+        self.ceilings = machine.effective_ceilings();
         self
     }
     /// The sliders' travel: every via-point and knot, and the whole motion
@@ -94,17 +107,26 @@ impl JobBuilder {
     /// finite, reachable and apart from the one before, and every knot added
     /// between them reachable.
     pub fn build(self) -> Result<Job, PlanError> {
-        self.robot.validate().map_err(|e| {
+        let robot = match (self.robot, self.machine_robot) {
+            (Some(job), Some(machine)) => {
+                if let Some((key, j, m)) = job.first_difference(&machine) {
+                    return Err(PlanError::OtherMachine {
+                        key,
+                        job: j,
+                        machine: m,
+                    });
+                }
+                job
+            }
+            (Some(r), None) | (None, Some(r)) => r,
+            (None, None) => Robot::default(),
+        };
+        robot.validate().map_err(|e| {
             let triquint_shared::params::ParamError::Invalid { name, .. } = e;
             PlanError::invalid(&format!("robot.{name}"), e.to_string())
         })?;
         let l = &self.limits;
-        for (name, value) in [
-            ("velocity", l.velocity),
-            ("acceleration", l.acceleration),
-            ("jerk", l.jerk),
-            ("torque", l.torque),
-        ] {
+        for (name, value) in l.named() {
             let (lo, hi) = LIMIT_RANGE;
             if !(value.is_finite() && (lo..=hi).contains(&value)) {
                 return Err(PlanError::invalid(
@@ -116,6 +138,16 @@ impl JobBuilder {
                         readable(hi)
                     ),
                 ));
+            }
+        }
+        for ((name, value), (_, ceiling)) in l.named().into_iter().zip(self.ceilings.named()) {
+            // NaN ceilings are refused by the machine's validation.
+            if value > ceiling {
+                return Err(PlanError::AboveCeiling {
+                    limit: name,
+                    value,
+                    ceiling,
+                });
             }
         }
         self.travel
@@ -137,7 +169,7 @@ impl JobBuilder {
                 ),
             ));
         }
-        let model = self.robot.model::<f64>();
+        let model = robot.model::<f64>();
         for (i, p) in pts.iter().enumerate() {
             if p.iter().any(|x| !x.is_finite()) {
                 return Err(PlanError::invalid(
@@ -185,9 +217,10 @@ impl JobBuilder {
         }
         Ok(Job {
             objective: self.objective,
-            robot: self.robot,
+            robot,
             limits: self.limits,
             travel: self.travel,
+            ceilings: self.ceilings,
             points_m: self.points_m,
         })
     }
@@ -229,9 +262,11 @@ impl Job {
     pub fn to_builder(&self) -> JobBuilder {
         JobBuilder {
             objective: self.objective,
-            robot: self.robot.clone(),
+            robot: Some(self.robot.clone()),
             limits: self.limits.clone(),
             travel: self.travel.clone(),
+            ceilings: self.ceilings.clone(),
+            machine_robot: None,
             points_m: self.points_m.clone(),
         }
     }
@@ -246,6 +281,10 @@ impl Job {
     }
     pub fn travel(&self) -> &Travel {
         &self.travel
+    }
+    /// What the limits were held to.
+    pub fn ceilings(&self) -> &Ceilings {
+        &self.ceilings
     }
     /// Via-points in metres.
     pub fn points_m(&self) -> &[[f64; 3]] {

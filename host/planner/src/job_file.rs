@@ -21,6 +21,7 @@
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use triquint_shared::machine::Machine;
 use triquint_shared::plan::Objective;
 use triquint_shared::{Limits, Robot};
 
@@ -87,8 +88,7 @@ impl<'de> Deserialize<'de> for Point {
 struct JobFile {
     #[serde(default)]
     objective: Objective,
-    #[serde(default)]
-    robot: Robot,
+    robot: Option<Robot>,
     #[serde(default)]
     limits: Limits,
     path: PathSpec,
@@ -97,7 +97,13 @@ struct JobFile {
 impl Job {
     /// Parses a job; a `[path] file` is read relative to the working directory.
     pub fn from_toml(text: &str) -> Result<Job, PlanError> {
-        parse(text, "job", Path::new("."), &mut Vec::new())
+        parse(text, "job", Path::new("."), &mut Vec::new(), None)
+    }
+
+    /// [`Job::from_toml`] for `machine` ([`JobBuilder::machine`](crate::job::JobBuilder::machine)):
+    /// a `[robot]` in the job must equal the machine's.
+    pub fn from_toml_for(text: &str, machine: &Machine) -> Result<Job, PlanError> {
+        parse(text, "job", Path::new("."), &mut Vec::new(), Some(machine))
     }
 
     /// Reads a job file; a `[path] file` is read relative to the job file.
@@ -109,6 +115,16 @@ impl Job {
     /// [`Job::load`], and the files it read: the job file and its points
     /// file if it names one (so a command can refuse to overwrite them).
     pub fn load_with_files(path: &Path) -> Result<(Job, Vec<PathBuf>), PlanError> {
+        Self::load_for(path, None)
+    }
+
+    /// [`Job::load_with_files`], for `machine` if given
+    /// ([`JobBuilder::machine`](crate::job::JobBuilder::machine)): a `[robot]`
+    /// in the job must equal the machine's.
+    pub fn load_for(
+        path: &Path,
+        machine: Option<&Machine>,
+    ) -> Result<(Job, Vec<PathBuf>), PlanError> {
         let origin = path.display().to_string();
         let text =
             read_text(path, MAX_JOB_BYTES, "a job file").map_err(|e| PlanError::JobFile {
@@ -118,12 +134,18 @@ impl Job {
             })?;
         let dir = path.parent().unwrap_or(Path::new("."));
         let mut files = vec![path.to_path_buf()];
-        let job = parse(&text, &origin, dir, &mut files)?;
+        let job = parse(&text, &origin, dir, &mut files, machine)?;
         Ok((job, files))
     }
 }
 
-fn parse(text: &str, origin: &str, dir: &Path, files: &mut Vec<PathBuf>) -> Result<Job, PlanError> {
+fn parse(
+    text: &str,
+    origin: &str,
+    dir: &Path,
+    files: &mut Vec<PathBuf>,
+    machine: Option<&Machine>,
+) -> Result<Job, PlanError> {
     let file_error = |line: Option<usize>, reason: String| PlanError::JobFile {
         origin: origin.to_string(),
         line,
@@ -165,9 +187,16 @@ fn parse(text: &str, origin: &str, dir: &Path, files: &mut Vec<PathBuf>) -> Resu
         Units::Millimetres => 1e-3,
         Units::Metres => 1.0,
     };
-    Job::builder()
+    let builder = match machine {
+        Some(m) => Job::builder().machine(m),
+        None => Job::builder(),
+    };
+    let builder = match f.robot {
+        Some(r) => builder.robot(r),
+        None => builder,
+    };
+    builder
         .objective(f.objective)
-        .robot(f.robot)
         .limits(f.limits)
         .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
         .build()

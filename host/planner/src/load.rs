@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, Plan};
+use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, Plan};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
@@ -17,7 +17,9 @@ pub enum LoadError {
     #[error("{0}")]
     Json(String),
     /// Another format or version than this library reads.
-    #[error("format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_1}`)")]
+    #[error(
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
+    )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
     #[error("{0}")]
@@ -34,20 +36,20 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
     // The format tag first, so another version is named as such.
     if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
         && let Some(f) = v.get("format").and_then(|f| f.as_str())
-        && f != PLAN_FORMAT
-        && f != PLAN_FORMAT_1
     {
-        return Err(LoadError::Format { found: one_line(f) });
-    }
-    // Format 2 records the machine values the check needs; only format 1
-    // may lack them (it gets the default machine's).
-    if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
-        && v.get("format").and_then(|f| f.as_str()) == Some(PLAN_FORMAT)
-        && v.get("travel").is_none()
-    {
-        return Err(LoadError::Invalid(format!(
-            "a `{PLAN_FORMAT}` plan records its `travel`; this one has none"
-        )));
+        // What each format records of the machine; an earlier format
+        // gets the default machine's values for what it lacks.
+        let records: &[&str] = match f {
+            PLAN_FORMAT => &["travel", "ceilings"],
+            PLAN_FORMAT_2 => &["travel"],
+            PLAN_FORMAT_1 => &[],
+            _ => return Err(LoadError::Format { found: one_line(f) }),
+        };
+        if let Some(missing) = records.iter().find(|k| v.get(**k).is_none()) {
+            return Err(LoadError::Invalid(format!(
+                "a `{f}` plan records its `{missing}`; this one has none"
+            )));
+        }
     }
     let plan: Plan =
         serde_json::from_str(text).map_err(|e| LoadError::Json(one_line(&e.to_string())))?;
@@ -76,7 +78,7 @@ fn one_line(msg: &str) -> String {
 /// last included.
 pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if plan.format != PLAN_FORMAT && plan.format != PLAN_FORMAT_1 {
+    if ![PLAN_FORMAT, PLAN_FORMAT_2, PLAN_FORMAT_1].contains(&plan.format.as_str()) {
         return Err(LoadError::Format {
             found: one_line(&plan.format),
         });
@@ -90,23 +92,23 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     plan.travel
         .validate()
         .map_err(|e| LoadError::Invalid(e.to_string()))?;
-    // The range a job's limits are held to: a plan whose limits no job
-    // could have is refused, not checked against absurd bounds.
+    // The range a job's limits are held to, and the ceilings with them: a
+    // plan whose limits no job could have is refused, not checked against
+    // absurd bounds.
     let (lo, hi) = LIMIT_RANGE;
-    let l = &plan.limits;
-    for (name, value) in [
-        ("velocity", l.velocity),
-        ("acceleration", l.acceleration),
-        ("jerk", l.jerk),
-        ("torque", l.torque),
+    for (what, named) in [
+        ("limits", plan.limits.named()),
+        ("ceilings", plan.ceilings.named()),
     ] {
-        if !(lo..=hi).contains(&value) {
-            return bad(format!(
-                "limits: `{name}` is {}, not in {}..{}",
-                readable(value),
-                readable(lo),
-                readable(hi)
-            ));
+        for (name, value) in named {
+            if !(lo..=hi).contains(&value) {
+                return bad(format!(
+                    "{what}: `{name}` is {}, not in {}..{}",
+                    readable(value),
+                    readable(lo),
+                    readable(hi)
+                ));
+            }
         }
     }
     let n = plan.segments.len();
@@ -258,6 +260,7 @@ mod tests {
             robot,
             limits: Limits::default(),
             travel: Default::default(),
+            ceilings: Default::default(),
             via_points_m: vec![p, p],
             knots_m: vec![q; n + 1],
             intervals_s: vec![1e-3; n],

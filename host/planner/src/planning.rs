@@ -300,6 +300,7 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
         robot: job.robot().clone(),
         limits: job.limits().clone(),
         travel: job.travel().clone(),
+        ceilings: job.ceilings().clone(),
         via_points_m: job.points_m().to_vec(),
         knots_m: p.knots.q.clone(),
         intervals_s: s.h.clone(),

@@ -218,6 +218,19 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             inst
         }
         PlanError::Solver(_) => new_error(py, &errs.solver, &msg)?,
+        // Against the machine: a field of the job, as InvalidJobError.
+        PlanError::OtherMachine { key, .. } => {
+            let inst = new_error(py, &errs.invalid_job, &msg)?;
+            inst.setattr("field", format!("robot.{key}"))?;
+            inst.setattr("reason", &msg)?;
+            inst
+        }
+        PlanError::AboveCeiling { limit, .. } => {
+            let inst = new_error(py, &errs.invalid_job, &msg)?;
+            inst.setattr("field", format!("limits.{limit}"))?;
+            inst.setattr("reason", &msg)?;
+            inst
+        }
         _ => new_error(py, &errs.base, &msg)?,
     };
     Ok(PyErr::from_value(inst))

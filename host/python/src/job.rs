@@ -12,6 +12,7 @@ use triquint_shared::plan::Objective;
 
 use crate::arrays::{floats, rows_array, shape_text};
 use crate::errors::{guard, internal_error, invalid_job, plan_error};
+use crate::machine::PyMachine;
 use crate::plan::PyPlan;
 use crate::robot::{PyRobot, robot_or_default};
 use crate::units::Units;
@@ -55,6 +56,7 @@ pub struct JobArgs<'a, 'py> {
     pub jerk: Option<f64>,
     pub torque: Option<f64>,
     pub robot: Option<&'a Bound<'py, PyRobot>>,
+    pub machine: Option<&'a Bound<'py, PyMachine>>,
 }
 
 impl JobArgs<'_, '_> {
@@ -74,6 +76,7 @@ impl JobArgs<'_, '_> {
         add("jerk", self.jerk.is_some());
         add("torque", self.torque.is_some());
         add("robot", self.robot.is_some());
+        add("machine", self.machine.is_some());
         v
     }
 }
@@ -103,11 +106,17 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
     }
     let scale = units.scale();
     let rows: Vec<[f64; 3]> = pts.rows3().iter().map(|p| p.map(|x| x * scale)).collect();
-    let robot = robot_or_default(args.robot);
+    let mut builder = Job::builder();
+    if let Some(m) = args.machine {
+        builder = builder.machine(&m.get().machine);
+    }
+    // A robot given with a machine must be the machine's.
+    if args.robot.is_some() || args.machine.is_none() {
+        builder = builder.robot(robot_or_default(args.robot));
+    }
     let job = guard(py, || {
-        Job::builder()
+        builder
             .objective(objective)
-            .robot(robot)
             .limits(limits)
             .points_m(rows)
             .build()
@@ -120,9 +129,10 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
 impl PyJob {
     #[new]
     #[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
-        velocity = None, acceleration = None, jerk = None, torque = None, robot = None),
+        velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
+        machine = None),
         text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
-            velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None)")]
+            velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -135,6 +145,7 @@ impl PyJob {
         jerk: Option<f64>,
         torque: Option<f64>,
         robot: Option<Bound<'_, PyRobot>>,
+        machine: Option<Bound<'_, PyMachine>>,
     ) -> PyResult<Self> {
         let args = JobArgs {
             units,
@@ -145,6 +156,7 @@ impl PyJob {
             jerk,
             torque,
             robot: robot.as_ref(),
+            machine: machine.as_ref(),
         };
         make_job(py, points, &args)
     }
@@ -155,11 +167,22 @@ impl PyJob {
     /// [limits], [path] with units and points or a points file relative to
     /// the job file). Errors of the file raise JobFileError with its path and
     /// line; errors of its contents InvalidJobError or OutsideWorkspaceError
-    /// (points in millimetres).
+    /// (points in millimetres). With `machine`, the job is held to it as
+    /// `triquint plan --machine` holds it (its [robot] must be the machine's,
+    /// its limits within the ceilings, its points inside the travel).
     #[classmethod]
-    fn from_toml(_cls: &Bound<'_, PyType>, py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, *, machine = None))]
+    fn from_toml(
+        _cls: &Bound<'_, PyType>,
+        py: Python<'_>,
+        path: PathBuf,
+        machine: Option<Bound<'_, PyMachine>>,
+    ) -> PyResult<Self> {
+        let machine = machine.map(|m| m.get().machine.clone());
         let job = guard(py, || {
-            Job::load(&path).map_err(|e| plan_error(py, e, Units::Millimetres))
+            Job::load_for(&path, machine.as_ref())
+                .map(|(job, _)| job)
+                .map_err(|e| plan_error(py, e, Units::Millimetres))
         })?;
         Ok(Self {
             job,
@@ -260,7 +283,9 @@ impl From<&Progress> for PyProgress {
 /// `points` is an (n, 3) array-like of platform positions in millimetres
 /// (`units="m"` for metres), or a `Job`; with a Job only `starts`, `seed`
 /// and `progress` may be given (TypeError otherwise). `robot` is a
-/// `Robot` (default: the paper's Table 1). `starts` starting interval sets
+/// `Robot` (default: the paper's Table 1); `machine` a `Machine`, whose
+/// robot, travel and ceilings the job is held to (a `robot` given with it
+/// must be its robot). `starts` starting interval sets
 /// of the global search (1 to 1000, as the CLI's `--starts`; ValueError
 /// otherwise), random ones seeded by `seed`: the same job, starts and seed
 /// give the same plan. `progress`, if given, is called about every
@@ -274,10 +299,10 @@ impl From<&Progress> for PyProgress {
 #[pyfunction]
 #[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
     velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
-    starts = 8, seed = 1, progress = None),
+    machine = None, starts = 8, seed = 1, progress = None),
     text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
-        velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, starts=8, \
-        seed=1, progress=None)")]
+        velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None, \
+        starts=8, seed=1, progress=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -290,6 +315,7 @@ pub fn plan(
     jerk: Option<f64>,
     torque: Option<f64>,
     robot: Option<Bound<'_, PyRobot>>,
+    machine: Option<Bound<'_, PyMachine>>,
     starts: usize,
     seed: u64,
     progress: Option<Bound<'_, PyAny>>,
@@ -303,6 +329,7 @@ pub fn plan(
         jerk,
         torque,
         robot: robot.as_ref(),
+        machine: machine.as_ref(),
     };
     if !(1..=triquint_planner::MAX_STARTS).contains(&starts) {
         return Err(PyValueError::new_err(format!(

@@ -10,6 +10,7 @@ mod arrays;
 mod errors;
 mod job;
 mod kin;
+mod machine;
 mod plan;
 mod robot;
 mod units;
@@ -74,6 +75,7 @@ fn triquint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<plan::PySamples>()?;
     m.add_class::<plan::PySegments>()?;
     m.add_class::<robot::PyRobot>()?;
+    m.add_class::<machine::PyMachine>()?;
     let e = errors::errors(py)?;
     m.add("TriquintError", e.base.bind(py))?;
     m.add("InvalidJobError", e.invalid_job.bind(py))?;
@@ -97,6 +99,7 @@ const PUBLIC: &[&str] = &[
     "fk",
     "torque",
     "Job",
+    "Machine",
     "Plan",
     "Progress",
     "Robot",

@@ -83,7 +83,7 @@ impl PySegments {
     }
 }
 
-/// A planned trajectory: the CLI's plan file (`triquint-plan/2`), so a plan
+/// A planned trajectory: the CLI's plan file (`triquint-plan/3`), so a plan
 /// made here goes to `triquint check`, `report`, `simulate` and `upload`,
 /// and a plan from `triquint plan` loads here. Everything is SI (m, m/s,
 /// m/s², m/s³, N·m, s). Make one with `triquint.plan`, `Plan.load` or
@@ -324,7 +324,7 @@ impl PyPlan {
 
     /// to_json() -> str
     ///
-    /// The plan file's text (`triquint-plan/2` JSON, as `triquint plan`
+    /// The plan file's text (`triquint-plan/3` JSON, as `triquint plan`
     /// writes it).
     fn to_json(&self) -> PyResult<String> {
         pretty(&self.plan)

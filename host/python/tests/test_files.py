@@ -13,8 +13,8 @@ from conftest import EXAMPLES
 def test_json_round_trip(case1):
     text = case1.to_json()
     doc = json.loads(text)
-    assert doc["format"] == "triquint-plan/2"
-    assert set(doc) == {"format", "objective", "robot", "limits", "travel", "via_points_m", "knots_m", "intervals_s",
+    assert doc["format"] == "triquint-plan/3"
+    assert set(doc) == {"format", "objective", "robot", "limits", "travel", "ceilings", "via_points_m", "knots_m", "intervals_s",
                         "total_time_s", "segments", "max_abs", "solver"}
     back = triquint.Plan.from_json(text)
     assert back == case1
@@ -48,7 +48,7 @@ def test_not_a_plan():
         triquint.Plan.from_json("{\"format\": 3}")
     assert e.value.kind == "json" and "line 1" in str(e.value)
     with pytest.raises(triquint.PlanFileError) as e:
-        triquint.Plan.from_json("{\"format\": \"triquint-plan/3\"}")
+        triquint.Plan.from_json("{\"format\": \"triquint-plan/4\"}")
     assert e.value.kind == "format"
     assert isinstance(e.value, ValueError)
 

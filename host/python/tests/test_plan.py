@@ -17,7 +17,7 @@ def test_paper_optima_at_5_s(case1, case2):
     for p in (case1, case2):
         assert p.duration == pytest.approx(5.0, abs=1e-9)
         assert p.objective == "min-max-jerk"
-        assert p.format == triquint.PLAN_FORMAT == "triquint-plan/2"
+        assert p.format == triquint.PLAN_FORMAT == "triquint-plan/3"
 
 
 def test_points_and_job_file_give_the_same_plan(case1):

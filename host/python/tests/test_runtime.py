@@ -19,7 +19,7 @@ STUB = pathlib.Path(__file__).resolve().parents[1] / "triquint.pyi"
 
 def test_version_and_format():
     assert triquint.__version__ == "0.1.0"
-    assert triquint.PLAN_FORMAT == "triquint-plan/2"
+    assert triquint.PLAN_FORMAT == "triquint-plan/3"
 
 
 def test_signatures_and_docstrings():

@@ -12,10 +12,13 @@ use crate::exit::{CliError, CliResult};
 pub struct CheckArgs {
     /// Plan file written by `triquint plan`.
     pub plan: PathBuf,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 pub fn run(args: &CheckArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
+    args.machine.check_plan(&plan, &args.plan)?;
     let rows = triquint_planner::check(&plan).map_err(|e| {
         CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
     })?;

@@ -24,6 +24,8 @@ pub struct ClearArgs {
     /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
     #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
     pub nodes: String,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {

@@ -5,8 +5,8 @@ use nalgebra::Vector3;
 use serde_json::json;
 use triquint_cli_common::outln;
 use triquint_shared::kinematics::Pose;
+use triquint_shared::machine::Machine;
 use triquint_shared::readable::readable;
-use triquint_shared::{Robot, Travel};
 
 use super::{finite, fmt_triple};
 use crate::exit::{CliError, CliResult};
@@ -23,16 +23,19 @@ pub struct FkArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
-pub fn run(args: &FkArgs, robot: &Robot) -> CliResult {
+pub fn run(args: &FkArgs, machine: &Machine) -> CliResult {
+    let robot = &machine.robot;
     let q_mm = Vector3::new(
         finite("Q1", &args.q1)?,
         finite("Q2", &args.q2)?,
         finite("Q3", &args.q3)?,
     );
     let q_m: [f64; 3] = (q_mm / 1000.0).into();
-    if let Some(o) = Travel::default().outside(&q_m) {
+    if let Some(o) = machine.travel().outside(&q_m) {
         return Err(CliError::bad_input(format!(
             "joints ({}, {}, {}) mm are outside the travel: {o}",
             readable(q_mm.x),

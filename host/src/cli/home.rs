@@ -11,8 +11,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use triquint_cli_common::outln;
 use triquint_link::Listener;
-use triquint_shared::Robot;
-use triquint_shared::protocol::config::HomingSettings;
+use triquint_shared::machine::Machine;
 use triquint_shared::protocol::{CommandCode, FaultCode, State, flags};
 
 use crate::exit::{CliError, CliResult};
@@ -25,6 +24,8 @@ use crate::ops::send::{send_command, send_emergency};
 pub struct HomeArgs {
     #[command(flatten)]
     pub bus: BusArgs,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 /// The host's emergency frame: every drive stops.
@@ -43,11 +44,12 @@ enum Progress {
     Failed(FaultCode),
 }
 
-pub fn run(args: &HomeArgs, robot: &Robot, homing: &HomingSettings) -> CliResult {
-    let bus = &args.bus;
+pub fn run(args: &HomeArgs, machine: &Machine) -> CliResult {
+    let bus = &args.bus.for_machine(machine);
+    let homing = &machine.homing;
     check_bus_args(bus)?;
     let ids = bus.ids()?;
-    configure(robot, homing, bus)?;
+    configure(machine, bus)?;
     let mut port = open(&bus.iface)?;
     // Every axis at once: the commands go out back to back (well within a tick).
     for (k, id) in ids.iter().enumerate() {

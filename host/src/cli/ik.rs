@@ -5,8 +5,8 @@ use nalgebra::Vector3;
 use serde_json::json;
 use triquint_cli_common::outln;
 use triquint_shared::kinematics::Pose;
+use triquint_shared::machine::Machine;
 use triquint_shared::readable::readable;
-use triquint_shared::{Robot, Travel};
 
 use super::{finite, fmt_triple};
 use crate::exit::{CliError, CliResult};
@@ -23,9 +23,12 @@ pub struct IkArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
-pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
+pub fn run(args: &IkArgs, machine: &Machine) -> CliResult {
+    let robot = &machine.robot;
     let r_mm = Vector3::new(
         finite("X", &args.x)?,
         finite("Y", &args.y)?,
@@ -40,7 +43,7 @@ pub fn run(args: &IkArgs, robot: &Robot) -> CliResult {
         ))
     })?;
     // A pose whose sliders stand outside their travel is no answer.
-    if let Some(o) = Travel::default().outside(&pose.q.into()) {
+    if let Some(o) = machine.travel().outside(&pose.q.into()) {
         return Err(CliError::bad_input(format!(
             "position ({}, {}, {}) mm is outside the travel: {o}",
             readable(r_mm.x),

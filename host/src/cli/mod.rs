@@ -36,39 +36,6 @@ pub fn fmt_triple(labels: [&str; 3], v: &Vector3<f64>, decimals: usize) -> Strin
         .join("  ")
 }
 
-/// With `--robot FILE`, a plan made for another robot is bad input: the
-/// error names the first parameter that differs.
-pub fn same_robot(robot_file: Option<&std::path::Path>, plan: &std::path::Path) -> CliResult {
-    let Some(file) = robot_file else {
-        return Ok(());
-    };
-    let robot = crate::robot_file::load_robot(Some(file))?;
-    let p = load_plan(plan)?;
-    if p.robot == robot {
-        return Ok(());
-    }
-    let (a, b) = (
-        serde_json::to_value(&p.robot).unwrap_or_default(),
-        serde_json::to_value(&robot).unwrap_or_default(),
-    );
-    let field = a
-        .as_object()
-        .and_then(|m| m.iter().find(|(k, v)| b.get(k.as_str()) != Some(*v)))
-        .map(|(k, v)| {
-            format!(
-                "`{k}` is {v} in the plan, {} in {}",
-                b[k.as_str()],
-                file.display()
-            )
-        })
-        .unwrap_or_default();
-    Err(CliError::bad_input(format!(
-        "{}: planned for another robot than {}: {field}",
-        plan.display(),
-        file.display()
-    )))
-}
-
 /// Reads a plan file through the planner's one loader; any failure is bad
 /// input (exit 2), with the path in the one-line message.
 pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {

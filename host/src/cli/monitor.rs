@@ -55,6 +55,8 @@ pub struct MonitorArgs {
     /// Stop after this many seconds.
     #[arg(long, value_name = "S")]
     pub duration: Option<f64>,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 fn json_value(v: &Value) -> Json {

@@ -6,9 +6,8 @@
 use clap::Args;
 use nalgebra::Vector3;
 use triquint_cli_common::outln;
-use triquint_shared::Robot;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::protocol::config::HomingSettings;
+use triquint_shared::machine::Machine;
 
 use crate::cli::finite;
 use crate::cli::keys::Keys;
@@ -34,16 +33,19 @@ pub struct MoveToArgs {
     /// Print the upload summary as JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
-pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResult {
+pub fn run(args: &MoveToArgs, machine: &Machine) -> CliResult {
+    let bus = &args.bus.for_machine(machine);
     let target_mm = Vector3::new(
         finite("X", &args.x)?,
         finite("Y", &args.y)?,
         finite("Z", &args.z)?,
     );
     let target = target_mm / 1000.0;
-    let m = robot.model::<f64>();
+    let m = machine.robot.model::<f64>();
     Pose::from_cartesian(&m, target).map_err(|e| {
         CliError::bad_input(format!(
             "target ({}, {}, {}) mm is not reachable: {e}",
@@ -52,14 +54,14 @@ pub fn run(args: &MoveToArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
             triquint_shared::readable::readable(target_mm.z)
         ))
     })?;
-    check_bus_args(&args.bus)?;
-    let q0 = reported_joints(robot, homing, &args.bus)?;
-    let Some(p) = plan_move(robot, q0, target)? else {
+    check_bus_args(bus)?;
+    let q0 = reported_joints(machine, bus)?;
+    let Some(p) = plan_move(machine, q0, target)? else {
         outln!("already within 1 µm of the target on every axis")?;
         return Ok(());
     };
     let mut keys = Keys::open(1000);
-    let summary = run_plan(&p, &args.bus, homing, false, keys.as_mut())?;
+    let summary = run_plan(&p, bus, machine, false, keys.as_mut())?;
     drop(keys);
-    report(&summary, &args.bus, args.json)
+    report(&summary, bus, args.json)
 }

@@ -44,6 +44,8 @@ pub struct PlanArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 /// The search's progress on stderr, and Ctrl-C as cancellation.
@@ -94,7 +96,11 @@ impl Watcher {
 
 pub fn run(args: &PlanArgs) -> CliResult {
     let starts = parse_starts(&args.starts)?;
-    let (job, inputs) = Job::load_with_files(&args.job).map_err(plan_error)?;
+    let machine = match &args.machine.file {
+        Some(_) => Some(args.machine.load()?),
+        None => None,
+    };
+    let (job, inputs) = Job::load_for(&args.job, machine.as_ref()).map_err(plan_error)?;
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let to_stdout = args.output.as_os_str() == "-";
     // Refused outputs before the search, so they cost nothing.

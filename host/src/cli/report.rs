@@ -19,10 +19,13 @@ pub struct ReportArgs {
     /// Print the statistics as JSON instead of tables.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 pub fn run(args: &ReportArgs) -> CliResult {
     let plan = load_plan(&args.plan)?;
+    args.machine.check_plan(&plan, &args.plan)?;
     let bad = |e: ReportError| CliError::bad_input(format!("{}: {e}", args.plan.display()));
     let stats = plan_stats(&plan).map_err(|e| bad(e.into()))?;
     // Plots first, so a failure leaves no half-printed report; all of them

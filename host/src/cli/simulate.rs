@@ -22,9 +22,10 @@ pub struct SimulateArgs {
     /// Drives run feedback only (same gains).
     #[arg(long)]
     pub no_feedforward: bool,
-    /// Control tick rate of the drives (Hz), 1000 to 10000 (`triquint_cli_common::parse::RATE_HZ`).
-    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
-    pub rate: f64,
+    /// Control tick rate of the drives (Hz), 1000 to 10000
+    /// [default: the machine file's `drive.control_rate`].
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -32,6 +33,8 @@ pub struct SimulateArgs {
     /// tracking error, torque command, feedforward against the total, overview.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 fn to_cli(e: SimulateError) -> CliError {
@@ -48,12 +51,17 @@ fn to_cli(e: SimulateError) -> CliError {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult {
-    triquint_cli_common::parse::check_rate("--rate", args.rate)?;
     let plan = crate::cli::load_plan(&args.plan)?;
+    let machine = args.machine.load()?;
+    let rate_hz = args.rate.unwrap_or(machine.drive.control_rate);
+    triquint_cli_common::parse::check_rate("--rate", rate_hz)?;
+    crate::machine_arg::plan_for_machine(&plan, &args.plan, &machine, &args.machine.shown())?;
+    crate::machine_arg::verified(&plan, &args.plan)?;
     let opts = SimulateOptions {
+        settings: machine.drive_settings(),
         fd: args.fd,
         feedforward: !args.no_feedforward,
-        rate_hz: args.rate,
+        rate_hz,
         ..SimulateOptions::default()
     };
     let report = simulate(&plan, &opts).map_err(to_cli)?;

@@ -27,6 +27,8 @@ pub struct StatusArgs {
     /// How long to listen (s): long enough for a few heartbeats.
     #[arg(long, default_value_t = 0.5, value_name = "S")]
     pub wait: f64,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 /// Listens to the drives of `ids` for up to `wait` seconds.

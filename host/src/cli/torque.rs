@@ -23,6 +23,8 @@ pub struct TorqueArgs {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 pub fn run(args: &TorqueArgs, robot: &Robot) -> CliResult {

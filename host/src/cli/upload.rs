@@ -10,9 +10,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use triquint_cli_common::outln;
-use triquint_shared::Robot;
+use triquint_shared::machine::Machine;
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
+use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, State};
 
 use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, open_host};
@@ -20,6 +20,7 @@ use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions, open_host};
 use crate::cli::keys::Keys;
 use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult, Status};
+use crate::machine_arg::{plan_for_machine, verified};
 use crate::ops::bus::{BusArgs, check_bus_args, upload_error};
 use crate::ops::joints::reported_joints;
 use crate::ops::plan_move::plan_move;
@@ -41,6 +42,8 @@ pub struct UploadArgs {
     /// report the platform to the plan's start, then the plan.
     #[arg(long)]
     pub approach: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
 }
 
 /// What an upload did.
@@ -108,16 +111,15 @@ fn progress_message(p: &triquint_link::Progress, keys: bool) -> String {
 pub fn run_plan(
     plan: &Plan,
     bus: &BusArgs,
-    homing: &HomingSettings,
+    machine: &Machine,
     clear: bool,
     mut keys: Option<&mut Keys>,
 ) -> CliResult<UploadSummary> {
     check_bus_args(bus)?;
     let settings = DriveSettings {
-        control_rate: bus.rate,
+        control_rate: bus.rate(),
         node_ids: bus.ids()?,
-        homing: homing.clone(),
-        ..DriveSettings::default()
+        ..machine.drive_settings()
     };
     let configs = DriveConfigs::for_plan(plan, &settings).map_err(CliError::bad_input)?;
     let override_cap = configs.override_cap;
@@ -253,9 +255,12 @@ pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
     }))
 }
 
-pub fn run(args: &UploadArgs, robot: &Robot, homing: &HomingSettings) -> CliResult {
+pub fn run(args: &UploadArgs, machine: &Machine) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    check_bus_args(&args.bus)?;
+    let bus = &args.bus.for_machine(machine);
+    check_bus_args(bus)?;
+    plan_for_machine(&plan, &args.plan, machine, &args.machine.shown())?;
+    verified(&plan, &args.plan)?;
     let mut keys = Keys::open(1000);
     if args.approach {
         let start = plan.via_points_m.first().copied().ok_or_else(|| {
@@ -264,39 +269,28 @@ pub fn run(args: &UploadArgs, robot: &Robot, homing: &HomingSettings) -> CliResu
                 args.plan.display()
             ))
         })?;
-        let approach = approach_plan(&plan, robot, homing, &args.bus, start)?;
+        let approach = approach_plan(machine, bus, start)?;
         if let Some(p) = approach {
             triquint_cli_common::errln!(
                 "approach: {} segments, {:.3} s, to the plan's start",
                 p.segments.len(),
                 p.total_time_s
             );
-            let s = run_plan(&p, &args.bus, homing, args.clear, keys.as_mut())?;
+            let s = run_plan(&p, bus, machine, args.clear, keys.as_mut())?;
             if !(s.completed && s.faults.is_empty()) {
                 triquint_cli_common::errln!("the approach did not complete; the plan is not run");
-                return report(&s, &args.bus, args.json);
+                return report(&s, bus, args.json);
             }
         }
     }
-    let summary = run_plan(&plan, &args.bus, homing, args.clear, keys.as_mut())?;
+    let summary = run_plan(&plan, bus, machine, args.clear, keys.as_mut())?;
     drop(keys);
-    report(&summary, &args.bus, args.json)
+    report(&summary, bus, args.json)
 }
 
 /// The minimum-time move (the planner of `move-to`) from where the drives
 /// report the platform to `start` (m); `None` if already there.
-fn approach_plan(
-    plan: &Plan,
-    robot: &Robot,
-    homing: &HomingSettings,
-    bus: &BusArgs,
-    start: [f64; 3],
-) -> CliResult<Option<Plan>> {
-    if *robot != plan.robot {
-        return Err(CliError::bad_input(
-            "--approach: the plan is for another robot than --robot's",
-        ));
-    }
-    let q0 = reported_joints(robot, homing, bus)?;
-    plan_move(robot, q0, start.into())
+fn approach_plan(machine: &Machine, bus: &BusArgs, start: [f64; 3]) -> CliResult<Option<Plan>> {
+    let q0 = reported_joints(machine, bus)?;
+    plan_move(machine, q0, start.into())
 }

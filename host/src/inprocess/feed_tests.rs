@@ -400,9 +400,13 @@ fn approach_then_case2_completes_from_the_power_on_and_home_poses() {
         .q;
     for (name, q0) in [("power-on", power_on), ("homed", homed)] {
         let start = Vector3::from(plan.via_points_m[0]);
-        let approach = crate::ops::plan_move::plan_move(&plan.robot, q0, start)
-            .unwrap()
-            .expect("not at the start");
+        let approach = crate::ops::plan_move::plan_move(
+            &triquint_shared::machine::Machine::default(),
+            q0,
+            start,
+        )
+        .unwrap()
+        .expect("not at the start");
         let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
         let mut sent = false;
         let a = run_on(&mut sim, &approach, SessionOptions::default(), |_, _| {

@@ -109,7 +109,10 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
     let mut sim_cfg = opts.sim.clone();
     sim_cfg.fd = opts.fd;
     sim_cfg.rate_hz = opts.rate_hz;
-    sim_cfg.counts_per_metre = settings.counts_per_metre[0];
+    // The simulated machine is the configured one: its encoder scales and
+    // motor directions are the settings'.
+    sim_cfg.counts_per_metre = settings.counts_per_metre;
+    sim_cfg.motor_direction = settings.direction;
     // Record at most 1 kHz.
     sim_cfg.record_every = (opts.rate_hz / 1000.0).round().max(1.0) as u32;
     let q0 = plan

@@ -3,6 +3,7 @@
 
 use clap::Args;
 use triquint_link::UploadError;
+use triquint_shared::machine::Machine;
 
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::nodes_arg;
@@ -16,26 +17,50 @@ pub struct BusArgs {
     /// CAN-FD: 64-byte segment frames (the interface needs MTU 72).
     #[arg(long)]
     pub fd: bool,
-    /// Control tick rate the drives are configured for (Hz), 1000 to 10000.
-    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
-    pub rate: f64,
+    /// Control tick rate the drives are configured for (Hz), 1000 to
+    /// 10000 [default: the machine file's `drive.control_rate`].
+    #[arg(long = "rate", value_name = "HZ")]
+    pub rate_arg: Option<f64>,
     /// How long a node may stay silent before the upload fails (s).
     #[arg(long, default_value_t = 2.0, value_name = "S")]
     pub timeout: f64,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15) [default: the
+    /// machine file's `axis.N.node_id`].
+    #[arg(long = "nodes", value_name = "A,B,C")]
+    pub nodes_arg: Option<String>,
+    /// What the flags leave open, from the machine ([`BusArgs::for_machine`]).
+    #[arg(skip)]
+    pub machine_ids: Option<[u8; 3]>,
+    #[arg(skip)]
+    pub machine_rate: Option<f64>,
 }
 
 impl BusArgs {
-    /// The node ids of `--nodes`.
+    /// The flags, with the machine's node ids and rate where none is given.
+    pub fn for_machine(&self, machine: &Machine) -> Self {
+        Self {
+            machine_ids: Some(machine.axes.each_ref().map(|a| a.node_id)),
+            machine_rate: Some(machine.drive.control_rate),
+            ..self.clone()
+        }
+    }
+
+    /// The node ids of `--nodes`, else the machine's, else 1, 2, 3.
     pub fn ids(&self) -> CliResult<[u8; 3]> {
-        triquint_cli_common::parse::parse_axis_nodes("--nodes", &self.nodes)
+        match &self.nodes_arg {
+            Some(n) => triquint_cli_common::parse::parse_axis_nodes("--nodes", n),
+            None => Ok(self.machine_ids.unwrap_or([1, 2, 3])),
+        }
+    }
+
+    /// The control rate of `--rate`, else the machine's, else 1 kHz.
+    pub fn rate(&self) -> f64 {
+        self.rate_arg.or(self.machine_rate).unwrap_or(1000.0)
     }
 }
 
 pub fn check_bus_args(b: &BusArgs) -> CliResult {
-    triquint_cli_common::parse::check_rate("--rate", b.rate)?;
+    triquint_cli_common::parse::check_rate("--rate", b.rate())?;
     if !(b.timeout.is_finite() && b.timeout > 0.0) {
         return Err(CliError::bad_input(format!(
             "--timeout {}: must be a positive number of seconds",

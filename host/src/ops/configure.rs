@@ -3,22 +3,23 @@
 use std::time::Duration;
 
 use triquint_link::{DriveConfigs, Session, SessionOptions, UploadError};
-use triquint_shared::protocol::config::{DriveSettings, HomingSettings};
-use triquint_shared::{Limits, Robot};
+use triquint_shared::Limits;
+use triquint_shared::machine::Machine;
+use triquint_shared::protocol::config::DriveSettings;
 
 use crate::exit::{CliError, CliResult};
 use crate::ops::bus::{BusArgs, upload_error};
 
 /// Writes and commits the drives' configuration (limits-sized, with the
 /// homing settings), without motion.
-pub fn configure(robot: &Robot, homing: &HomingSettings, bus: &BusArgs) -> CliResult {
+pub fn configure(machine: &Machine, bus: &BusArgs) -> CliResult {
     let settings = DriveSettings {
-        control_rate: bus.rate,
+        control_rate: bus.rate(),
         node_ids: bus.ids()?,
-        homing: homing.clone(),
-        ..DriveSettings::default()
+        ..machine.drive_settings()
     };
-    let configs = DriveConfigs::for_limits(robot, &Limits::default(), &settings).nodes;
+    let configs =
+        DriveConfigs::for_limits(&machine.robot, &machine_limits(machine), &settings).nodes;
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout * 1e6) as u64,
@@ -38,5 +39,19 @@ pub fn configure(robot: &Robot, homing: &HomingSettings, bus: &BusArgs) -> CliRe
             }
             Err(e) => return Err(upload_error(e, bus)),
         }
+    }
+}
+
+/// The default limits held to the machine's ceilings: what the drives are
+/// configured with before there is a plan, and what `move-to` plans with.
+pub fn machine_limits(machine: &Machine) -> Limits {
+    let c = machine.effective_ceilings();
+    let d = Limits::default();
+    Limits {
+        velocity: d.velocity.min(c.velocity),
+        acceleration: d.acceleration.min(c.acceleration),
+        jerk: d.jerk.min(c.jerk),
+        torque: d.torque.min(c.torque),
+        total_time: d.total_time,
     }
 }

@@ -4,8 +4,7 @@ use std::time::Duration;
 
 use nalgebra::Vector3;
 use triquint_link::{Listener, SocketCanPort};
-use triquint_shared::Robot;
-use triquint_shared::protocol::config::HomingSettings;
+use triquint_shared::machine::Machine;
 
 use crate::exit::{CliError, CliResult};
 use crate::ops::bus::BusArgs;
@@ -29,16 +28,12 @@ fn listen_positions(
 
 /// Where the drives on `bus` report the joints (m), configuring them first
 /// if they do not report a position; refused when one is not homed.
-pub fn reported_joints(
-    robot: &Robot,
-    homing: &HomingSettings,
-    bus: &BusArgs,
-) -> CliResult<Vector3<f64>> {
+pub fn reported_joints(machine: &Machine, bus: &BusArgs) -> CliResult<Vector3<f64>> {
     let ids = bus.ids()?;
     let mut port = open(&bus.iface)?;
     let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
     if q.iter().any(Option::is_none) {
-        configure(robot, homing, bus)?;
+        configure(machine, bus)?;
         (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout))?;
     }
     drop(port);

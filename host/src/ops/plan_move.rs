@@ -2,12 +2,14 @@
 
 use nalgebra::Vector3;
 use triquint_planner::{Job, Objective, Options, Plan, plan};
+use triquint_shared::Travel;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::{Limits, Robot, Travel};
+use triquint_shared::machine::Machine;
 
 use crate::exit::{CliError, CliResult, plan_error};
 
-/// The minimum-time, minimum-jerk move within the default limits from
+/// The minimum-time, minimum-jerk move within the default limits (held to
+/// the machine's ceilings) from
 /// joints `q0` (m) to the platform at `target` (m); `None` when every axis
 /// is within 1 µm of it already.
 ///
@@ -15,8 +17,12 @@ use crate::exit::{CliError, CliResult, plan_error};
 /// a slider between the travel's end and its switch, so the move's travel
 /// is widened to take in where the sliders are, and the move only heads
 /// back inside.
-pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliResult<Option<Plan>> {
-    let m = robot.model::<f64>();
+pub fn plan_move(
+    machine: &Machine,
+    q0: Vector3<f64>,
+    target: Vector3<f64>,
+) -> CliResult<Option<Plan>> {
+    let m = machine.robot.model::<f64>();
     let start = Pose::from_joints(&m, q0).map_err(|e| {
         CliError::device(format!(
             "the drives report joints {:?} m, which have no valid pose: {e}",
@@ -33,7 +39,7 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
         target.y * 1e3,
         target.z * 1e3
     );
-    let travel = Travel::default();
+    let travel = machine.travel();
     if let Some(e) = travel.outside(&goal.q.into()) {
         return Err(CliError::bad_input(format!(
             "the target ({:.3}, {:.3}, {:.3}) mm is outside the travel: {e}",
@@ -47,8 +53,8 @@ pub fn plan_move(robot: &Robot, q0: Vector3<f64>, target: Vector3<f64>) -> CliRe
     }
     let job = Job::builder()
         .objective(Objective::MinTime)
-        .robot(robot.clone())
-        .limits(Limits::default())
+        .machine(machine)
+        .limits(crate::ops::configure::machine_limits(machine))
         .travel(travel_from(&travel, q0))
         .points_m([start.r.into(), target.into()])
         .build()
@@ -86,11 +92,11 @@ mod tests {
 
     #[test]
     fn a_move_from_the_homing_rest_heads_back_inside_the_travel() {
-        let robot = Robot::default();
+        let machine = Machine::default();
         let travel = Travel::default();
         assert!(HOMED_M > travel.max[0]);
         let q0 = Vector3::repeat(HOMED_M);
-        let p = plan_move(&robot, q0, Vector3::new(-0.09, 0.09, 0.68))
+        let p = plan_move(&machine, q0, Vector3::new(-0.09, 0.09, 0.68))
             .expect("planned")
             .expect("a move");
         let end = p.segments.last().unwrap().quintic().end();
@@ -99,8 +105,8 @@ mod tests {
 
     #[test]
     fn a_target_outside_the_travel_is_bad_input() {
-        let robot = Robot::default();
-        let e = plan_move(&robot, Vector3::repeat(0.3), Vector3::new(0.0, 0.0, 0.1)).unwrap_err();
+        let machine = Machine::default();
+        let e = plan_move(&machine, Vector3::repeat(0.3), Vector3::new(0.0, 0.0, 0.1)).unwrap_err();
         assert!(e.to_string().contains("outside the travel"), "{e}");
     }
 

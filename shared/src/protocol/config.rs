@@ -330,36 +330,6 @@ impl Default for HomingSettings {
 /// The loop bandwidth every plan runs with (Hz). Not tuned per plan.
 pub const DEFAULT_BANDWIDTH_HZ: f64 = 10.0;
 
-impl Default for DriveSettings {
-    fn default() -> Self {
-        // A 17-bit encoder on a 10 mm lead: 2^17 counts per 10 mm.
-        let cpm = 131_072.0 / 0.010;
-        Self {
-            bandwidth_hz: DEFAULT_BANDWIDTH_HZ,
-            direction: [1.0; 3],
-            counts_per_metre: [cpm; 3],
-            following_error_max: 1.0e-3,
-            arm_tolerance: 0.2e-3,
-            underrun_margin: 0.05,
-            sync_timeout: 0.25,
-            control_rate: 1000.0,
-            telemetry_rate: 50.0,
-            heartbeat_period: 0.1,
-            feedforward: true,
-            velocity_filter: 300.0,
-            // An identification 20 % short of the virtual machine's 6 N and 30 N·s/m.
-            friction_coulomb: 4.8,
-            friction_viscous: 24.0,
-            torque_constant: [0.08; 3],
-            // The paper machine's sliders stay within 0.08–0.41 m in every
-            // test plan; its guideway travel is assumed to be 0–0.8 m.
-            soft_limits: [[0.0, 0.8]; 3],
-            node_ids: [1, 2, 3],
-            homing: HomingSettings::default(),
-        }
-    }
-}
-
 /// Inertia of one axis seen at the motor (kg m²): rotor plus the slider, half
 /// a strut and a third of the platform reflected through the screw.
 pub fn axis_inertia(robot: &Robot) -> f64 {

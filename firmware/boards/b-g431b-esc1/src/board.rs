@@ -3,6 +3,8 @@
 //! encoder scale, limits and soft limits; not the current sensing or the
 //! motor's poles).
 
+use triquint_shared::machine::boards;
+
 /// Node id when flash holds none (1–15); `TRIQUINT_NODE_ID=2 cargo run --release`
 /// programs another, which is then kept in flash. A committed configuration
 /// with another `node_id` renumbers the board from its next start. Anything
@@ -16,11 +18,12 @@ pub const DEFAULT_NODE_ID: u8 = match option_env!("TRIQUINT_NODE_ID") {
     None => 1,
 };
 /// |Iq| limit (A); the ESC1 is rated 40 A peak.
-pub const MAX_CURRENT: f32 = 15.0;
+pub const MAX_CURRENT: f32 = boards::B_G431B_ESC1_MAX_CURRENT;
 /// Motor pole pairs.
 pub const POLE_PAIRS: f32 = 7.0;
-/// Encoder counts per motor revolution (quadrature edges).
-pub const COUNTS_PER_REV: f32 = 4096.0;
+/// Encoder counts per motor revolution (quadrature edges); the machine
+/// file's `counts_per_rev` must say the same.
+pub const COUNTS_PER_REV: f32 = boards::B_G431B_ESC1_COUNTS_PER_REV as f32;
 /// Phase current per ADC count: 3 mΩ shunt, op-amp gain 9.14, 12 bit on 3.3 V.
 pub const AMPS_PER_COUNT: f32 = 3.3 / 4096.0 / (0.003 * 9.14);
 /// ADC count at zero current (1.65 V bias).
