@@ -34,7 +34,7 @@ d.get("solver", {}).pop("seconds", None)
 if d.get("format") in ("triquint-plan/1", "triquint-plan/2"):
     d["format"] = "triquint-plan/3"
     d.setdefault("travel", {"min": [0.05] * 3, "max": [0.415] * 3})
-    d.setdefault("ceilings", {"velocity": 1.0, "acceleration": 10.0, "jerk": 100.0, "torque": 10.0})
+    d.setdefault("ceilings", {"velocity": 1e6, "acceleration": 1e6, "jerk": 1e6, "torque": 1e6})
 print(json.dumps(d, sort_keys=True))' "$1"; }
 
 fail=0

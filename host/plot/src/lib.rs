@@ -57,19 +57,20 @@ const GRID: RGBColor = RGBColor(0xe4, 0xe4, 0xe4);
 const NOTE: RGBColor = RGBColor(0x50, 0x50, 0x50);
 
 /// Why a chart could not be drawn.
-#[derive(Debug)]
-pub struct PlotError(String);
-
-impl std::fmt::Display for PlotError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "drawing a chart: {}", self.0)
-    }
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlotError {
+    /// The font compiled into the crate did not register.
+    #[error("drawing a chart: the embedded font is not a font")]
+    Font,
+    /// plotters' drawing area or SVG backend failed: its message (its
+    /// error type is generic over the backend).
+    #[error("drawing a chart: {0}")]
+    Backend(String),
 }
 
-impl std::error::Error for PlotError {}
-
 fn err(e: impl std::fmt::Display) -> PlotError {
-    PlotError(e.to_string())
+    PlotError::Backend(e.to_string())
 }
 
 /// Registers the embedded font once (plotters keeps a global table).
@@ -81,7 +82,7 @@ fn font_ready() -> Result<(), PlotError> {
     if ok {
         Ok(())
     } else {
-        Err(PlotError("the embedded font is not a font".into()))
+        Err(PlotError::Font)
     }
 }
 

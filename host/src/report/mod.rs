@@ -25,6 +25,9 @@ pub enum ReportError {
     /// The plan file is structurally wrong (beyond what serde checks).
     #[error("not a valid plan: {0}")]
     Invalid(String),
+    /// A chart could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] triquint_plot::PlotError),
     /// The dynamics (forward kinematics) failed along the trajectory.
     #[error("segment {segment} at t = {time_s:.6} s: {source}")]
     Kinematics {

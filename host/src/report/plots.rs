@@ -212,7 +212,7 @@ pub fn plots(plan: &Plan, stats: &PlanStats) -> Result<Vec<(&'static str, String
     .panel(jerk.clone())
     .panel(torque.clone())
     .panel(path.clone());
-    let svg = |r: Result<String, PlotError>| r.map_err(|e| ReportError::Invalid(e.to_string()));
+    let svg = |r: Result<String, PlotError>| r.map_err(ReportError::from);
     Ok(vec![
         ("position.svg", svg(position.to_svg())?),
         ("velocity.svg", svg(velocity.to_svg())?),

@@ -197,7 +197,7 @@ pub fn sim_plots(
     .panel(error.clone())
     .panel(torque.clone())
     .panel(ff.clone());
-    let svg = |c: Result<String, PlotError>| c.map_err(|e| ReportError::Invalid(e.to_string()));
+    let svg = |c: Result<String, PlotError>| c.map_err(ReportError::from);
     Ok(vec![
         ("position.svg", svg(position.to_svg())?),
         ("tracking_error.svg", svg(error.to_svg())?),
