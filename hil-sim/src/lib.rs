@@ -20,6 +20,7 @@ pub mod proxy;
 pub mod realtime;
 pub mod report;
 pub mod sim;
+pub mod test_reference;
 pub mod testplan;
 pub mod vibration;
 

@@ -21,9 +21,11 @@ pub enum PlantKind {
 
 /// The plant of a virtual machine.
 #[derive(Clone, Debug)]
+// One per machine, never in a collection: the size difference costs nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum PlantModel {
     Rigid(Plant),
-    Flexible(Box<FlexPlant>),
+    Flexible(FlexPlant),
 }
 
 impl PlantModel {
@@ -38,9 +40,7 @@ impl PlantModel {
     ) -> Result<Self, FlexError> {
         Ok(match kind {
             PlantKind::Rigid => Self::Rigid(Plant::new(nominal, cfg, q0)),
-            PlantKind::Flexible => {
-                Self::Flexible(Box::new(FlexPlant::new(nominal, cfg, flex.clone(), q0)?))
-            }
+            PlantKind::Flexible => Self::Flexible(FlexPlant::new(nominal, cfg, flex.clone(), q0)?),
         })
     }
 

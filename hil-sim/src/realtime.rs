@@ -452,6 +452,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
                 .map_or(0.0, |n| n.max_stop_jerk as f64)
         }),
         fault_run: None,
+        vibration: None,
     }
 }
 

@@ -72,6 +72,30 @@ pub fn residual(
     })
 }
 
+/// The amplitude (m/s²) of the platform's acceleration at `hz` over
+/// `[from_s, from_s + window_s]`: the largest over the three axes of the
+/// Fourier coefficient's magnitude, 2|Σ a e^{−iωt}|/n. Picks one mode out of
+/// the noise of the others.
+pub fn amplitude_at(record: &[AccelSample], from_s: f64, window_s: f64, hz: f64) -> f64 {
+    let w: Vec<&AccelSample> = record
+        .iter()
+        .filter(|s| s.t_s >= from_s && s.t_s <= from_s + window_s)
+        .collect();
+    if w.is_empty() {
+        return 0.0;
+    }
+    let omega = 2.0 * std::f64::consts::PI * hz;
+    (0..3)
+        .map(|k| {
+            let (re, im) = w.iter().fold((0.0, 0.0), |(re, im), s| {
+                let ph = omega * (s.t_s - from_s);
+                (re + s.accel[k] * ph.cos(), im + s.accel[k] * ph.sin())
+            });
+            2.0 * (re * re + im * im).sqrt() / w.len() as f64
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Lowest and highest frequency searched (Hz), and the grid step.
 const SCAN_HZ: (f64, f64, f64) = (2.0, 400.0, 0.05);
 
@@ -143,6 +167,16 @@ mod tests {
         assert!(r.rms_accel_m_s2 < r.peak_accel_m_s2 / 2.0_f64.sqrt());
         assert!((r.peak_position_m * w * w - r.peak_accel_m_s2).abs() < 1e-9);
         assert_eq!(r.samples, 1601);
+        // A steady sine's amplitude is recovered; a far frequency sees little.
+        let steady: Vec<AccelSample> = rec
+            .iter()
+            .map(|s| AccelSample {
+                accel: [0.0, amp * (w * s.t_s).sin(), 0.0],
+                ..*s
+            })
+            .collect();
+        assert!((amplitude_at(&steady, 0.0, 1.0, f) - amp).abs() < 0.01 * amp);
+        assert!(amplitude_at(&steady, 0.0, 1.0, 3.0 * f) < 0.02 * amp);
         // Nothing in the window, nothing to say.
         assert!(residual(&rec, 2.0, 0.5, Vector3::zeros()).is_none());
         assert_eq!(dominant_hz(&[(0.0, 1.0); 20]), None);

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use triquint_shared::plan::Plan;
+use triquint_sim::plant_model::PlantKind;
 use triquint_sim::report::JsonFault;
 
 use triquint_cli_common::outln;
@@ -25,6 +26,10 @@ pub struct SimulateArgs {
     /// Control tick rate of the drives (Hz), 1000 to 10000 (`triquint_cli_common::parse::RATE_HZ`).
     #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
     pub rate: f64,
+    /// The machine: rigid, or flexible (screw and strut compliance, current-loop
+    /// lag, an accelerometer on the platform: adds the residual vibration).
+    #[arg(long, value_enum, default_value_t = PlantKind::Rigid)]
+    pub plant: PlantKind,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -54,6 +59,7 @@ pub fn run(args: &SimulateArgs) -> CliResult {
         fd: args.fd,
         feedforward: !args.no_feedforward,
         rate_hz: args.rate,
+        plant: args.plant,
         ..SimulateOptions::default()
     };
     let report = simulate(&plan, &opts).map_err(to_cli)?;
@@ -134,6 +140,18 @@ fn print_human(
         r.run.stop_ramp_s,
         r.f32_eval_error_m
     )?;
+    if let Some(v) = &r.run.vibration {
+        outln!(
+            "residual vibration over {:.2} s after the end: acceleration peak {:.4} RMS {:.4} m/s², position peak {:.3} RMS {:.3} µm{}",
+            v.window_s,
+            v.peak_accel_m_s2,
+            v.rms_accel_m_s2,
+            v.peak_position_m * 1e6,
+            v.rms_position_m * 1e6,
+            v.dominant_hz
+                .map_or(String::new(), |f| format!(", at {f:.1} Hz"))
+        )?;
+    }
     if faults.is_empty() {
         outln!("completed: {}, no faults", r.run.completed)?;
     } else {
