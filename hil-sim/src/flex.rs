@@ -414,6 +414,25 @@ impl FlexPlant {
         Ok(())
     }
 
+    /// The residual vibration over `window_s` from `from_s` (plant time),
+    /// the rotors held at `qm` (m): the platform's rest and lowest mode there.
+    pub fn residual(
+        &self,
+        from_s: f64,
+        window_s: f64,
+        qm: Vector3<f64>,
+    ) -> Result<Option<crate::vibration::Residual>, KinematicsError> {
+        let (_, rest) = self.rest(qm)?;
+        let lowest = self.modes(rest)?.first().map(|m| m.hz);
+        Ok(crate::vibration::residual(
+            &self.accel,
+            from_s,
+            window_s,
+            rest,
+            lowest,
+        ))
+    }
+
     /// The modes of the machine linearised at the platform pose `r` with
     /// the motors held (the rotor is two orders of magnitude heavier than
     /// what it carries, and the servo holds it besides): sliders and

@@ -121,7 +121,7 @@ pub struct LawRun {
     pub plant: PlantModel,
     pub start_s: f64,
     pub end_s: f64,
-    /// Largest |reference − encoder| of any axis (m).
+    /// Largest |reference − encoder| of any axis from the reference's start (m).
     pub max_error_m: f64,
 }
 
@@ -169,7 +169,9 @@ pub fn run(
                 0.0
             };
             let out = law::step(&mut law_state[i], &gains[i], r.q[i] as f32, measured, ff);
-            max_error = max_error.max(f64::from(out.error).abs());
+            if t >= 0.0 {
+                max_error = max_error.max(f64::from(out.error).abs());
+            }
             command[i] = f64::from(out.torque * c.direction);
         }
         // One tick of actuation delay, as on a drive.

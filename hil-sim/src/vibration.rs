@@ -27,15 +27,21 @@ pub struct Residual {
     /// The frequency that dominates the acceleration in the window (Hz;
     /// none when the window is too short or silent).
     pub dominant_hz: Option<f64>,
+    /// The machine's lowest mode at the rest pose (Hz), and the
+    /// acceleration's amplitude there ([`amplitude_at`], m/s²): one mode
+    /// picked out of the floor the others make.
+    pub lowest_mode_hz: Option<f64>,
+    pub lowest_mode_m_s2: Option<f64>,
 }
 
 /// The residual over `[from_s, from_s + window_s]` of `record`, the platform
-/// coming to rest at `rest` (m).
+/// coming to rest at `rest` (m), with the amplitude at `lowest_mode_hz`.
 pub fn residual(
     record: &[AccelSample],
     from_s: f64,
     window_s: f64,
     rest: Vector3<f64>,
+    lowest_mode_hz: Option<f64>,
 ) -> Option<Residual> {
     let w: Vec<&AccelSample> = record
         .iter()
@@ -69,6 +75,8 @@ pub fn residual(
         peak_position_m: peak(&pos),
         rms_position_m: rms(&pos),
         dominant_hz: dominant_hz(&trace),
+        lowest_mode_hz,
+        lowest_mode_m_s2: lowest_mode_hz.map(|f| amplitude_at(record, from_s, window_s, f)),
     })
 }
 
@@ -158,7 +166,8 @@ mod tests {
                 }
             })
             .collect();
-        let r = residual(&rec, 0.0, 0.5, Vector3::new(0.0, 0.0, 0.5)).unwrap();
+        let r = residual(&rec, 0.0, 0.5, Vector3::new(0.0, 0.0, 0.5), Some(f)).unwrap();
+        assert!(r.lowest_mode_m_s2.unwrap() > 0.1 * amp);
         assert!((r.dominant_hz.unwrap() - f).abs() < 0.2, "{r:?}");
         assert!(
             r.peak_accel_m_s2 <= amp && r.peak_accel_m_s2 > 0.8 * amp,
@@ -178,7 +187,7 @@ mod tests {
         assert!((amplitude_at(&steady, 0.0, 1.0, f) - amp).abs() < 0.01 * amp);
         assert!(amplitude_at(&steady, 0.0, 1.0, 3.0 * f) < 0.02 * amp);
         // Nothing in the window, nothing to say.
-        assert!(residual(&rec, 2.0, 0.5, Vector3::zeros()).is_none());
+        assert!(residual(&rec, 2.0, 0.5, Vector3::zeros(), None).is_none());
         assert_eq!(dominant_hz(&[(0.0, 1.0); 20]), None);
     }
 }

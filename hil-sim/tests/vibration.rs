@@ -14,7 +14,7 @@ use triquint_sim::flex::FlexParams;
 use triquint_sim::plant::PlantConfig;
 use triquint_sim::plant_model::{PlantKind, PlantModel};
 use triquint_sim::test_reference::{self, SevenPhase};
-use triquint_sim::vibration::{self, Residual, SETTLE_WINDOW_S};
+use triquint_sim::vibration::{Residual, SETTLE_WINDOW_S};
 
 /// A C3 rest-to-rest move along the same line: s(τ) = 35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷.
 fn septic(q0: Vector3<f64>, q1: Vector3<f64>, t_total: f64) -> impl Fn(f64) -> JointMotion<f64> {
@@ -80,12 +80,12 @@ fn residual_of(
     )
     .unwrap();
     let flex = run.plant.flexible().unwrap();
-    let (_, rest) = flex.rest(reference(duration).q).unwrap();
-    let lowest = flex.modes(flex.platform()).unwrap()[0].hz;
-    (
-        vibration::residual(&flex.accel, run.end_s, SETTLE_WINDOW_S, rest).unwrap(),
-        vibration::amplitude_at(&flex.accel, run.end_s, SETTLE_WINDOW_S, lowest),
-    )
+    let r = flex
+        .residual(run.end_s, SETTLE_WINDOW_S, reference(duration).q)
+        .unwrap()
+        .unwrap();
+    let at_mode = r.lowest_mode_m_s2.unwrap();
+    (r, at_mode)
 }
 
 #[test]

@@ -7,13 +7,13 @@ use triquint_link::{DriveConfigs, FaultReport, Session, SessionOptions, UploadEr
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
-use triquint_sim::flex::{FlexError, FlexParams};
+use triquint_sim::flex::{AccelSample, FlexError, FlexParams};
 use triquint_sim::host_port::SimPort;
 use triquint_sim::metrics;
 use triquint_sim::plant_model::PlantKind;
 use triquint_sim::report::RunReport;
 use triquint_sim::sim::{Sample, SimError};
-use triquint_sim::vibration::{self, SETTLE_WINDOW_S};
+use triquint_sim::vibration::SETTLE_WINDOW_S;
 use triquint_sim::{Sim, SimConfig};
 
 use super::measure::run_report;
@@ -93,6 +93,8 @@ pub struct SimReport {
     pub start_us: u64,
     pub sim_time_s: f64,
     pub samples: Vec<Sample>,
+    /// The flexible plant's accelerometer (empty on the rigid one).
+    pub accel: Vec<AccelSample>,
 }
 
 /// The spread of the drives' start times, `None` unless every drive
@@ -176,10 +178,9 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         let end = plan
             .at(plan.total_time_s)
             .ok_or_else(|| SimulateError::Plan("the plan has no end".into()))?;
-        let (_, rest) = flex
-            .rest(Vector3::from(end.q))
+        run.vibration = flex
+            .residual(end_s, SETTLE_WINDOW_S, Vector3::from(end.q))
             .map_err(|source| SimError::Plant { t_s: end_s, source })?;
-        run.vibration = vibration::residual(&flex.accel, end_s, SETTLE_WINDOW_S, rest);
     }
     Ok(SimReport {
         run,
@@ -193,5 +194,9 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
         samples: std::mem::take(&mut sim.samples),
+        accel: sim
+            .plant
+            .flexible()
+            .map_or_else(Vec::new, |f| f.accel.clone()),
     })
 }
