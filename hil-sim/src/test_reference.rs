@@ -30,13 +30,13 @@ pub struct SevenPhase {
 }
 
 impl SevenPhase {
-    /// The profile, none for a move of zero length or limits that are not
-    /// finite and positive.
+    /// The profile, none for a move shorter than a micrometre (a closed
+    /// path's start and end) or limits that are not finite and positive.
     pub fn new(q0: Vector3<f64>, q1: Vector3<f64>, limits: &Limits) -> Option<Self> {
         let dq = q1 - q0;
         let len = dq.amax();
         let ok = |x: f64| x.is_finite() && x > 0.0;
-        if !ok(len) || !ok(limits.velocity) || !ok(limits.acceleration) || !ok(limits.jerk) {
+        if !ok(len - 1e-6) || !ok(limits.velocity) || !ok(limits.acceleration) || !ok(limits.jerk) {
             return None;
         }
         // Limits on the path parameter s ∈ [0, 1], from the joint that moves most.
@@ -222,5 +222,7 @@ mod tests {
             assert!(jumps >= 3, "{jumps}");
         }
         assert!(SevenPhase::new(q0, q0, &limits).is_none());
+        let closed = q0 + Vector3::new(1e-9, 0.0, 0.0);
+        assert!(SevenPhase::new(q0, closed, &limits).is_none());
     }
 }
