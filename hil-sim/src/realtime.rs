@@ -22,9 +22,11 @@ use triquint_shared::protocol::{
     CommandCode, FaultCode, Frame, Msg, PartEvent, Reassembler, State, decode, frame_time_ns,
 };
 
+use crate::flex::{FlexError, FlexParams};
 use crate::metrics::{Tracking, segment_from_wire, tracking_segments};
 use crate::node_port::NodePort;
-use crate::plant::{Plant, PlantConfig};
+use crate::plant::PlantConfig;
+use crate::plant_model::{PlantKind, PlantModel};
 use crate::report::{JsonFault, RunReport};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode, SimSwitch, SwitchMode};
 use triquint_link::socketcan::{SocketCanError, SocketCanPort};
@@ -47,6 +49,9 @@ pub struct RealtimeConfig {
     pub rate_hz: f64,
     pub robot: Robot,
     pub plant: PlantConfig,
+    /// Rigid or flexible, and the flexible plant's parameters.
+    pub plant_kind: PlantKind,
+    pub flex: FlexParams,
     /// Joint positions at power-on (m).
     pub q0: Vector3<f64>,
     pub counts_per_metre: f64,
@@ -68,6 +73,8 @@ impl RealtimeConfig {
             rate_hz: 1000.0,
             robot,
             plant: PlantConfig::default(),
+            plant_kind: PlantKind::Rigid,
+            flex: FlexParams::default(),
             q0,
             counts_per_metre: 131_072.0 / 0.010,
             clock_seed: 7,
@@ -85,6 +92,8 @@ pub enum RealtimeError {
     Bus(#[from] SocketCanError),
     #[error(transparent)]
     Machine(#[from] SimError),
+    #[error(transparent)]
+    Flex(#[from] FlexError),
 }
 
 /// Everything the machine measured.
@@ -239,7 +248,7 @@ pub fn run(
     // stable and accurate for this plant at 1 kHz, and affordable in real time.
     let mut plant_cfg = cfg.plant.clone();
     plant_cfg.max_step_s = plant_cfg.max_step_s.max(tick_ns as f64 * 1e-9);
-    let mut plant = Plant::new(&cfg.robot, plant_cfg, cfg.q0);
+    let mut plant = PlantModel::new(cfg.plant_kind, &cfg.robot, plant_cfg, &cfg.flex, cfg.q0)?;
     let mut watch = Watch::default();
     let start_ns = port.now_ns();
     let mut plant_ns = start_ns;
@@ -319,21 +328,23 @@ pub fn run(
                 error: None,
             };
             service(&mut n.node, &mut p);
-            plant.tau[axis] = n.control_tick(local, plant.q[axis], cfg.counts_per_metre, t);
+            let tau = n.control_tick(local, plant.q()[axis], cfg.counts_per_metre, t);
+            plant.set_torque(axis, tau);
             n.note_fault(t);
             service(&mut n.node, &mut p);
             if let Some(e) = p.error {
                 break 'run Err(e.into());
             }
         }
-        plant.braked = nodes.len() < 3 || !nodes.iter().all(SimNode::enabled);
+        plant.set_braked(nodes.len() < 3 || !nodes.iter().all(SimNode::enabled));
         observe(&mut watch, &mut nodes, &plant, t, report);
     };
     let end = port.now_ns();
     report.wall_time_s = (end - start_ns) as f64 * 1e-9;
     report.bus_load = all_busy_ns as f64 / (end - start_ns).max(1) as f64;
     report.foreign_frames = port.foreign;
-    report.final_joint_position_m = [plant.q[0], plant.q[1], plant.q[2]];
+    let q = plant.q();
+    report.final_joint_position_m = [q[0], q[1], q[2]];
     // A run cut short by the stop is reported as it stands (not completed).
     if watch.since_ns.is_some() && watch.running {
         let r = finish(&watch, &nodes, end, false);
@@ -346,7 +357,7 @@ pub fn run(
 fn observe(
     watch: &mut Watch,
     nodes: &mut [SimNode],
-    plant: &Plant,
+    plant: &PlantModel,
     now: u64,
     report: &mut RealtimeReport,
 ) {
@@ -371,7 +382,7 @@ fn observe(
     if watch.running
         && let Some(h) = host_ns
     {
-        let q = plant.q;
+        let q = plant.q();
         watch
             .samples
             .push(Sample::of(h.max(0) as u64, [q[0], q[1], q[2]], nodes));
