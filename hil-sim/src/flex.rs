@@ -181,7 +181,7 @@ pub struct FlexPlant {
     pub accel: Vec<AccelSample>,
 }
 
-/// Platform force of the struts on the platform at a state, and the strut stiffness matrix.
+/// The struts' axial stiffness seen by the platform at a pose: k Σ d̂ᵢd̂ᵢᵀ (N/m).
 fn strut_stiffness(pose: &Pose<f64>, k_strut: f64) -> Matrix3<f64> {
     let mut s = Matrix3::zeros();
     for d in &pose.struts {
