@@ -10,15 +10,19 @@
 pub mod bus;
 pub mod confinement;
 pub mod faults;
+pub mod flex;
 pub mod host_port;
 pub mod metrics;
 pub mod node_port;
 pub mod plant;
+pub mod plant_model;
 pub mod proxy;
 pub mod realtime;
 pub mod report;
 pub mod sim;
+pub mod test_reference;
 pub mod testplan;
+pub mod vibration;
 
 pub use bus::{Bus, BusConfig, Delivery};
 pub use faults::{Fault, FaultInjector, FaultWindow};

@@ -21,6 +21,7 @@ use triquint_cli_common::machine_file::load_machine;
 use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
 use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
 use triquint_shared::kinematics::Pose;
+use triquint_sim::plant_model::PlantKind;
 use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
 use triquint_sim::report::RunReport;
 use triquint_sim::sim::SwitchMode;
@@ -79,6 +80,10 @@ struct Args {
     /// the paper's machine.
     #[arg(long = "machine", visible_alias = "robot", value_name = "FILE.toml")]
     machine: Option<PathBuf>,
+    /// The machine: rigid, or flexible (screw and strut compliance, a
+    /// current-loop lag, an accelerometer on the platform; `docs/vibration.md`).
+    #[arg(long, value_enum, default_value_t = PlantKind::Rigid)]
+    plant: PlantKind,
     /// Write the report (JSON) here on exit.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
@@ -168,6 +173,7 @@ fn run(args: &Args) -> CliResult {
     cfg.switches = switches;
     cfg.fd = args.fd;
     cfg.rate_hz = args.rate;
+    cfg.plant_kind = args.plant;
     let stop = stop_on_signals()?;
     let port = realtime::open(&cfg).map_err(CliError::device)?;
     triquint_cli_common::errln!(
@@ -183,6 +189,7 @@ fn run(args: &Args) -> CliResult {
         Ok(()) => None,
         Err(e @ RealtimeError::Bus(_)) => Some(CliError::device(e)),
         Err(e @ RealtimeError::Machine(_)) => Some(CliError::motion_fault(e)),
+        Err(e @ RealtimeError::Flex(_)) => Some(CliError::bad_input(e)),
     };
     triquint_cli_common::errln!(
         "triquint-sim: {} runs, {} ticks, {} missed deadlines ({} skipped, max late {:.0} µs), {} frames",

@@ -22,9 +22,11 @@ use triquint_shared::protocol::{
     CommandCode, FaultCode, Frame, Msg, PartEvent, Reassembler, State, decode, frame_time_ns,
 };
 
+use crate::flex::{FlexError, FlexParams};
 use crate::metrics::{Tracking, segment_from_wire, tracking_segments};
 use crate::node_port::NodePort;
-use crate::plant::{Plant, PlantConfig};
+use crate::plant::PlantConfig;
+use crate::plant_model::{PlantKind, PlantModel};
 use crate::report::{JsonFault, RunReport};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode, SimSwitch, SwitchMode};
 use triquint_link::socketcan::{SocketCanError, SocketCanPort};
@@ -46,6 +48,9 @@ pub struct RealtimeConfig {
     pub fd: bool,
     pub rate_hz: f64,
     pub plant: PlantConfig,
+    /// Rigid or flexible, and the flexible plant's parameters.
+    pub plant_kind: PlantKind,
+    pub flex: FlexParams,
     /// Joint positions at power-on (m).
     pub q0: Vector3<f64>,
     pub clock_seed: u64,
@@ -65,6 +70,8 @@ impl RealtimeConfig {
             fd: false,
             rate_hz: 1000.0,
             plant: PlantConfig::default(),
+            plant_kind: PlantKind::Rigid,
+            flex: FlexParams::default(),
             q0,
             clock_seed: 7,
             max_drift_ppm: 200.0,
@@ -81,6 +88,8 @@ pub enum RealtimeError {
     Bus(#[from] SocketCanError),
     #[error(transparent)]
     Machine(#[from] SimError),
+    #[error(transparent)]
+    Flex(#[from] FlexError),
 }
 
 /// Everything the machine measured.
@@ -235,7 +244,13 @@ pub fn run(
     // stable and accurate for this plant at 1 kHz, and affordable in real time.
     let mut plant_cfg = cfg.plant.clone();
     plant_cfg.max_step_s = plant_cfg.max_step_s.max(tick_ns as f64 * 1e-9);
-    let mut plant = Plant::new(&cfg.machine.robot, plant_cfg, cfg.q0);
+    let mut plant = PlantModel::new(
+        cfg.plant_kind,
+        &cfg.machine.robot,
+        plant_cfg,
+        &cfg.flex,
+        cfg.q0,
+    )?;
     let mut watch = Watch::default();
     let start_ns = port.now_ns();
     let mut plant_ns = start_ns;
@@ -316,22 +331,23 @@ pub fn run(
             };
             service(&mut n.node, &mut p);
             let cpm = cfg.machine.counts_per_metre(axis);
-            plant.tau[axis] =
-                cfg.machine.axes[axis].direction * n.control_tick(local, plant.q[axis], cpm, t);
+            let tau = n.control_tick(local, plant.q()[axis], cpm, t);
+            plant.set_torque(axis, cfg.machine.axes[axis].direction * tau);
             n.note_fault(t);
             service(&mut n.node, &mut p);
             if let Some(e) = p.error {
                 break 'run Err(e.into());
             }
         }
-        plant.braked = nodes.len() < 3 || !nodes.iter().all(SimNode::enabled);
+        plant.set_braked(nodes.len() < 3 || !nodes.iter().all(SimNode::enabled));
         observe(&mut watch, &mut nodes, &plant, t, report);
     };
     let end = port.now_ns();
     report.wall_time_s = (end - start_ns) as f64 * 1e-9;
     report.bus_load = all_busy_ns as f64 / (end - start_ns).max(1) as f64;
     report.foreign_frames = port.foreign;
-    report.final_joint_position_m = [plant.q[0], plant.q[1], plant.q[2]];
+    let q = plant.q();
+    report.final_joint_position_m = [q[0], q[1], q[2]];
     // A run cut short by the stop is reported as it stands (not completed).
     if watch.since_ns.is_some() && watch.running {
         let r = finish(&watch, &nodes, end, false);
@@ -344,7 +360,7 @@ pub fn run(
 fn observe(
     watch: &mut Watch,
     nodes: &mut [SimNode],
-    plant: &Plant,
+    plant: &PlantModel,
     now: u64,
     report: &mut RealtimeReport,
 ) {
@@ -369,7 +385,7 @@ fn observe(
     if watch.running
         && let Some(h) = host_ns
     {
-        let q = plant.q;
+        let q = plant.q();
         watch
             .samples
             .push(Sample::of(h.max(0) as u64, [q[0], q[1], q[2]], nodes));
@@ -450,6 +466,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
                 .map_or(0.0, |n| n.max_stop_jerk as f64)
         }),
         fault_run: None,
+        vibration: None,
     }
 }
 

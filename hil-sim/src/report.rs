@@ -12,6 +12,7 @@ use triquint_shared::protocol::{FaultCode, Reject};
 use crate::faults::FaultStats;
 use crate::metrics::Tracking;
 use crate::sim::FaultEvent;
+use crate::vibration::Residual;
 
 /// A fault a node reported, at `t_s` seconds of plan time.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -72,6 +73,10 @@ pub struct RunReport {
     /// (absent from the JSON otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fault_run: Option<FaultRunFigures>,
+    /// Only on the flexible plant: the residual vibration after the plan's
+    /// end, from the platform's accelerometer (absent from the JSON otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vibration: Option<Residual>,
 }
 
 /// How a fault run ended.
@@ -164,6 +169,7 @@ impl Default for RunReport {
             max_stop_jerk: [0.0; 3],
             stop_ramp_s: 0.0,
             fault_run: None,
+            vibration: None,
         }
     }
 }

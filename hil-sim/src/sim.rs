@@ -12,7 +12,9 @@ use triquint_shared::protocol::{FaultCode, Frame, State};
 
 use crate::bus::{Bus, BusConfig, Delivery};
 use crate::faults::{BABBLER, FaultInjector, FaultWindow};
-use crate::plant::{Plant, PlantConfig};
+use crate::flex::{FlexError, FlexParams};
+use crate::plant::PlantConfig;
+use crate::plant_model::{PlantKind, PlantModel};
 
 /// Everything configurable about the virtual hardware.
 #[derive(Clone, Debug)]
@@ -350,7 +352,7 @@ pub enum SimError {
 pub struct Sim {
     pub cfg: SimConfig,
     pub bus: Bus,
-    pub plant: Plant,
+    pub plant: PlantModel,
     pub nodes: Vec<SimNode>,
     t_ns: u64,
     plant_t_ns: u64,
@@ -375,6 +377,19 @@ impl Sim {
         sim.bus = Bus::new(sim.cfg.bus.clone(), BABBLER + 1);
         sim.faults = Some(FaultInjector::new(windows, seed, BABBLER + 1));
         sim
+    }
+
+    /// A machine on the flexible plant (`flex`), otherwise as [`Sim::new`].
+    pub fn flexible(
+        robot: &Robot,
+        q0: Vector3<f64>,
+        cfg: SimConfig,
+        flex: &FlexParams,
+    ) -> Result<Self, FlexError> {
+        let plant = PlantModel::new(PlantKind::Flexible, robot, cfg.plant.clone(), flex, q0)?;
+        let mut sim = Self::new(robot, q0, cfg);
+        sim.plant = plant;
+        Ok(sim)
     }
 
     /// Every guideway gets its limit switch (`homing`'s heights and
@@ -432,7 +447,7 @@ impl Sim {
             .collect::<Vec<_>>();
         let mut sim = Self {
             bus: Bus::new(cfg.bus.clone(), 4),
-            plant: Plant::new(robot, cfg.plant.clone(), q0),
+            plant: PlantModel::Rigid(crate::plant::Plant::new(robot, cfg.plant.clone(), q0)),
             nodes,
             t_ns: 0,
             plant_t_ns: 0,
@@ -514,14 +529,14 @@ impl Sim {
     fn control_tick(&mut self, i: usize, local_us: u64) {
         let cpm = self.cfg.counts_per_metre[i];
         let t_ns = self.t_ns;
-        self.plant.tau[i] = self.cfg.motor_direction[i]
-            * self.nodes[i].control_tick(local_us, self.plant.q[i], cpm, t_ns);
-        self.plant.braked = !self.nodes.iter().all(|n| n.enabled);
+        let tau = self.nodes[i].control_tick(local_us, self.plant.q()[i], cpm, t_ns);
+        self.plant.set_torque(i, self.cfg.motor_direction[i] * tau);
+        self.plant.set_braked(!self.nodes.iter().all(|n| n.enabled));
         if i == 0 {
             self.tick_count += 1;
             let every = self.cfg.record_every.max(1) as u64;
             if self.tick_count % every == 0 {
-                let q = self.plant.q;
+                let q = self.plant.q();
                 self.samples
                     .push(Sample::of(t_ns, [q[0], q[1], q[2]], &self.nodes));
             }

@@ -145,7 +145,7 @@ fn an_unhomed_machine_refuses_motion_homes_and_knows_its_position() {
         // the simulator's unknown offset, and the position it reports
         // (f32 metres) against the true one.
         let zero = n.node.home_offset() - n.enc_offset;
-        let err = (f64::from(n.node.stats.q) - sim.plant.q[i]) * CPM;
+        let err = (f64::from(n.node.stats.q) - sim.plant.q()[i]) * CPM;
         eprintln!(
             "axis {}: homed zero off by {zero} counts, position {err:+.3} counts",
             i + 1
@@ -153,7 +153,7 @@ fn an_unhomed_machine_refuses_motion_homes_and_knows_its_position() {
         assert!(zero.abs() <= 1, "axis {}: zero {zero} counts", i + 1);
         assert!(err.abs() <= 2.0, "axis {}: {err} counts", i + 1);
         // Backed off below the switch.
-        let below = HomingSettings::default().switch_height[i] - sim.plant.q[i];
+        let below = HomingSettings::default().switch_height[i] - sim.plant.q()[i];
         assert!(below > 0.0 && below < 0.012, "axis {}: {below}", i + 1);
     }
     let s = status(&mut sim);

@@ -69,6 +69,7 @@ mod program;
 mod rounding;
 mod run_state;
 mod search;
+pub mod shaping;
 mod spline;
 pub mod stats;
 mod step;

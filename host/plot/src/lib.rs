@@ -79,11 +79,7 @@ fn font_ready() -> Result<(), PlotError> {
     let ok = *DONE.get_or_init(|| {
         plotters::style::register_font(FAMILY, FontStyle::Normal, FONT_DATA).is_ok()
     });
-    if ok {
-        Ok(())
-    } else {
-        Err(PlotError::Font)
-    }
+    if ok { Ok(()) } else { Err(PlotError::Font) }
 }
 
 /// Text of `px` pixels in the chart font (plotters writes size / 1.24 into the SVG).

@@ -4,13 +4,16 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use triquint_shared::plan::Plan;
+use triquint_sim::plant_model::PlantKind;
 use triquint_sim::report::JsonFault;
+use triquint_sim::vibration::Residual;
 
 use triquint_cli_common::outln;
 use triquint_cli_common::output::write_outputs;
 
 use crate::exit::{CliError, CliResult};
 use crate::inprocess::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
+use crate::inprocess::test_reference::{self, TestReference};
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -26,6 +29,16 @@ pub struct SimulateArgs {
     /// [default: the machine file's `drive.control_rate`].
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
+    /// The machine: rigid, or flexible (screw and strut compliance, current-loop
+    /// lag, an accelerometer on the platform: adds the residual vibration).
+    #[arg(long, value_enum, default_value_t = PlantKind::Rigid)]
+    pub plant: PlantKind,
+    /// TEST REFERENCE, not a drive's path: run the plan, or a jerk-discontinuous
+    /// 7-phase profile of its move (which the drives refuse), through the
+    /// firmware's control law below the drives' checks, and report the
+    /// residual vibration (with --plant flexible).
+    #[arg(long, value_enum, value_name = "KIND")]
+    pub test_reference: Option<TestReference>,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -62,8 +75,12 @@ pub fn run(args: &SimulateArgs) -> CliResult {
         fd: args.fd,
         feedforward: !args.no_feedforward,
         rate_hz,
+        plant: args.plant,
         ..SimulateOptions::default()
     };
+    if let Some(kind) = args.test_reference {
+        return run_test_reference(args, &plan, &opts, kind);
+    }
     let report = simulate(&plan, &opts).map_err(to_cli)?;
     if let Some(dir) = &args.plot {
         write_plots(dir, &args.plan, &plan, &opts, &report)?;
@@ -92,6 +109,68 @@ pub fn run(args: &SimulateArgs) -> CliResult {
             None => "the plan did not complete".to_string(),
         }))
     }
+}
+
+fn run_test_reference(
+    args: &SimulateArgs,
+    plan: &Plan,
+    opts: &SimulateOptions,
+    kind: TestReference,
+) -> CliResult {
+    let r = test_reference::run(plan, opts, kind).map_err(to_cli)?;
+    if let Some(dir) = &args.plot {
+        let title = format!(
+            "Platform accelerometer: TEST REFERENCE {} of {:.3} s",
+            kind.name(),
+            r.duration_s
+        );
+        let svg = crate::report::sim_plots::accelerometer(
+            &title,
+            &r.accel,
+            r.start_s,
+            r.duration_s,
+            r.vibration.as_ref(),
+        )
+        .map_err(|e| CliError::bad_input(format!("plots: {e}")))?;
+        let path = dir.join("accelerometer.svg");
+        write_outputs(&[(path.as_path(), svg.as_bytes())], &[&args.plan])?;
+    }
+    if args.json {
+        outln!(
+            "{}",
+            serde_json::to_string(&r).map_err(|e| CliError::device(e.to_string()))?
+        )?;
+        return Ok(());
+    }
+    outln!(
+        "TEST REFERENCE (the firmware's control law below the drives' checks, no bus): {}, {:.3} s, {} plant, largest following error {:.3} µm",
+        kind.name(),
+        r.duration_s,
+        if r.vibration.is_some() {
+            "flexible"
+        } else {
+            "rigid"
+        },
+        r.max_error_m * 1e6
+    )?;
+    if let Some(v) = &r.vibration {
+        print_residual(v)?;
+    }
+    Ok(())
+}
+
+fn print_residual(v: &Residual) -> CliResult {
+    outln!(
+        "residual vibration over {:.2} s after the end: acceleration peak {:.4} RMS {:.4} m/s², position peak {:.3} RMS {:.3} µm{}",
+        v.window_s,
+        v.peak_accel_m_s2,
+        v.rms_accel_m_s2,
+        v.peak_position_m * 1e6,
+        v.rms_position_m * 1e6,
+        v.dominant_hz
+            .map_or(String::new(), |f| format!(", at {f:.1} Hz"))
+    )?;
+    Ok(())
 }
 
 fn print_human(
@@ -142,6 +221,9 @@ fn print_human(
         r.run.stop_ramp_s,
         r.f32_eval_error_m
     )?;
+    if let Some(v) = &r.run.vibration {
+        print_residual(v)?;
+    }
     if faults.is_empty() {
         outln!("completed: {}, no faults", r.run.completed)?;
     } else {

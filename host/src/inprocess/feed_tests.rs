@@ -77,7 +77,7 @@ fn run_on(
                 t_s,
                 phases: [0, 1, 2].map(|i| sim.nodes[i].node.scaling_phase()),
                 reference: sim.nodes[0].node.stats.reference,
-                q: sim.plant.q,
+                q: sim.plant.q(),
             });
         }
         let t = sim.now_ns() + 100_000;
@@ -531,7 +531,7 @@ fn a_stop_before_start_ends_the_session_stopped_and_nothing_moves() {
     };
     assert!(outcome.stopped && !outcome.completed && outcome.start_us == 0);
     sim.run_until(sim.now_ns() + 300_000_000).unwrap();
-    assert!((sim.plant.q - q0).amax() < 20e-6, "moved");
+    assert!((sim.plant.q() - q0).amax() < 20e-6, "moved");
     for n in &sim.nodes {
         assert_eq!(n.node.state(), triquint_shared::protocol::State::Idle);
         assert_eq!(n.node.fault(), FaultCode::None);

@@ -9,5 +9,6 @@ pub mod fault_run;
 mod feed_tests;
 mod measure;
 pub mod simulate;
+pub mod test_reference;
 #[cfg(test)]
 mod tests;

@@ -7,10 +7,13 @@ use triquint_link::{DriveConfigs, FaultReport, Session, SessionOptions, UploadEr
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::segment::parts_per_segment;
+use triquint_sim::flex::{AccelSample, FlexError, FlexParams};
 use triquint_sim::host_port::SimPort;
 use triquint_sim::metrics;
+use triquint_sim::plant_model::PlantKind;
 use triquint_sim::report::RunReport;
 use triquint_sim::sim::{Sample, SimError};
+use triquint_sim::vibration::SETTLE_WINDOW_S;
 use triquint_sim::{Sim, SimConfig};
 
 use super::measure::run_report;
@@ -30,6 +33,9 @@ pub struct SimulateOptions {
     pub host_poll_us: u64,
     /// Return a refused Arm as an error instead of a report with the fault.
     pub strict: bool,
+    /// The plant, and the flexible one's parameters.
+    pub plant: PlantKind,
+    pub flex: FlexParams,
 }
 
 impl Default for SimulateOptions {
@@ -44,6 +50,8 @@ impl Default for SimulateOptions {
             start_offset_m: [0.0; 3],
             host_poll_us: 100,
             strict: false,
+            plant: PlantKind::Rigid,
+            flex: FlexParams::default(),
         }
     }
 }
@@ -59,6 +67,8 @@ pub enum SimulateError {
     Plan(String),
     #[error("plan: {0}")]
     Config(#[from] PlanConfigError),
+    #[error("flexible plant: {0}")]
+    Flex(#[from] FlexError),
     #[error("the simulation did not finish within {0:.1} s of simulated time")]
     Timeout(f64),
 }
@@ -83,6 +93,8 @@ pub struct SimReport {
     pub start_us: u64,
     pub sim_time_s: f64,
     pub samples: Vec<Sample>,
+    /// The flexible plant's accelerometer (empty on the rigid one).
+    pub accel: Vec<AccelSample>,
 }
 
 /// The spread of the drives' start times, `None` unless every drive
@@ -121,7 +133,10 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         .map(|s| s.quintic().eval(0.0).q)
         .ok_or_else(|| SimulateError::Plan("the plan has no segments".into()))?
         + Vector3::from(opts.start_offset_m);
-    let mut sim = Sim::new(&plan.robot, q0, sim_cfg);
+    let mut sim = match opts.plant {
+        PlantKind::Rigid => Sim::new(&plan.robot, q0, sim_cfg),
+        PlantKind::Flexible => Sim::flexible(&plan.robot, q0, sim_cfg, &opts.flex)?,
+    };
     let mut sopts = opts.session.clone();
     sopts.fd = opts.fd;
     let mut session = Session::new(plan, configs, sopts)?;
@@ -142,6 +157,15 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         }
         sim.run_until(t)?;
     };
+    // The flexible machine rings on after the plan: hold it a settle window.
+    let end_s = outcome.start_us as f64 * 1e-6 + plan.total_time_s;
+    if sim.plant.flexible().is_some() {
+        let until = ((end_s + SETTLE_WINDOW_S) * 1e9).ceil() as u64;
+        while sim.now_ns() < until {
+            let t = (sim.now_ns() + opts.host_poll_us * 1000).min(until);
+            sim.run_until(t)?;
+        }
+    }
     let skew = start_skew_ns(sim.nodes.iter().map(|n| n.started_ns));
     let now = sim.now_ns().max(1);
     let mut run = run_report(
@@ -153,6 +177,14 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         None,
     );
     run.completed = outcome.completed;
+    if let Some(flex) = sim.plant.flexible() {
+        let end = plan
+            .at(plan.total_time_s)
+            .ok_or_else(|| SimulateError::Plan("the plan has no end".into()))?;
+        run.vibration = flex
+            .residual(end_s, SETTLE_WINDOW_S, Vector3::from(end.q))
+            .map_err(|source| SimError::Plant { t_s: end_s, source })?;
+    }
     Ok(SimReport {
         run,
         faults: outcome.faults.clone(),
@@ -165,5 +197,9 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         start_us: outcome.start_us,
         sim_time_s: now as f64 * 1e-9,
         samples: std::mem::take(&mut sim.samples),
+        accel: sim
+            .plant
+            .flexible()
+            .map_or_else(Vec::new, |f| f.accel.clone()),
     })
 }

@@ -5,7 +5,9 @@
 use triquint_plot::{Chart, DARK, Figure, Line, PlotError, Stroke};
 use triquint_shared::dynamics;
 use triquint_shared::plan::Plan;
+use triquint_sim::flex::AccelSample;
 use triquint_sim::metrics::plan_position;
+use triquint_sim::vibration::Residual;
 
 use super::ReportError;
 use crate::inprocess::simulate::{SimReport, SimulateOptions};
@@ -198,13 +200,75 @@ pub fn sim_plots(
     .panel(torque.clone())
     .panel(ff.clone());
     let svg = |c: Result<String, PlotError>| c.map_err(ReportError::from);
-    Ok(vec![
+    let mut out = vec![
         ("position.svg", svg(position.to_svg())?),
         ("tracking_error.svg", svg(error.to_svg())?),
         ("torque.svg", svg(torque.to_svg())?),
         ("feedforward.svg", svg(ff.to_svg())?),
         ("overview.svg", svg(overview.to_svg())?),
-    ])
+    ];
+    if !r.accel.is_empty() {
+        let title = format!("Platform accelerometer: plan of {:.3} s", plan.total_time_s);
+        out.push((
+            "accelerometer.svg",
+            accelerometer(&title, &r.accel, start, end, r.run.vibration.as_ref())?,
+        ));
+    }
+    Ok(out)
+}
+
+/// The flexible plant's accelerometer (per axis) against time since the
+/// reference's start `start_s` (plant time): the whole run in m/s², and the
+/// settle window of `residual` after the end (`end`, since the start)
+/// magnified, in mm/s², with its figures.
+pub fn accelerometer(
+    title: &str,
+    accel: &[AccelSample],
+    start_s: f64,
+    end: f64,
+    residual: Option<&Residual>,
+) -> Result<String, ReportError> {
+    let window = residual.map_or(0.5, |v| v.window_s);
+    let (from, to) = (-0.2, end + window);
+    let trace = |k: usize, lo: f64, hi: f64, scale: f64| -> Vec<(f64, f64)> {
+        accel
+            .iter()
+            .map(|s| (s.t_s - start_s, s.accel[k] * scale))
+            .filter(|p| (lo..=hi).contains(&p.0))
+            .collect()
+    };
+    let mut whole = Chart::new("The whole run")
+        .x_label(TIME)
+        .y_label("platform acceleration (m/s²)")
+        .x_range(from, to)
+        .knot(end, "end");
+    let mut settle = Chart::new("After the end: the residual vibration")
+        .x_label(TIME)
+        .y_label("platform acceleration (mm/s²)")
+        .x_range(end, to)
+        .note(match residual {
+            Some(v) => format!(
+                "{:.2} s window: |a| peak {:.1} RMS {:.1} mm/s²; position peak {:.3} RMS {:.3} µm{}",
+                v.window_s,
+                v.peak_accel_m_s2 * 1e3,
+                v.rms_accel_m_s2 * 1e3,
+                v.peak_position_m * 1e6,
+                v.rms_position_m * 1e6,
+                v.dominant_hz
+                    .map_or(String::new(), |f| format!("; dominant {f:.1} Hz"))
+            ),
+            None => "no settle window recorded".to_string(),
+        });
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        whole = whole.line(Line::joint(k, format!("a_{axis}"), trace(k, from, to, 1.0)));
+        settle = settle
+            .line(Line::joint(k, format!("a_{axis}"), trace(k, end, to, 1e3)).stroke(Stroke::Thin));
+    }
+    Figure::new(title, 1, (900, 420))
+        .panel(whole)
+        .panel(settle)
+        .to_svg()
+        .map_err(ReportError::from)
 }
 
 #[cfg(test)]

@@ -1,0 +1,228 @@
+//! TEST REFERENCES: motions run through the firmware's control law on a
+//! plant, below the drives' segment checks. The drives refuse a
+//! jerk-discontinuous plan (`Reject::Discontinuous`), rightly; to measure
+//! what such a profile does to a flexible machine, this runs it anyway, on
+//! one clock, with no bus: the law (`triquint_firmware::law`, the same
+//! feedforward 1.5 ticks ahead, PID and one-tick actuation delay as a
+//! drive's tick), the encoder quantised, the plant. Nothing here reaches a
+//! drive; a plan and a profile of the same move run the same way, so their
+//! figures compare.
+
+use nalgebra::Vector3;
+use triquint_firmware::derived_config::DerivedConfig;
+use triquint_firmware::law::{self, Gains, LawState};
+use triquint_shared::Limits;
+use triquint_shared::kinematics::KinematicsError;
+use triquint_shared::protocol::DriveConfig;
+use triquint_shared::quintic::JointMotion;
+
+use crate::plant_model::PlantModel;
+
+/// A jerk-limited 7-phase (S-curve) profile from `q0` to `q1` along the
+/// straight joint-space line, time-optimal within the joint limits: the jerk
+/// is ±J or 0, and it jumps at every phase boundary.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SevenPhase {
+    q0: Vector3<f64>,
+    dq: Vector3<f64>,
+    /// (duration s, path jerk 1/s³) of each phase.
+    phases: [(f64, f64); 7],
+}
+
+impl SevenPhase {
+    /// The profile, none for a move shorter than a micrometre (a closed
+    /// path's start and end) or limits that are not finite and positive.
+    pub fn new(q0: Vector3<f64>, q1: Vector3<f64>, limits: &Limits) -> Option<Self> {
+        let dq = q1 - q0;
+        let len = dq.amax();
+        let ok = |x: f64| x.is_finite() && x > 0.0;
+        if !ok(len - 1e-6) || !ok(limits.velocity) || !ok(limits.acceleration) || !ok(limits.jerk) {
+            return None;
+        }
+        // Limits on the path parameter s ∈ [0, 1], from the joint that moves most.
+        let (v, a, j) = (
+            limits.velocity / len,
+            limits.acceleration / len,
+            limits.jerk / len,
+        );
+        // Peak velocity: the limit, or what a move of length 1 reaches.
+        let rises = |vp: f64| {
+            if vp * j >= a * a {
+                (a / j, a / j + vp / a)
+            } else {
+                ((vp / j).sqrt(), 2.0 * (vp / j).sqrt())
+            }
+        };
+        let (mut tj, mut ta) = rises(v);
+        let mut vp = v;
+        if vp * ta > 1.0 {
+            // No cruise: v_p·T_a = 1.
+            let with_a = (-(a / j) + ((a / j) * (a / j) + 4.0 / a).sqrt()) * a / 2.0;
+            vp = if with_a * j >= a * a {
+                with_a
+            } else {
+                (j / 4.0).cbrt()
+            };
+            (tj, ta) = rises(vp);
+        }
+        let tv = ((1.0 - vp * ta) / vp).max(0.0);
+        let tc = (ta - 2.0 * tj).max(0.0);
+        Some(Self {
+            q0,
+            dq,
+            phases: [
+                (tj, j),
+                (tc, 0.0),
+                (tj, -j),
+                (tv, 0.0),
+                (tj, -j),
+                (tc, 0.0),
+                (tj, j),
+            ],
+        })
+    }
+
+    pub fn duration(&self) -> f64 {
+        self.phases.iter().map(|p| p.0).sum()
+    }
+
+    /// The motion at `t` (s), at rest before 0 and after the end.
+    pub fn at(&self, t: f64) -> JointMotion<f64> {
+        let (mut s, mut v, mut a) = (0.0, 0.0, 0.0);
+        let mut left = t.max(0.0);
+        let mut jerk = 0.0;
+        for &(d, j) in &self.phases {
+            let h = left.min(d);
+            s += v * h + a * h * h / 2.0 + j * h * h * h / 6.0;
+            v += a * h + j * h * h / 2.0;
+            a += j * h;
+            left -= h;
+            if left <= 0.0 {
+                jerk = if h < d { j } else { 0.0 };
+                break;
+            }
+        }
+        if left > 0.0 {
+            // Past the end: exactly at the target, at rest.
+            (s, v, a) = (1.0, 0.0, 0.0);
+        }
+        JointMotion {
+            q: self.q0 + self.dq * s,
+            qd: self.dq * v,
+            qdd: self.dq * a,
+            qddd: self.dq * jerk,
+        }
+    }
+}
+
+/// What a test-reference run leaves: the plant (with its records) and when,
+/// in plant time, the reference began and ended.
+pub struct LawRun {
+    pub plant: PlantModel,
+    pub start_s: f64,
+    pub end_s: f64,
+    /// Largest |reference − encoder| of any axis from the reference's start (m).
+    pub max_error_m: f64,
+}
+
+/// Runs `reference` (motion at time since its start, `duration_s` long) on
+/// `plant` through the control law of drives configured by `configs`:
+/// `hold_s` holding the start first (the drives' armed hold), `settle_s`
+/// holding the end after.
+pub fn run(
+    mut plant: PlantModel,
+    configs: &[DriveConfig; 3],
+    reference: &dyn Fn(f64) -> JointMotion<f64>,
+    duration_s: f64,
+    hold_s: f64,
+    settle_s: f64,
+) -> Result<LawRun, KinematicsError> {
+    let cfg = &configs[0];
+    let model = cfg.robot().native_model();
+    let derived = configs.map(|c| DerivedConfig::new(&c, 0));
+    let gains = [0, 1, 2].map(|i| Gains::new(&configs[i], &derived[i]));
+    let dt = 1.0 / f64::from(cfg.control_rate);
+    let mut law_state = [LawState::default(); 3];
+    let mut acting = Vector3::zeros();
+    let ticks = ((hold_s + duration_s + settle_s) / dt).ceil() as usize;
+    let mut max_error: f64 = 0.0;
+    plant.set_braked(false);
+    for k in 0..ticks {
+        let t = k as f64 * dt - hold_s;
+        let r = reference(t.clamp(0.0, duration_s));
+        let ahead = reference((t + 1.5 * dt).clamp(0.0, duration_s));
+        let ahead32 = JointMotion {
+            q: ahead.q.cast::<f32>(),
+            qd: ahead.qd.cast::<f32>(),
+            qdd: ahead.qdd.cast::<f32>(),
+            qddd: ahead.qddd.cast::<f32>(),
+        };
+        let q = plant.q();
+        let mut command = Vector3::zeros();
+        for i in 0..3 {
+            let c = &configs[i];
+            let counts = (q[i] * f64::from(c.counts_per_metre)).floor();
+            let measured = (counts / f64::from(c.counts_per_metre)) as f32;
+            let ff = if c.feedforward != 0.0 {
+                law::feedforward(&model, c, &ahead32, i).unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            let out = law::step(&mut law_state[i], &gains[i], r.q[i] as f32, measured, ff);
+            if t >= 0.0 {
+                max_error = max_error.max(f64::from(out.error).abs());
+            }
+            command[i] = f64::from(out.torque * c.direction);
+        }
+        // One tick of actuation delay, as on a drive.
+        for i in 0..3 {
+            plant.set_torque(i, acting[i]);
+        }
+        acting = command;
+        plant.advance(dt)?;
+    }
+    Ok(LawRun {
+        plant,
+        start_s: hold_s,
+        end_s: hold_s + duration_s,
+        max_error_m: max_error,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_seven_phase_profile_reaches_its_target_within_its_limits() {
+        let limits = Limits::default();
+        let q0 = Vector3::new(0.30, 0.25, 0.35);
+        for q1 in [
+            Vector3::new(0.40, 0.20, 0.33),
+            Vector3::new(0.301, 0.25, 0.35),
+        ] {
+            let p = SevenPhase::new(q0, q1, &limits).unwrap();
+            let end = p.at(p.duration());
+            assert!((end.q - q1).amax() < 1e-12, "{:?}", end.q - q1);
+            assert!(end.qd.amax() < 1e-9 && end.qdd.amax() < 1e-9);
+            let n = 2000;
+            let mut jumps = 0;
+            let mut last = p.at(0.0).qddd;
+            for k in 0..=n {
+                let m = p.at(p.duration() * k as f64 / n as f64);
+                assert!(m.qd.amax() <= limits.velocity * (1.0 + 1e-9));
+                assert!(m.qdd.amax() <= limits.acceleration * (1.0 + 1e-9));
+                assert!(m.qddd.amax() <= limits.jerk * (1.0 + 1e-9));
+                if (m.qddd - last).amax() > 0.5 * limits.jerk {
+                    jumps += 1;
+                }
+                last = m.qddd;
+            }
+            // The jerk jumps: that is the point of it.
+            assert!(jumps >= 3, "{jumps}");
+        }
+        assert!(SevenPhase::new(q0, q0, &limits).is_none());
+        let closed = q0 + Vector3::new(1e-9, 0.0, 0.0);
+        assert!(SevenPhase::new(q0, closed, &limits).is_none());
+    }
+}

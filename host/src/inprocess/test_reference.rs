@@ -1,0 +1,286 @@
+//! `triquint simulate --test-reference`: TEST REFERENCES, never a drive's
+//! path. The plan, or a jerk-discontinuous 7-phase profile between its start
+//! and end (which the drives refuse, rightly), run through the firmware's
+//! control law on the plant below the drives' segment checks
+//! (`triquint_sim::test_reference`), with the drives' configuration for the
+//! plan; on the flexible plant, the residual vibration after it.
+
+use serde::Serialize;
+use triquint_link::DriveConfigs;
+use triquint_shared::plan::Plan;
+use triquint_shared::quintic::JointMotion;
+use triquint_sim::flex::AccelSample;
+use triquint_sim::plant_model::PlantModel;
+use triquint_sim::sim::SimError;
+use triquint_sim::test_reference::{self, SevenPhase};
+use triquint_sim::vibration::{Residual, SETTLE_WINDOW_S};
+
+use super::simulate::{SimulateError, SimulateOptions};
+
+/// The test reference to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum TestReference {
+    /// The plan itself.
+    Plan,
+    /// A 7-phase jerk-limited profile from the plan's start to its end along
+    /// the straight joint-space line, within the plan's limits.
+    SevenPhase,
+    /// Holding the plan's start for as long as the plan: the noise floor.
+    Still,
+}
+
+impl TestReference {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Plan => "plan",
+            Self::SevenPhase => "seven-phase",
+            Self::Still => "still",
+        }
+    }
+}
+
+/// Holding the start before the reference (s): the release from the brakes
+/// rings the flexible machine, and this lets it die away.
+const HOLD_S: f64 = 1.0;
+
+/// What a test-reference run measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct TestRun {
+    pub test_reference: TestReference,
+    pub duration_s: f64,
+    /// Largest |reference − encoder| of any axis (m).
+    pub max_error_m: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vibration: Option<Residual>,
+    /// Plant time of the reference's start (s).
+    #[serde(skip)]
+    pub start_s: f64,
+    #[serde(skip)]
+    pub accel: Vec<AccelSample>,
+}
+
+fn motion(plan: &Plan, t: f64) -> JointMotion<f64> {
+    let s = plan.at(t.clamp(0.0, plan.total_time_s)).unwrap_or_default();
+    JointMotion {
+        q: s.q.into(),
+        qd: s.v.into(),
+        qdd: s.a.into(),
+        qddd: s.jerk.into(),
+    }
+}
+
+/// Runs `kind` for `plan` with `opts`' plant, rate and feedforward.
+pub fn run(
+    plan: &Plan,
+    opts: &SimulateOptions,
+    kind: TestReference,
+) -> Result<TestRun, SimulateError> {
+    let start = motion(plan, 0.0).q;
+    let end = motion(plan, plan.total_time_s).q;
+    match kind {
+        TestReference::Plan => {
+            run_motion(plan, opts, kind, &|t| motion(plan, t), plan.total_time_s)
+        }
+        TestReference::SevenPhase => {
+            let seven = SevenPhase::new(start, end, &plan.limits).ok_or_else(|| {
+                SimulateError::Plan(
+                    "a 7-phase profile needs a move: the plan's start and end are the same (a closed path)"
+                        .into(),
+                )
+            })?;
+            run_motion(plan, opts, kind, &|t| seven.at(t), seven.duration())
+        }
+        TestReference::Still => {
+            run_motion(plan, opts, kind, &|_| motion(plan, 0.0), plan.total_time_s)
+        }
+    }
+}
+
+/// Runs `reference` (`duration_s` long, labelled `kind`) with the drives'
+/// configuration for `plan` and `opts`' plant, rate and feedforward.
+pub fn run_motion(
+    plan: &Plan,
+    opts: &SimulateOptions,
+    kind: TestReference,
+    reference: &dyn Fn(f64) -> JointMotion<f64>,
+    duration: f64,
+) -> Result<TestRun, SimulateError> {
+    let mut settings = opts.settings.clone();
+    settings.control_rate = opts.rate_hz;
+    settings.feedforward = opts.feedforward;
+    let configs = DriveConfigs::for_plan(plan, &settings)?;
+    let plant = PlantModel::new(
+        opts.plant,
+        &plan.robot,
+        opts.sim.plant.clone(),
+        &opts.flex,
+        reference(0.0).q,
+    )?;
+    let run = test_reference::run(
+        plant,
+        &configs.nodes,
+        reference,
+        duration,
+        HOLD_S,
+        SETTLE_WINDOW_S,
+    )
+    .map_err(|source| SimError::Plant { t_s: 0.0, source })?;
+    let (vibration, accel) = match run.plant.flexible() {
+        Some(flex) => (
+            flex.residual(run.end_s, SETTLE_WINDOW_S, reference(duration).q)
+                .map_err(|source| SimError::Plant {
+                    t_s: run.end_s,
+                    source,
+                })?,
+            flex.accel.clone(),
+        ),
+        None => (None, Vec::new()),
+    };
+    Ok(TestRun {
+        test_reference: kind,
+        duration_s: duration,
+        max_error_m: run.max_error_m,
+        vibration,
+        start_s: run.start_s,
+        accel,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use triquint_planner::{Job, Objective, Options, plan};
+    use triquint_sim::plant_model::PlantKind;
+
+    use super::*;
+    use crate::inprocess::simulate::simulate;
+
+    /// The P2P move of docs/vibration.md on the flexible plant: at the
+    /// lowest mode, the jerk-discontinuous 7-phase profile rings several
+    /// times what the min-time and min-max-jerk plans of the same move leave,
+    /// at the model's frequency, and the plans through the drives leave as
+    /// little as through the law alone.
+    #[test]
+    fn a_seven_phase_profile_rings_where_the_plans_do_not() {
+        let job = |objective, total| {
+            Job::builder()
+                .objective(objective)
+                .total_time(total)
+                .points_mm([[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]])
+                .build()
+                .unwrap()
+        };
+        let min_time = plan(&job(Objective::MinTime, 5.0), &Options::default()).unwrap();
+        let smooth = plan(&job(Objective::MinMaxJerk, 1.5), &Options::default()).unwrap();
+        let opts = SimulateOptions {
+            plant: PlantKind::Flexible,
+            ..SimulateOptions::default()
+        };
+        let at_mode = |r: &TestRun| r.vibration.as_ref().unwrap().lowest_mode_m_s2.unwrap();
+        let seven = run(&min_time, &opts, TestReference::SevenPhase).unwrap();
+        let floor = run(&min_time, &opts, TestReference::Still).unwrap();
+        let v7 = seven.vibration.as_ref().unwrap();
+        for p in [&min_time, &smooth] {
+            let law = run(p, &opts, TestReference::Plan).unwrap();
+            assert!(
+                at_mode(&seven) > 3.0 * at_mode(&law),
+                "{seven:?} vs {law:?}"
+            );
+            assert!(v7.peak_position_m > 2.0 * law.vibration.as_ref().unwrap().peak_position_m);
+            let drives = simulate(p, &opts).unwrap();
+            assert!(drives.run.completed);
+            let dv = drives.run.vibration.unwrap();
+            assert!(
+                at_mode(&seven) > 3.0 * dv.lowest_mode_m_s2.unwrap(),
+                "{dv:?}"
+            );
+        }
+        assert!(at_mode(&seven) > 10.0 * at_mode(&floor), "{floor:?}");
+        let (hz, mode) = (v7.dominant_hz.unwrap(), v7.lowest_mode_hz.unwrap());
+        assert!(
+            (hz - mode).abs() < 0.05 * mode,
+            "{hz} Hz vs the model's {mode} Hz"
+        );
+    }
+
+    /// Input shaping on the flexible plant: the jerk-discontinuous 7-phase
+    /// profile of the P2P move convolved with ZVD and EI impulses at the
+    /// machine's lowest mode (and EI 20 % off it) rings that mode 3–4× less;
+    /// and the min-time plan shaped by the planner (`shaping::shape`) is a
+    /// C3 plan that `check` proves. (The drives cannot run it yet: its 14
+    /// segments, six of 19.6 ms, do not keep the stop ramp's worth of plan
+    /// in their queue, and they stop with Underrun.)
+    #[test]
+    fn shaping_removes_the_ringing_of_the_jerk_steps() {
+        use triquint_planner::shaping::{Impulses, Shaper, shape};
+        use triquint_sim::flex::FlexPlant;
+        use triquint_sim::plant::PlantConfig;
+
+        let job = Job::builder()
+            .objective(Objective::MinTime)
+            .points_mm([[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]])
+            .build()
+            .unwrap();
+        let p = plan(&job, &Options::default()).unwrap();
+        let opts = SimulateOptions {
+            plant: PlantKind::Flexible,
+            ..SimulateOptions::default()
+        };
+        let end = motion(&p, p.total_time_s).q;
+        let start = motion(&p, 0.0).q;
+        let flex =
+            FlexPlant::new(&p.robot, PlantConfig::default(), opts.flex.clone(), end).unwrap();
+        let mode = flex.modes(flex.platform()).unwrap()[0];
+        let seven = SevenPhase::new(start, end, &p.limits).unwrap();
+        let at_mode = |r: &TestRun| r.vibration.as_ref().unwrap().lowest_mode_m_s2.unwrap();
+        let unshaped = run(&p, &opts, TestReference::SevenPhase).unwrap();
+        let mut shaped = Vec::new();
+        for (shaper, hz) in [
+            (Shaper::Zvd, mode.hz),
+            (Shaper::Ei, mode.hz),
+            (Shaper::Ei, 1.2 * mode.hz),
+            (Shaper::Ei, 0.8 * mode.hz),
+        ] {
+            let imp = Impulses::new(shaper, hz, mode.damping).unwrap();
+            let reference = |t: f64| {
+                let mut m = JointMotion::<f64>::default();
+                for (d, a) in imp.times_s.iter().zip(&imp.amplitudes) {
+                    let c = seven.at(t - d);
+                    m.q += c.q * *a;
+                    m.qd += c.qd * *a;
+                    m.qdd += c.qdd * *a;
+                    m.qddd += c.qddd * *a;
+                }
+                m
+            };
+            let d = seven.duration() + imp.duration_s();
+            let r = run_motion(&p, &opts, TestReference::SevenPhase, &reference, d).unwrap();
+            eprintln!(
+                "{shaper:?} at {hz:.2} Hz: {} vs {}",
+                at_mode(&r),
+                at_mode(&unshaped)
+            );
+            shaped.push(at_mode(&r));
+        }
+        let u = at_mode(&unshaped);
+        // Down to what the smooth plans leave after a move (0.3–0.8 mm/s²:
+        // the servo settling against the friction it mis-identifies), not
+        // to the 6 % of holding still.
+        assert!(
+            shaped[0] < 0.35 * u && shaped[1] < 0.35 * u,
+            "{shaped:?} vs {u}"
+        );
+        assert!(
+            shaped[2] < 0.5 * u && shaped[3] < 0.5 * u,
+            "{shaped:?} vs {u}"
+        );
+
+        // The planner's shaping of the plan itself: C3, checked, run by the drives.
+        let imp = Impulses::new(Shaper::Zvd, mode.hz, mode.damping).unwrap();
+        let s = shape(&p, &imp).unwrap();
+        assert!(triquint_planner::check(&s).unwrap().iter().all(|r| r.ok));
+        // Through the law it leaves no more than the floor after a move.
+        let law = run(&s, &opts, TestReference::Plan).unwrap();
+        assert!(at_mode(&law) < 0.35 * u, "{law:?}");
+    }
+}
