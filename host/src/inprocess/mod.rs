@@ -10,4 +10,6 @@ mod feed_tests;
 mod measure;
 pub mod simulate;
 #[cfg(test)]
+mod streaming_tests;
+#[cfg(test)]
 mod tests;
