@@ -454,7 +454,7 @@ fn underrun_stops_along_the_path_with_bounded_jerk() {
         60.0 * delta / h.powi(3),
     );
     let limit = Limits::default().jerk;
-    let ts = triquint_shared::protocol::config::stop_time(v, a, j, limit);
+    let ts = triquint_shared::protocol::stop_ramp::stop_time(v, a, j, limit, 1.0);
     let mut r = Rig::loaded_with(Rig::with_stop_time(ts), &segs[..3]);
     r.start();
     let mut stop_at = None;

@@ -10,7 +10,8 @@
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::DriveConfig;
-use triquint_shared::protocol::config::{DriveSettings, stop_time};
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::stop_ramp::stop_time;
 use triquint_shared::{Limits, Robot};
 
 use crate::override_cap::{Maxima, override_scaling};
@@ -85,8 +86,8 @@ impl DriveConfigs {
         a: f64,
         j: f64,
     ) -> Self {
-        let ts = stop_time(v, a, j, limits.jerk);
-        let tq = stop_time(v, a, 0.0, 3.0 * limits.jerk);
+        let ts = stop_time(v, a, j, limits.jerk, 1.0);
+        let tq = stop_time(v, a, 0.0, 3.0 * limits.jerk, 1.0);
         Self {
             nodes: [0, 1, 2].map(|i| DriveConfig::new(robot, limits, i, settings, ts, tq)),
             stop_time_s: ts,
@@ -230,5 +231,40 @@ mod tests {
         // Sized from the segments: the recorded summary would have given
         // the 50 ms floor, a stop far above the jerk limit.
         assert!(got.stop_time_s > 0.05, "{}", got.stop_time_s);
+    }
+
+    /// The stop ramps of the committed test plans and of a move at the
+    /// limits, by this rule and by the one that takes every peak at once
+    /// (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
+    #[test]
+    fn stop_ramps_are_no_longer_than_by_separate_peaks() {
+        use triquint_shared::protocol::stop_ramp::stop_time_separate_peaks;
+        let s = DriveSettings::default();
+        let mut rows = vec![];
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let text = std::fs::read_to_string(format!(
+                "{}/../../testdata/protocol/plans/{name}.json",
+                env!("CARGO_MANIFEST_DIR")
+            ))
+            .expect("a test plan");
+            let plan: Plan = serde_json::from_str(&text).expect("a plan");
+            let c = DriveConfigs::for_plan(&plan, &s).unwrap();
+            let [v, a, j] = largest(&plan).unwrap();
+            let old = stop_time_separate_peaks(v, a, j, plan.limits.jerk, c.override_cap);
+            rows.push((name, c.override_cap, c.stop_time_s, old));
+        }
+        let l = Limits::default();
+        let c = DriveConfigs::for_limits(&Robot::default(), &l, &s);
+        let old = stop_time_separate_peaks(l.velocity, l.acceleration, l.jerk, l.jerk, 1.0);
+        rows.push(("at the limits", 1.0, c.stop_time_s, old));
+        for (name, cap, new, old) in rows {
+            eprintln!(
+                "{name}: cap {cap:.3}, T_s {new:.3} s (look-ahead at σ = 1 {:.3} s), by separate peaks {old:.3} s ({:.3} s), ratio {:.3}",
+                0.5 * new,
+                0.5 * old,
+                new / old
+            );
+            assert!(new <= old * (1.0 + 1e-9) && new >= 0.05, "{name}");
+        }
     }
 }

@@ -7,11 +7,10 @@
 //! time-scaling (`firmware/src/scaling.rs`) over Δσ lasts
 //! T_s·max(√Δσ, Δσ), so |σ̇| ≤ 1.875/T_s and |σ̈| ≤ 5.774/T_s² in every
 //! one of them (a hold or stop from the cap, a resume to it, an override
-//! change); with σ ≤ k the joint jerk is at most
-//! q‴k³ + 3q″k|σ̇| + q′|σ̈|. So the stop ramp T_s is sized, as
-//! `stop_time` does for σ = 1, for a motion of maxima (v, a·k, j·k³): the
-//! jerk of any transition stays within max(J, j·k³ + J/2), the stop budget
-//! of docs/protocol.md. The quick stop likewise, at three times the limit.
+//! change). The stop ramp T_s is sized by `stop_ramp::stop_time` for σ up
+//! to k: the joint jerk q‴σ³ + 3q″σσ̇ + q′σ̈ of any transition from a
+//! constant σ ≤ k stays within max(J, j·k³ + J/2), the stop budget of
+//! docs/protocol.md. The quick stop likewise, at three times the limit.
 //! Torque in a transition is checked on a grid of the plan against the
 //! limit (or the σ = 1 transitions' own peak if that is above it).
 
@@ -19,7 +18,8 @@ use nalgebra::Vector3;
 use triquint_shared::Limits;
 use triquint_shared::dynamics::torque;
 use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::{SMOOTHSTEP_MAX_D1, stop_time};
+use triquint_shared::protocol::config::SMOOTHSTEP_MAX_D1;
+use triquint_shared::protocol::stop_ramp::stop_time;
 
 /// The largest cap the drives accept (configuration range 1–32).
 pub const CAP_MAX: f64 = 32.0;
@@ -49,8 +49,8 @@ pub struct Scaling {
 /// Stop ramps (T_s, T_q) for a motion of maxima `m` run at σ up to `k`.
 pub fn ramps(m: Maxima, limits: &Limits, k: f64) -> (f64, f64) {
     (
-        stop_time(m.v, m.a * k, m.j * k.powi(3), limits.jerk),
-        stop_time(m.v, m.a * k, 0.0, 3.0 * limits.jerk),
+        stop_time(m.v, m.a, m.j, limits.jerk, k),
+        stop_time(m.v, m.a, 0.0, 3.0 * limits.jerk, k),
     )
 }
 
@@ -153,7 +153,6 @@ impl<'a> TorqueGrid<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use triquint_shared::protocol::config::SMOOTHSTEP_MAX_D2;
 
     fn case2() -> Plan {
         let text = std::fs::read_to_string(concat!(
@@ -191,10 +190,21 @@ mod tests {
         let (t1, _) = ramps(m, l, 1.0);
         assert!(s.stop_time_s >= t1);
         let t = s.stop_time_s;
-        let worst = k.powi(3) * m.j
-            + 3.0 * m.a * k * SMOOTHSTEP_MAX_D1 / t
-            + m.v * SMOOTHSTEP_MAX_D2 / (t * t);
+        // A stop from the cap, sampled: σ = k(1 − S(u)) over T_s·k.
         let budget = l.jerk.max(k.powi(3) * m.j + 0.5 * l.jerk);
+        let worst = (0..=1000)
+            .map(|i| {
+                let u = i as f64 / 1000.0;
+                let s = u.powi(3) * (10.0 - 15.0 * u + 6.0 * u * u);
+                let s1 = 30.0 * (u * (1.0 - u)).powi(2);
+                let s2 = 60.0 * u * (1.0 - u) * (1.0 - 2.0 * u);
+                let sigma = k * (1.0 - s);
+                let tt = t * k;
+                m.j * sigma.powi(3)
+                    + 3.0 * m.a * sigma * k * s1 / tt
+                    + m.v * k * s2.abs() / (tt * tt)
+            })
+            .fold(0.0f64, f64::max);
         assert!(worst <= budget * (1.0 + 1e-9), "{worst} > {budget}");
     }
 

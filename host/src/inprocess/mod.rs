@@ -9,6 +9,8 @@ pub mod fault_run;
 mod feed_tests;
 mod measure;
 pub mod simulate;
+#[cfg(test)]
+mod streaming_tests;
 pub mod test_reference;
 #[cfg(test)]
 mod tests;

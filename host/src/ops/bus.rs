@@ -77,7 +77,9 @@ pub fn upload_error(e: UploadError, bus: &BusArgs) -> CliError {
     let n = nodes_arg(bus.ids().unwrap_or([1, 2, 3]));
     match e {
         e if e.is_config() => CliError::bad_input(e),
-        e @ UploadError::Segment { .. } => CliError::bad_input(e),
+        e @ (UploadError::Segment { .. } | UploadError::Unstreamable { .. }) => {
+            CliError::bad_input(e)
+        }
         e @ UploadError::Faulted { .. } => CliError::refused(format!(
             "{iface}: {e}: see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}` (or upload with --clear)"
         )),

@@ -245,19 +245,6 @@ pub const SMOOTHSTEP_MAX_D1: f64 = 1.875;
 /// max |S''(u)| = 10/√3.
 pub const SMOOTHSTEP_MAX_D2: f64 = 5.773_502_691_896_258;
 
-/// Duration of a stop by time-scaling σ = 1 − S(t/T) such that the joint jerk
-/// q'''σ³ + 3q''σσ̇ + q'σ̈ stays within `jerk_limit` when the plan's own
-/// maxima are `v`, `a`, `j` (the stop adds at most
-/// 3a·1.875/T + v·5.774/T²); if the plan already uses the jerk limit, the
-/// stop may add half of it again. At least 50 ms.
-pub fn stop_time(v: f64, a: f64, j: f64, jerk_limit: f64) -> f64 {
-    let budget = (jerk_limit - j).max(0.5 * jerk_limit).max(1e-9);
-    let b = 3.0 * SMOOTHSTEP_MAX_D1 * a;
-    let c = SMOOTHSTEP_MAX_D2 * v;
-    let t = (b + libm::sqrt(b * b + 4.0 * budget * c)) / (2.0 * budget);
-    t.max(0.05)
-}
-
 /// Settings of a drive that are not in the plan (machine and tuning).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DriveSettings {
@@ -717,20 +704,6 @@ mod tests {
             ),
         ] {
             assert_eq!(bad.validate().unwrap_err().name, name);
-        }
-    }
-
-    #[test]
-    fn stop_time_meets_jerk_budget() {
-        for (v, a, j, lim) in [
-            (0.2, 0.8, 1.5, 5.0),
-            (0.5, 1.2, 5.0, 5.0),
-            (0.0, 0.0, 0.1, 5.0),
-        ] {
-            let t = stop_time(v, a, j, lim);
-            let added = 3.0 * a * SMOOTHSTEP_MAX_D1 / t + v * SMOOTHSTEP_MAX_D2 / (t * t);
-            let budget = (lim - j).max(0.5 * lim);
-            assert!(added <= budget * (1.0 + 1e-9), "{added} > {budget}");
         }
     }
 }

@@ -21,6 +21,8 @@ pub mod describe;
 pub mod generate;
 pub mod messages;
 pub mod segment;
+pub mod stop_ramp;
+pub mod streaming;
 pub mod wire;
 
 pub use config::{DriveConfig, DriveSettings, PARAM_COUNT, PARAMS};

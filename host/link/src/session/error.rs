@@ -65,6 +65,18 @@ pub enum UploadError {
     },
     #[error("segment {seq}: not acknowledged by node {node} after {tries} transmissions")]
     Retransmits { node: u8, seq: usize, tries: u32 },
+    #[error(
+        "segments {first}–{last} last {} ms, less than the {} ms that queues of {capacity} segments need (look-ahead and refill, docs/protocol.md, Streamability): the drives would underrun; nothing moved",
+        *run_us as f64 / 1e3,
+        *need_us as f64 / 1e3
+    )]
+    Unstreamable {
+        capacity: usize,
+        first: usize,
+        last: usize,
+        run_us: u64,
+        need_us: u64,
+    },
     #[error("node {node} refused {}: {}", command.name(), code_name(*code, "unknown code"))]
     Refused {
         node: u8,
@@ -126,15 +138,15 @@ impl UploadError {
 
     /// Is this a drive rejecting the plan's own contents (bad input, exit
     /// 2): a segment invalid, not continuous with the one before, or
-    /// outside the axis's soft limits? Other rejections are the bus's or
-    /// the machine's.
+    /// outside the axis's soft limits; or a plan the drives' queues cannot
+    /// stream? Other rejections are the bus's or the machine's.
     pub fn is_bad_plan(&self) -> bool {
         matches!(
             self,
             UploadError::Rejected {
                 reason: Some(Reject::Invalid | Reject::Discontinuous | Reject::OutsideSoftLimits),
                 ..
-            }
+            } | UploadError::Unstreamable { .. }
         )
     }
 

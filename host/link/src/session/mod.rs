@@ -27,6 +27,7 @@ pub use options::SessionOptions;
 pub use start::{ARM_RESENDS, START_RETRY_US};
 
 use triquint_shared::plan::Plan;
+use triquint_shared::protocol::streaming::StreamRule;
 use triquint_shared::protocol::{
     CommandCode, DriveConfig, FaultCode, Msg, PROTOCOL_VERSION, State, WireSegment, decode,
 };
@@ -122,6 +123,9 @@ pub struct Session {
     clock: PlanClock,
     /// The configured override cap (σ).
     override_cap: f64,
+    /// Streamability of the plan by the configuration (its capacity is
+    /// the drives', known once they acknowledge a segment).
+    stream_rule: StreamRule,
 }
 
 /// Where a plan starts.
@@ -169,7 +173,15 @@ impl Session {
     ) -> Self {
         let stream = Stream::new(segments, opts.fd);
         let override_cap = configs[0].override_cap.max(1.0) as f64;
+        let c = &configs[0];
+        let stream_rule = StreamRule::new(
+            0,
+            c.stop_time as f64,
+            c.underrun_margin as f64,
+            c.heartbeat_period as f64,
+        );
         Self {
+            stream_rule,
             plan_end_us: stream.plan_end_us(),
             opts,
             phase: Phase::Discover,
@@ -410,6 +422,7 @@ impl Session {
                 let want = if cap == 0 { 1 } else { cap.min(n_seg) };
                 let want = want.min(self.opts.stall_after.unwrap_or(usize::MAX)).max(1);
                 if self.stream.all_acked_through(want) {
+                    self.check_streamable(cap)?;
                     self.start.arm(now, &mut self.out);
                     self.set_phase(Phase::Arm, now);
                 } else {
@@ -472,6 +485,25 @@ impl Session {
 
     /// An Arm refusal: every node back to Idle (Reset, nothing moved), and
     /// for a refusal for distance, how far each axis is from the plan's start.
+    /// Refuses, before Arm, a plan that queues of `capacity` segments
+    /// cannot stream at σ = 1 (`protocol::streaming`).
+    fn check_streamable(&mut self, capacity: usize) -> Result<(), UploadError> {
+        if capacity == 0 {
+            return Ok(());
+        }
+        self.stream_rule.capacity = capacity;
+        let d: Vec<u32> = self.stream.segments.iter().map(|s| s.duration_us).collect();
+        self.stream_rule
+            .check(&d)
+            .map_err(|s| UploadError::Unstreamable {
+                capacity,
+                first: s.first,
+                last: s.last,
+                run_us: s.run_us,
+                need_us: s.need_us,
+            })
+    }
+
     fn arm_refused<P: CanPort>(&mut self, e: UploadError, port: &mut P) -> UploadError {
         self.out.command(0, CommandCode::Reset, 0);
         let _ = self.out.flush(port);

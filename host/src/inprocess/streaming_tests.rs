@@ -1,0 +1,175 @@
+//! Streaming capacity end to end (issue 35): plans of many short segments
+//! on the in-process virtual hardware, classic CAN and CAN-FD, each
+//! checked against the streamability rule (`protocol::streaming`) before
+//! it runs; the figures are printed (`--nocapture`) for docs/protocol.md.
+
+use triquint_firmware::QUEUE_CAPACITY;
+use triquint_link::{DriveConfigs, UploadError};
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::streaming::StreamRule;
+use triquint_shared::{Limits, Robot};
+use triquint_sim::testplan;
+
+use super::simulate::{SimulateError, SimulateOptions, simulate};
+
+/// The rule for `plan` on this firmware's queue, default settings.
+fn rule(plan: &Plan) -> StreamRule {
+    let s = DriveSettings::default();
+    let c = DriveConfigs::for_plan(plan, &s).unwrap();
+    StreamRule::new(
+        QUEUE_CAPACITY,
+        c.stop_time_s,
+        s.underrun_margin,
+        s.heartbeat_period,
+    )
+}
+
+fn durations(plan: &Plan) -> Vec<u32> {
+    plan.wire_segments()
+        .unwrap()
+        .iter()
+        .map(|w| w.duration_us)
+        .collect()
+}
+
+/// Runs `plan` on classic CAN and CAN-FD: completed, no fault, every
+/// segment executed; prints the bus load.
+fn runs_on_both_buses(name: &str, plan: &Plan) {
+    let r = rule(plan);
+    let shortest = r.shortest_run(&durations(plan));
+    eprintln!(
+        "{name}: queue {}, look-ahead + refill {:.3} s, shortest run {:?} s",
+        r.capacity,
+        r.need_us() as f64 * 1e-6,
+        shortest.map(|s| s.run_us as f64 * 1e-6)
+    );
+    for fd in [false, true] {
+        let o = SimulateOptions {
+            fd,
+            ..SimulateOptions::default()
+        };
+        let r = simulate(plan, &o).unwrap();
+        let what = format!("{name} fd={fd}");
+        assert!(r.run.completed, "{what}: faults {:?}", r.faults_on_nodes);
+        assert!(
+            r.faults.is_empty() && r.faults_on_nodes.is_empty(),
+            "{what}"
+        );
+        eprintln!(
+            "{what}: {} segments, {:.3} s, {} frames/segment, bus load {:.4} (segments {:.4}), {} retransmissions",
+            plan.segments.len(),
+            plan.total_time_s,
+            r.frames_per_segment,
+            r.run.bus_load,
+            r.run.segment_bus_load,
+            r.retransmits
+        );
+    }
+}
+
+/// A rest-to-rest move of `d` (m) along x in `n` equal segments over `t`
+/// s, through the points of a quintic smoothstep at the knots.
+fn point_to_point(n: usize, t: f64, d: f64) -> Plan {
+    let pts: Vec<[f64; 3]> = (0..=n)
+        .map(|i| {
+            let u = i as f64 / n as f64;
+            let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+            [d * s, 0.0, 0.62]
+        })
+        .collect();
+    let h = vec![t / n as f64; n];
+    testplan::plan_through(&Robot::default(), &Limits::default(), &pts, &h).unwrap()
+}
+
+/// A 3-turn helix of radius 80 mm rising from 560 to 680 mm, rest to rest
+/// (path parameter a smoothstep of time), in `n` segments over `t` s,
+/// every tenth segment `short` s long (the others share the rest).
+fn helix(n: usize, t: f64, short: Option<f64>) -> Plan {
+    let shorts = if short.is_some() { n / 10 } else { 0 };
+    let s = short.unwrap_or(0.0);
+    let long = (t - s * shorts as f64) / (n - shorts) as f64;
+    let h: Vec<f64> = (0..n)
+        .map(|i| {
+            if short.is_some() && i % 10 == 9 {
+                s
+            } else {
+                long
+            }
+        })
+        .collect();
+    let mut knot_t = vec![0.0];
+    for x in &h {
+        knot_t.push(knot_t.last().copied().unwrap_or(0.0) + x);
+    }
+    let pts: Vec<[f64; 3]> = knot_t
+        .iter()
+        .map(|&tk| {
+            let v = (tk / t).clamp(0.0, 1.0);
+            let u = v * v * v * (10.0 - 15.0 * v + 6.0 * v * v);
+            let th = 2.0 * std::f64::consts::PI * 3.0 * u;
+            [0.08 * th.cos(), 0.08 * th.sin(), 0.56 + 0.12 * u]
+        })
+        .collect();
+    let limits = Limits {
+        total_time: t,
+        ..Limits::default()
+    };
+    testplan::plan_through(&Robot::default(), &limits, &pts, &h).unwrap()
+}
+
+#[test]
+fn a_fifteen_segment_move_under_a_second_streams() {
+    let plan = point_to_point(15, 0.9, 0.03);
+    assert_eq!(plan.segments.len(), 15);
+    // Within the limits, so the stop ramp is the plan's own.
+    let l = Limits::default();
+    for j in 0..3 {
+        assert!(plan.max_abs.jerk[j] <= l.jerk && plan.max_abs.velocity[j] <= l.velocity);
+    }
+    assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
+    runs_on_both_buses("15 segments in 0.9 s", &plan);
+}
+
+#[test]
+fn a_2_ms_segment_every_tenth_streams() {
+    let plan = helix(100, 20.0, Some(0.002));
+    assert_eq!(
+        plan.segments
+            .iter()
+            .filter(|s| s.duration_s < 0.0025)
+            .count(),
+        10
+    );
+    assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
+    runs_on_both_buses("2 ms every tenth", &plan);
+}
+
+#[test]
+fn a_2000_segment_plan_streams() {
+    let plan = helix(2000, 100.0, None);
+    assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
+    runs_on_both_buses("2000 segments", &plan);
+}
+
+#[test]
+fn an_unstreamable_plan_is_refused_before_anything_moves() {
+    // 300 segments in 3 s: 10 ms each, far less than the look-ahead in a
+    // queue's worth.
+    let plan = helix(300, 3.0, None);
+    let e = rule(&plan).check(&durations(&plan)).unwrap_err();
+    assert!(e.run_us < e.need_us);
+    let o = SimulateOptions::default();
+    match simulate(&plan, &o) {
+        Err(SimulateError::Upload(UploadError::Unstreamable {
+            capacity,
+            first,
+            last,
+            ..
+        })) => {
+            assert_eq!(capacity, QUEUE_CAPACITY);
+            assert_eq!(last - first + 1, QUEUE_CAPACITY - 1);
+        }
+        other => panic!("not refused: {:?}", other.map(|r| r.run.completed)),
+    }
+}
