@@ -24,6 +24,9 @@ pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 pub const PLAN_FORMAT: &str = "triquint-plan/2";
 /// The previous format: read (with the default machine's travel), never written.
 pub const PLAN_FORMAT_1: &str = "triquint-plan/1";
+/// Format 2 with `free_knots`: written for a plan whose planner chose some
+/// knots (docs/plan-format.md); a plan without free knots is still format 2.
+pub const PLAN_FORMAT_3: &str = "triquint-plan/3";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -92,6 +95,10 @@ pub struct Plan {
     pub travel: Travel,
     pub via_points_m: Vec<[f64; 3]>,
     pub knots_m: Vec<[f64; 3]>,
+    /// Indices in `knots_m` of the knots whose time and position the
+    /// planner chose (format 3; empty, and absent from the file, otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub free_knots: Vec<usize>,
     pub intervals_s: Vec<f64>,
     pub total_time_s: f64,
     pub segments: Vec<Segment>,
@@ -107,7 +114,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// assert_eq!(plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]).duration(), 2.0);
@@ -126,7 +133,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// let p = plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]);
@@ -150,7 +157,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
     /// let p = plan(vec![
@@ -181,7 +188,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
     /// let samples: Vec<(f64, JointState)> = p.sample(0.4)?.collect();
@@ -241,6 +248,7 @@ mod tests {
             travel: Travel::default(),
             via_points_m: Vec::new(),
             knots_m: Vec::new(),
+            free_knots: Vec::new(),
             intervals_s: Vec::new(),
             total_time_s: 0.0,
             segments: (0..n).map(seg).collect(),

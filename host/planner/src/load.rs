@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, Plan};
+use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_3, Plan};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
@@ -17,7 +17,9 @@ pub enum LoadError {
     #[error("{0}")]
     Json(String),
     /// Another format or version than this library reads.
-    #[error("format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_1}`)")]
+    #[error(
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_3}`, `{PLAN_FORMAT_1}`)"
+    )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
     #[error("{0}")]
@@ -34,19 +36,19 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
     // The format tag first, so another version is named as such.
     if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
         && let Some(f) = v.get("format").and_then(|f| f.as_str())
-        && f != PLAN_FORMAT
-        && f != PLAN_FORMAT_1
+        && !known_format(f)
     {
         return Err(LoadError::Format { found: one_line(f) });
     }
-    // Format 2 records the machine values the check needs; only format 1
-    // may lack them (it gets the default machine's).
+    // Formats 2 and 3 record the machine values the check needs; only
+    // format 1 may lack them (it gets the default machine's).
     if let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
-        && v.get("format").and_then(|f| f.as_str()) == Some(PLAN_FORMAT)
+        && let Some(f) = v.get("format").and_then(|f| f.as_str())
+        && f != PLAN_FORMAT_1
         && v.get("travel").is_none()
     {
         return Err(LoadError::Invalid(format!(
-            "a `{PLAN_FORMAT}` plan records its `travel`; this one has none"
+            "a `{f}` plan records its `travel`; this one has none"
         )));
     }
     let plan: Plan =
@@ -76,7 +78,7 @@ fn one_line(msg: &str) -> String {
 /// last included.
 pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if plan.format != PLAN_FORMAT && plan.format != PLAN_FORMAT_1 {
+    if !known_format(&plan.format) {
         return Err(LoadError::Format {
             found: one_line(&plan.format),
         });
@@ -169,7 +171,38 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
             exact(t)
         ));
     }
-    via_points_are_knots(plan)
+    via_points_are_knots(plan)?;
+    free_knots_valid(plan)
+}
+
+/// The formats this loader reads.
+fn known_format(f: &str) -> bool {
+    [PLAN_FORMAT, PLAN_FORMAT_3, PLAN_FORMAT_1].contains(&f)
+}
+
+/// Free knots only in format 3 (and there at least one): interior knots, in
+/// increasing order.
+fn free_knots_valid(plan: &Plan) -> Result<(), LoadError> {
+    let free = &plan.free_knots;
+    let bad = |m: String| Err(LoadError::Invalid(m));
+    if (plan.format == PLAN_FORMAT_3) == free.is_empty() {
+        return bad(format!(
+            "a `{}` plan {} free knots",
+            plan.format,
+            if free.is_empty() { "needs" } else { "has no" }
+        ));
+    }
+    let last = plan.knots_m.len() - 1;
+    if let Some(k) = free.iter().find(|&&k| k == 0 || k >= last) {
+        return bad(format!(
+            "free knot {k} is not an interior knot (1..{})",
+            last - 1
+        ));
+    }
+    if free.windows(2).any(|w| w[0] >= w[1]) {
+        return bad("free knots are not in increasing order".to_string());
+    }
+    Ok(())
 }
 
 /// `x` with every digit that tells it apart (the checks compare to 1e-9),
@@ -260,6 +293,7 @@ mod tests {
             travel: Default::default(),
             via_points_m: vec![p, p],
             knots_m: vec![q; n + 1],
+            free_knots: Vec::new(),
             intervals_s: vec![1e-3; n],
             total_time_s: t,
             segments,
