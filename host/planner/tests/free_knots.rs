@@ -1,0 +1,157 @@
+//! Free knots on point-to-point moves: every plan passes `check`, takes no
+//! longer than at fixed knots, and comes within a few per cent of the
+//! time-optimal jerk-limited duration of the joint that moves farthest
+//! (the bound no plan can beat, computed here in closed form).
+
+use triquint_planner::files::parse_plan;
+use triquint_planner::{Job, KnotPlacement, Limits, Objective, Options, PlanError, check, plan};
+
+const LIMITS: Limits = Limits {
+    velocity: 0.5,
+    acceleration: 1.2,
+    jerk: 5.0,
+    torque: 1e3,
+    total_time: 100.0,
+};
+
+/// Rest-to-rest time-optimal duration over `d` under per-joint v, a, j,
+/// when v·j ≥ a² (acceleration can be reached before velocity).
+fn double_s_time(d: f64, l: &Limits) -> f64 {
+    let (v, a, j) = (l.velocity, l.acceleration, l.jerk);
+    assert!(v * j >= a * a);
+    if d < 2.0 * a.powi(3) / (j * j) {
+        4.0 * (d / (2.0 * j)).cbrt()
+    } else if d < v * (a / j + v / a) {
+        let tj = a / j;
+        2.0 * (0.5 * tj + (0.25 * tj * tj + d / a).sqrt())
+    } else {
+        d / v + a / j + v / a
+    }
+}
+
+/// Seeded moves inside the paper's workspace (x, y ±100 mm, z 540–680 mm).
+fn moves(n: usize) -> Vec<[[f64; 3]; 2]> {
+    let mut state: u64 = 37;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut point = || {
+        [
+            -100.0 + 200.0 * next(),
+            -100.0 + 200.0 * next(),
+            540.0 + 140.0 * next(),
+        ]
+    };
+    (0..n).map(|_| [point(), point()]).collect()
+}
+
+fn job(m: [[f64; 3]; 2], knots: KnotPlacement) -> Result<Job, PlanError> {
+    Job::builder()
+        .objective(Objective::MinTime)
+        .limits(LIMITS)
+        .knots(knots)
+        .points_mm(m)
+        .build()
+}
+
+#[test]
+fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
+    let mut planned = 0;
+    for m in moves(20) {
+        let Ok(free_job) = job(m, KnotPlacement::Free) else {
+            continue;
+        };
+        let free = plan(&free_job, &Options::default()).unwrap();
+        let fixed = plan(&job(m, KnotPlacement::Fixed).unwrap(), &Options::default()).unwrap();
+        let rows = check(&free).unwrap();
+        assert!(rows.iter().all(|r| r.ok), "{m:?}: {rows:?}");
+        let (a, b) = (free.knots_m[0], free.knots_m[free.knots_m.len() - 1]);
+        let d = (0..3).map(|j| (b[j] - a[j]).abs()).fold(0.0, f64::max);
+        let optimum = double_s_time(d, &LIMITS);
+        let t = free.total_time_s;
+        assert!(t >= optimum * (1.0 - 1e-9), "{m:?}: {t} below {optimum}");
+        assert!(t <= optimum * 1.04, "{m:?}: {t} against {optimum}");
+        assert!(
+            t <= fixed.total_time_s,
+            "{m:?}: {t} against {}",
+            fixed.total_time_s
+        );
+        // Every interior knot is free, recorded in format 3, and read back.
+        assert_eq!(free.format, "triquint-plan/3");
+        assert_eq!(
+            free.free_knots,
+            (1..free.knots_m.len() - 1).collect::<Vec<_>>()
+        );
+        assert!(fixed.free_knots.is_empty() && fixed.format == "triquint-plan/2");
+        let back = parse_plan(&serde_json::to_string(&free).unwrap()).unwrap();
+        assert_eq!(back, free);
+        planned += 1;
+    }
+    assert!(planned >= 15, "only {planned} of 20 moves in the workspace");
+}
+
+#[test]
+fn free_knots_need_a_point_to_point_min_time_job() {
+    let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
+    assert!(job(m, KnotPlacement::Free).is_ok());
+    let e = Job::builder()
+        .knots(KnotPlacement::Free)
+        .points_mm(m)
+        .build()
+        .unwrap_err();
+    assert!(
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots"),
+        "{e:?}"
+    );
+    let e = Job::builder()
+        .objective(Objective::MinTime)
+        .knots(KnotPlacement::Free)
+        .points_mm([m[0], m[1], [20.0, 20.0, 600.0]])
+        .build()
+        .unwrap_err();
+    assert!(e.to_string().contains("exactly 2 via-points"), "{e}");
+    // The job file's key.
+    let text = "objective = \"min-time\"\nknots = \"free\"\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [20, 0, 600]]\n";
+    assert_eq!(
+        Job::from_toml(text).unwrap().knot_placement(),
+        KnotPlacement::Free
+    );
+    let e = Job::from_toml(&text.replace("\"free\"", "\"loose\"")).unwrap_err();
+    assert!(e.to_string().contains("job:2"), "{e}");
+}
+
+#[test]
+fn the_loader_takes_free_knots_only_in_format_3() {
+    let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
+    let p = plan(&job(m, KnotPlacement::Free).unwrap(), &Options::default()).unwrap();
+    let mut v: serde_json::Value = serde_json::to_value(&p).unwrap();
+    let load = |v: &serde_json::Value| parse_plan(&v.to_string());
+    assert!(load(&v).is_ok());
+    v["format"] = "triquint-plan/2".into();
+    assert!(
+        load(&v)
+            .unwrap_err()
+            .to_string()
+            .contains("has no free knots")
+    );
+    v["format"] = "triquint-plan/3".into();
+    v["free_knots"] = serde_json::json!([]);
+    assert!(
+        load(&v)
+            .unwrap_err()
+            .to_string()
+            .contains("needs free knots")
+    );
+    let last = p.knots_m.len() - 1;
+    for bad in [
+        serde_json::json!([0]),
+        serde_json::json!([last]),
+        serde_json::json!([2, 1]),
+    ] {
+        v["free_knots"] = bad.clone();
+        assert!(load(&v).is_err(), "{bad}");
+    }
+}
