@@ -33,8 +33,10 @@ const WINDOW: f64 = 1.0 / 32.0;
 /// How far inside the limits the whole-microsecond profile is built, so
 /// that the evaluation's rounding never reads as a violation.
 const MARGIN: f64 = 1e-9;
-/// Shortest segment (µs): the planner's [`Problem::h_min`] of 1 ms.
-const MIN_SEGMENT_US: i64 = 1_000;
+/// Shortest segment (µs): five times the planner's 1 ms, because the
+/// check's C3 residual of a segment in power form grows as h⁻³ times the
+/// rounding of its coefficients (at 1 ms a move's knots can miss 1e-9).
+const MIN_SEGMENT_US: i64 = 5_000;
 
 /// Durations (s) of the double S's jerk pulse, constant-acceleration hold
 /// and cruise.
@@ -226,10 +228,10 @@ pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution)> {
     let (us, jerk) = whole_microseconds(double_s(d, v, a, j), d, v, a, j)?;
     let total_us = 4 * us[0] + 2 * us[1] + us[2];
     // The window nearest the wanted fraction that keeps every segment at
-    // least the shortest: tried at half-millisecond steps either side.
+    // least the shortest: tried at millisecond steps either side.
     let aim = ((total_us as f64 * WINDOW).round() as i64).max(MIN_SEGMENT_US);
     let (window, times) = (0..64)
-        .map(|i| aim + if i % 2 == 0 { 1 } else { -1 } * (i + 1) / 2 * 500)
+        .map(|i| aim + if i % 2 == 0 { 1 } else { -1 } * (i + 1) / 2 * 1_000)
         .filter(|&w| w >= MIN_SEGMENT_US)
         .find_map(|w| knot_times(us, w).map(|t| (w, t)))?;
     let timing = Timing {

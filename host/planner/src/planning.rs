@@ -101,6 +101,14 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         plan.format = PLAN_FORMAT_3.to_string();
         plan.free_knots = (1..p.knots.len() - 1).collect();
     }
+    let plan = if free && !passes_check(&plan)? {
+        // Nothing the planner writes fails the check: the fixed knots then.
+        let (sol, _) = solve(job, &fixed, opts)?;
+        assemble(job, &fixed, &sol)
+    } else {
+        plan
+    };
+    let mut plan = plan;
     if let Some(e) = leaves_travel(&plan, job.travel()) {
         return Err(e);
     }
@@ -113,6 +121,14 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     Ok(plan)
+}
+
+/// A free-knot plan's check (its maxima recorded first, as the plan will).
+fn passes_check(plan: &Plan) -> Result<bool, PlanError> {
+    let mut plan = plan.clone();
+    plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
+        .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
+    Ok(crate::check::check(&plan).is_ok_and(|rows| rows.iter().all(|r| r.ok)))
 }
 
 /// The first segment in which a slider leaves the travel, from the exact
