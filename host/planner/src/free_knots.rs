@@ -369,10 +369,10 @@ mod tests {
         }
         // A window equal to a phase puts two knots on one time: one knot.
         assert_eq!(
-            knot_times([2_000, 0, 0], 2_000),
-            Some(vec![0, 2_000, 4_000, 6_000, 8_000, 10_000])
+            knot_times([20_000, 0, 0], 20_000),
+            Some(vec![0, 20_000, 40_000, 60_000, 80_000, 100_000])
         );
-        // One 500 µs from a switch is refused.
-        assert_eq!(knot_times([2_000, 0, 0], 1_500), None);
+        // One closer to a switch than the shortest segment is refused.
+        assert_eq!(knot_times([20_000, 0, 0], 17_000), None);
     }
 }
