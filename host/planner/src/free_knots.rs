@@ -214,10 +214,11 @@ fn knot_times(us: [i64; 3], window: i64) -> Option<Vec<i64>> {
 }
 
 /// The shortest plan at free knots of a point-to-point move, in whole
-/// microseconds and meeting every limit, with the problem at those knots;
-/// None when no time-scaling of the shape meets the limits. `template` is
-/// the job's problem: its first and last knots are the move's ends.
-pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution)> {
+/// microseconds and meeting every limit, with the problem at those knots
+/// and whether torque made it slower than the construction; None when no
+/// time-scaling of the shape meets the limits. `template` is the job's
+/// problem: its first and last knots are the move's ends.
+pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution, bool)> {
     let q = &template.knots.q;
     let (start, end) = (q[0], q[q.len() - 1]);
     let dq: [f64; 3] = [0, 1, 2].map(|j| end[j] - start[j]);
@@ -274,12 +275,12 @@ pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution)> {
     p.project(&h, &mut x);
     let exact = p.evaluate(&h, &x);
     if meets_every_limit(&p, &exact) {
-        return Some((p, exact));
+        return Some((p, exact, false));
     }
     // Torque binds: slowed down until it holds, then rounded and re-solved.
     let slower = shortest_scaling(&p, &exact)?;
     let rounded = lengthen_until_feasible(&p, &slower)?;
-    Some((p, rounded))
+    Some((p, rounded, true))
 }
 
 #[cfg(test)]

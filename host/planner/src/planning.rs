@@ -87,7 +87,21 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     let fixed = job_problem(job, state)?;
     let (p, free, r) = match job.knot_placement() {
         KnotPlacement::Free => match solve_free(job, &fixed) {
-            Some((p, r)) => (p, true, r),
+            Some((p, r, false)) => (p, true, r),
+            // Torque bound the free shape, which is only time-scaled for
+            // it: the fixed knots, reshaped by the search, may do better.
+            Some((p, r, true)) => {
+                let f = solve(job, &fixed, opts);
+                let total = |r: &Result<(Solution, usize), PlanError>| match r {
+                    Ok((s, _)) => s.h.iter().sum::<f64>(),
+                    Err(_) => f64::INFINITY,
+                };
+                if r.is_ok() && total(&r) <= total(&f) {
+                    (p, true, r)
+                } else {
+                    (fixed.clone(), false, f)
+                }
+            }
             None => (fixed.clone(), false, solve(job, &fixed, opts)),
         },
         KnotPlacement::Fixed => (fixed.clone(), false, solve(job, &fixed, opts)),
@@ -277,21 +291,24 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
     }
 }
 
+/// A plan's solution and search starts, or the verdict.
+type FreeResult = Result<(Solution, usize), PlanError>;
+
 /// Min-time at free knots ([`free_knots`]): the problem there and its
 /// shortest plan in whole microseconds (or the verdict against the job's
-/// total time); None when no time-scaling of the free-knot shape meets
-/// every limit, and the fixed knots are planned instead.
-type FreeResult = Result<(Solution, usize), PlanError>;
-fn solve_free(job: &Job, fixed: &Problem) -> Option<(Problem, FreeResult)> {
+/// total time), and whether torque slowed it; None when no time-scaling
+/// of the free-knot shape meets every limit, and the fixed knots are
+/// planned instead.
+fn solve_free(job: &Job, fixed: &Problem) -> Option<(Problem, FreeResult, bool)> {
     fixed.run.set_stage(Stage::MinTime);
-    let (p, s) = free_knots(fixed)?;
+    let (p, s, slowed) = free_knots(fixed)?;
     let total_time = job.limits().total_time;
     let r = if s.h.iter().sum::<f64>() > total_time * (1.0 + 1e-12) {
         Err(too_short(&p, &s, total_time))
     } else {
         Ok((s, 0))
     };
-    Some((p, r))
+    Some((p, r, slowed))
 }
 
 /// The verdict when the shortest plan `s` is longer than `total_time`: the

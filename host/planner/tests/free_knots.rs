@@ -93,6 +93,36 @@ fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
     assert!(planned >= 15, "only {planned} of 20 moves in the workspace");
 }
 
+/// When torque binds, the free shape is only time-scaled for it; the plan
+/// is then the shorter of it and the fixed knots' (reshaped by the
+/// search), so free knots are never worse, and every plan passes check.
+#[test]
+fn where_torque_binds_free_knots_are_never_worse_than_fixed() {
+    let m = [[-90.0, 90.0, 680.0], [40.0, -60.0, 600.0]];
+    let mut chose = [false; 2];
+    for torque in [0.25, 0.12] {
+        let with = |knots| {
+            let job = Job::builder()
+                .objective(Objective::MinTime)
+                .limits(Limits { torque, ..LIMITS })
+                .knots(knots)
+                .points_mm(m)
+                .build()
+                .unwrap();
+            plan(&job, &Options::default()).unwrap()
+        };
+        let (free, fixed) = (with(KnotPlacement::Free), with(KnotPlacement::Fixed));
+        assert!(check(&free).unwrap().iter().all(|r| r.ok));
+        assert!(free.total_time_s <= fixed.total_time_s, "torque {torque}");
+        // Torque binds: the plan reaches it on some joint.
+        let reached = free.max_abs.torque.iter().fold(0.0, |a: f64, &b| a.max(b));
+        assert!(reached > torque * 0.999, "torque {torque}: {reached}");
+        chose[usize::from(free.free_knots.is_empty())] = true;
+    }
+    // At 0.25 N·m the scaled free shape wins; at 0.12 the fixed knots do.
+    assert_eq!(chose, [true, true]);
+}
+
 #[test]
 fn free_knots_need_a_point_to_point_min_time_job() {
     let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
