@@ -199,11 +199,21 @@ fn whole_microseconds(t: Timing, d: f64, v: f64, a: f64, j: f64) -> Option<([i64
 /// than the shortest segment.
 fn knot_times(us: [i64; 3], window: i64) -> Option<Vec<i64>> {
     let [j, h, c] = us;
+    // Phase ends where the jerk changes: two decelerating pulses with no
+    // cruise between them are one phase.
     let mut switches = vec![0];
-    for d in [j, h, j, c, j, h, j] {
-        if d > 0 {
-            switches.push(switches[switches.len() - 1] + d);
+    let mut jerk_before = None;
+    for (d, sign) in [(j, 1), (h, 0), (j, -1), (c, 0), (j, -1), (h, 0), (j, 1)] {
+        if d == 0 {
+            continue;
         }
+        let end = switches[switches.len() - 1] + d;
+        if jerk_before == Some(sign) {
+            *switches.last_mut().expect("starts with 0") = end;
+        } else {
+            switches.push(end);
+        }
+        jerk_before = Some(sign);
     }
     let mut all: Vec<i64> = switches.iter().flat_map(|&t| [t, t + window]).collect();
     all.sort_unstable();
@@ -373,6 +383,15 @@ mod tests {
             knot_times([20_000, 0, 0], 20_000),
             Some(vec![0, 20_000, 40_000, 60_000, 80_000, 100_000])
         );
+        // 7 segments when only jerk binds, 11 when acceleration does, 15
+        // when velocity does.
+        for (us, segments) in [
+            ([200_000, 0, 0], 7),
+            ([240_000, 100_000, 0], 11),
+            ([240_000, 100_000, 200_000], 15),
+        ] {
+            assert_eq!(knot_times(us, 30_000).map(|t| t.len() - 1), Some(segments));
+        }
         // One closer to a switch than the shortest segment is refused.
         assert_eq!(knot_times([20_000, 0, 0], 17_000), None);
     }
