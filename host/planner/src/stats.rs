@@ -142,6 +142,10 @@ fn via_of_segments(plan: &Plan, model: &Model<f64>) -> Vec<usize> {
 /// The path's deviation of a (validated) plan ([`PathDeviation`]).
 pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
     let model = plan.robot.model::<f64>();
+    if plan.via_points_m.len() < 2 || plan.knots_m.len() != plan.segments.len() + 1 {
+        // Not a validated plan: no segments between via-points to measure.
+        return Ok(PathDeviation::default());
+    }
     let via = via_of_segments(plan, &model);
     let mut out = PathDeviation::default();
     let mut lipschitz: f64 = 0.0;
