@@ -5,8 +5,9 @@
 //! acceleration and jerk is the time-optimal jerk-limited ("double S")
 //! profile s(t) along the straight line in joint space, scaled so that the
 //! joint that moves farthest meets the limits: every other joint is a
-//! smaller copy, and all end together (what Ruckig's phase and time
-//! synchronisation give when every joint has the same limits). Its jerk
+//! smaller copy, and all end together (Ruckig's phase synchronisation;
+//! its time synchronisation takes as long when every joint has the same
+//! limits). Its jerk
 //! jumps, which a C3 plan cannot do. Averaging s over a sliding window of
 //! width τ (convolving its jerk with a box) makes the jerk continuous and
 //! piecewise linear, keeps every |v|, |a| and |jerk| within the original's
@@ -19,7 +20,8 @@
 //! lower to keep the distance), so the knots fall on the drives' time grid
 //! and nothing is re-solved. Torque is not part of the construction: when
 //! it binds, the shape is time-scaled until it holds and rounded as any
-//! min-time plan is.
+//! min-time plan is (and `planning` keeps the fixed knots' plan when that
+//! is shorter).
 
 use crate::problem::{Problem, Solution};
 use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, meets_every_limit};
@@ -35,7 +37,7 @@ const WINDOW: f64 = 1.0 / 32.0;
 const MARGIN: f64 = 1e-9;
 /// Shortest segment (µs): five times the planner's 1 ms, because the
 /// check's C3 residual of a segment in power form grows as h⁻³ times the
-/// rounding of its coefficients (at 1 ms a move's knots can miss 1e-9).
+/// rounding of its coefficients (docs/planner-speed.md).
 const MIN_SEGMENT_US: i64 = 5_000;
 
 /// Durations (s) of the double S's jerk pulse, constant-acceleration hold

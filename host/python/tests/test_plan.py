@@ -151,3 +151,20 @@ def test_free_knots_and_the_path_deviation(tmp_path):
     assert d["max"] <= d["bound"] and 0 < d["step"] <= 2e-4
     # The free knots leave the straight line; the fixed ones stay near it.
     assert f["bound"] < 0.5e-3 < d["max"]
+
+
+def test_knots_keyword():
+    move = [[-90, 90, 680], [40, -60, 600]]
+    free = triquint.plan(move, objective="min-time", knots="free")
+    job = triquint.Job(move, objective="min-time", knots="free")
+    assert job.knot_placement == "free"
+    assert triquint.plan(job).duration == free.duration
+    assert free.free_knots and free.duration < triquint.plan(move, objective="min-time").duration
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.plan(move, knots="free")  # min-max-jerk
+    assert e.value.field == "knots"
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.Job(move, knots="loose")
+    assert e.value.field == "knots"
+    with pytest.raises(TypeError):
+        triquint.plan(job, knots="free")
