@@ -25,8 +25,9 @@ pub const PLAN_FORMAT: &str = "triquint-plan/2";
 /// The previous format: read (with the default machine's travel), never written.
 pub const PLAN_FORMAT_1: &str = "triquint-plan/1";
 /// Format 2 with `free_knots`: written for a plan whose planner chose some
-/// knots (docs/plan-format.md); a plan without free knots is still format 2.
-pub const PLAN_FORMAT_3: &str = "triquint-plan/3";
+/// knots (docs/plan-format.md); a plan without free knots is still format
+/// 2. Numbered 4: 3 is the machine file's (ceilings), merged separately.
+pub const PLAN_FORMAT_FREE_KNOTS: &str = "triquint-plan/4";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -96,7 +97,7 @@ pub struct Plan {
     pub via_points_m: Vec<[f64; 3]>,
     pub knots_m: Vec<[f64; 3]>,
     /// Indices in `knots_m` of the knots whose time and position the
-    /// planner chose (format 3; empty, and absent from the file, otherwise).
+    /// planner chose (format 4; empty, and absent from the file, otherwise).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub free_knots: Vec<usize>,
     pub intervals_s: Vec<f64>,

@@ -3,7 +3,9 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_3, Plan};
+use triquint_shared::plan::{
+    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_FREE_KNOTS, Plan,
+};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
@@ -18,7 +20,7 @@ pub enum LoadError {
     Json(String),
     /// Another format or version than this library reads.
     #[error(
-        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_3}`, `{PLAN_FORMAT_1}`)"
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_1}`)"
     )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
@@ -177,15 +179,15 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
 
 /// The formats this loader reads.
 fn known_format(f: &str) -> bool {
-    [PLAN_FORMAT, PLAN_FORMAT_3, PLAN_FORMAT_1].contains(&f)
+    [PLAN_FORMAT, PLAN_FORMAT_FREE_KNOTS, PLAN_FORMAT_1].contains(&f)
 }
 
-/// Free knots only in format 3 (and there at least one): interior knots, in
+/// Free knots only in format 4 (and there at least one): interior knots, in
 /// increasing order.
 fn free_knots_valid(plan: &Plan) -> Result<(), LoadError> {
     let free = &plan.free_knots;
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if (plan.format == PLAN_FORMAT_3) == free.is_empty() {
+    if (plan.format == PLAN_FORMAT_FREE_KNOTS) == free.is_empty() {
         return bad(format!(
             "a `{}` plan {} free knots",
             plan.format,

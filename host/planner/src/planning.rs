@@ -8,7 +8,9 @@ use std::time::Duration;
 use nalgebra::Vector3;
 use triquint_shared::Travel;
 use triquint_shared::plan::figures::kinematics;
-use triquint_shared::plan::{Objective, PLAN_FORMAT, PLAN_FORMAT_3, Plan, Segment, SolverStats};
+use triquint_shared::plan::{
+    Objective, PLAN_FORMAT, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
+};
 
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
@@ -112,7 +114,7 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     let (sol, starts) = r?;
     let mut plan = assemble(job, &p, &sol);
     if free {
-        plan.format = PLAN_FORMAT_3.to_string();
+        plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
         plan.free_knots = (1..p.knots.len() - 1).collect();
     }
     let plan = if free && !passes_check(&plan)? {

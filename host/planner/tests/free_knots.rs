@@ -79,8 +79,8 @@ fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
             "{m:?}: {t} against {}",
             fixed.total_time_s
         );
-        // Every interior knot is free, recorded in format 3, and read back.
-        assert_eq!(free.format, "triquint-plan/3");
+        // Every interior knot is free, recorded in format 4, and read back.
+        assert_eq!(free.format, "triquint-plan/4");
         assert_eq!(
             free.free_knots,
             (1..free.knots_m.len() - 1).collect::<Vec<_>>()
@@ -154,7 +154,7 @@ fn free_knots_need_a_point_to_point_min_time_job() {
 }
 
 #[test]
-fn the_loader_takes_free_knots_only_in_format_3() {
+fn the_loader_takes_free_knots_only_in_format_4() {
     let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
     let p = plan(&job(m, KnotPlacement::Free).unwrap(), &Options::default()).unwrap();
     let mut v: serde_json::Value = serde_json::to_value(&p).unwrap();
@@ -167,7 +167,7 @@ fn the_loader_takes_free_knots_only_in_format_3() {
             .to_string()
             .contains("has no free knots")
     );
-    v["format"] = "triquint-plan/3".into();
+    v["format"] = "triquint-plan/4".into();
     v["free_knots"] = serde_json::json!([]);
     assert!(
         load(&v)

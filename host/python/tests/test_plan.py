@@ -142,7 +142,7 @@ def test_free_knots_and_the_path_deviation(tmp_path):
         path.write_text(move.format(knots))
         plans[knots] = triquint.plan(triquint.Job.from_toml(str(path)))
     free, fixed = plans["free"], plans["fixed"]
-    assert free.format == "triquint-plan/3" and fixed.format == "triquint-plan/2"
+    assert free.format == "triquint-plan/4" and fixed.format == "triquint-plan/2"
     assert free.free_knots == list(range(1, len(free.knots) - 1))
     assert fixed.free_knots == []
     assert free.duration < fixed.duration
