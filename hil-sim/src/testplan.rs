@@ -145,6 +145,7 @@ pub fn plan_through(
         ceilings: Default::default(),
         via_points_m: points.to_vec(),
         knots_m: knots.iter().map(|k| [k[0], k[1], k[2]]).collect(),
+        free_knots: Vec::new(),
         intervals_s: h.clone(),
         total_time_s: t0,
         segments,

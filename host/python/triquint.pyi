@@ -19,6 +19,7 @@ _ArrayLike = npt.ArrayLike
 _Array = npt.NDArray[np.float64]
 _Units = Literal["mm", "m"]
 _Objective = Literal["min-max-jerk", "min-time"]
+_Knots = Literal["fixed", "free"]
 _PathLike = Union[str, "os.PathLike[str]"]
 
 class TriquintError(Exception):
@@ -159,6 +160,7 @@ class Job:
         *,
         units: _Units = "mm",
         objective: _Objective = "min-max-jerk",
+        knots: _Knots = "fixed",
         total_time: float = 5.0,
         velocity: float = 0.5,
         acceleration: float = 1.2,
@@ -172,6 +174,8 @@ class Job:
         """Reads a job file of ``triquint plan``."""
     @property
     def objective(self) -> _Objective: ...
+    @property
+    def knot_placement(self) -> _Knots: ...
     @property
     def points(self) -> _Array:
         """Via-points (n, 3), metres."""
@@ -252,6 +256,13 @@ class Plan:
     def knots(self) -> _Array:
         """Joint positions q (k + 1, 3), metres, at the segment boundaries."""
     @property
+    def free_knots(self) -> List[int]:
+        """Indices into ``knots`` of the knots the planner chose (``knots="free"``); empty otherwise."""
+    @property
+    def path_deviation(self) -> Dict[str, float]:
+        """'max' (m, sampled), 'at' (s), 'bound' (m, Lipschitz bound between samples), 'step' (s):
+        the platform's largest distance from the straight segments between via-points."""
+    @property
     def segments(self) -> Segments: ...
     @property
     def max_abs(self) -> Dict[str, _Array]:
@@ -280,6 +291,7 @@ def plan(
     *,
     units: _Units = "mm",
     objective: _Objective = "min-max-jerk",
+    knots: _Knots = "fixed",
     total_time: float = 5.0,
     velocity: float = 0.5,
     acceleration: float = 1.2,

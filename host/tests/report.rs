@@ -54,6 +54,7 @@ fn rest_to_rest_plan(points_mm: &[[f64; 3]], h: &[f64]) -> Plan {
         ceilings: Default::default(),
         via_points_m: via,
         knots_m: knots,
+        free_knots: Vec::new(),
         intervals_s: h.to_vec(),
         total_time_s: t0,
         segments,

@@ -27,6 +27,9 @@ pub const PLAN_FORMAT: &str = "triquint-plan/3";
 /// lack: travel before 2, ceilings before 3), never written.
 pub const PLAN_FORMAT_1: &str = "triquint-plan/1";
 pub const PLAN_FORMAT_2: &str = "triquint-plan/2";
+/// Format 3 with `free_knots`: written for a plan whose planner chose some
+/// knots (docs/plan-format.md); a plan without free knots is format 3.
+pub const PLAN_FORMAT_FREE_KNOTS: &str = "triquint-plan/4";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -99,6 +102,10 @@ pub struct Plan {
     pub ceilings: Ceilings,
     pub via_points_m: Vec<[f64; 3]>,
     pub knots_m: Vec<[f64; 3]>,
+    /// Indices in `knots_m` of the knots whose time and position the
+    /// planner chose (format 4; empty, and absent from the file, otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub free_knots: Vec<usize>,
     pub intervals_s: Vec<f64>,
     pub total_time_s: f64,
     pub segments: Vec<Segment>,
@@ -114,7 +121,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// assert_eq!(plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]).duration(), 2.0);
@@ -133,7 +140,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// let p = plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]);
@@ -157,7 +164,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
     /// let p = plan(vec![
@@ -188,7 +195,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default() } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
     /// let samples: Vec<(f64, JointState)> = p.sample(0.4)?.collect();
@@ -249,6 +256,7 @@ mod tests {
             ceilings: Ceilings::default(),
             via_points_m: Vec::new(),
             knots_m: Vec::new(),
+            free_knots: Vec::new(),
             intervals_s: Vec::new(),
             total_time_s: 0.0,
             segments: (0..n).map(seg).collect(),

@@ -165,6 +165,7 @@ mod tests {
             ceilings: Default::default(),
             via_points_m: vec![],
             knots_m: vec![],
+            free_knots: vec![],
             intervals_s: vec![1.0],
             total_time_s: 1.0,
             segments: vec![Segment {

@@ -33,6 +33,22 @@ pub const MAX_SEGMENT_S: f64 = MAX_DURATION_US as f64 * 1e-6;
 /// Shortest interval the planner uses (s).
 pub const MIN_SEGMENT_S: f64 = 1e-3;
 
+/// How the planner places the knots between the via-points.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum KnotPlacement {
+    /// The via-points, with straight-line points at fixed fractions when
+    /// there are fewer than five ([`Job::knots_m`]); the planner chooses the
+    /// times and the knots' velocities and accelerations.
+    #[default]
+    Fixed,
+    /// Min-time between two via-points: the planner also chooses the
+    /// interior knots' number, times and joint positions, on the straight
+    /// line in joint space (the path leaves the Cartesian segment; the plan
+    /// reports by how much).
+    Free,
+}
+
 /// A valid job: reachable via-points (and knots), limits in range.
 /// Build one with [`Job::builder`] or read one with `Job::from_toml`.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +59,7 @@ pub struct Job {
     travel: Travel,
     ceilings: Ceilings,
     points_m: Vec<[f64; 3]>,
+    knots: KnotPlacement,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
@@ -58,6 +75,7 @@ pub struct JobBuilder {
     /// The machine's robot, which a robot given with the job must equal.
     machine_robot: Option<Robot>,
     points_m: Vec<[f64; 3]>,
+    knots: KnotPlacement,
 }
 
 impl JobBuilder {
@@ -90,6 +108,11 @@ impl JobBuilder {
     /// The upper bound on the total time (s).
     pub fn total_time(mut self, seconds: f64) -> Self {
         self.limits.total_time = seconds;
+        self
+    }
+    /// How the knots are placed ([`KnotPlacement::Fixed`] by default).
+    pub fn knots(mut self, knots: KnotPlacement) -> Self {
+        self.knots = knots;
         self
     }
     /// Replaces the via-points, in metres.
@@ -194,6 +217,14 @@ impl JobBuilder {
                 ));
             }
         }
+        if self.knots == KnotPlacement::Free
+            && (self.objective != Objective::MinTime || pts.len() != 2)
+        {
+            return Err(PlanError::invalid(
+                "knots",
+                "free knots need objective = \"min-time\" and exactly 2 via-points",
+            ));
+        }
         let knots = knot_points(pts);
         for (i, k) in knots.iter().enumerate() {
             reachable(&model, &self.travel, *k, PointKind::Knot, i)?;
@@ -222,6 +253,7 @@ impl JobBuilder {
             travel: self.travel,
             ceilings: self.ceilings,
             points_m: self.points_m,
+            knots: self.knots,
         })
     }
 }
@@ -268,6 +300,7 @@ impl Job {
             ceilings: self.ceilings.clone(),
             machine_robot: None,
             points_m: self.points_m.clone(),
+            knots: self.knots,
         }
     }
     pub fn objective(&self) -> Objective {
@@ -290,7 +323,11 @@ impl Job {
     pub fn points_m(&self) -> &[[f64; 3]] {
         &self.points_m
     }
-    /// The knots the planner interpolates: the via-points, with points on
+    /// How the knots are placed.
+    pub fn knot_placement(&self) -> KnotPlacement {
+        self.knots
+    }
+    /// The fixed knots the planner interpolates: the via-points, with points on
     /// the straight lines between them when there are fewer than five.
     pub fn knots_m(&self) -> Vec<[f64; 3]> {
         knot_points(&self.points_m)

@@ -2,6 +2,7 @@
 //!
 //! ```toml
 //! objective = "min-max-jerk"        # or "min-time"
+//! knots = "fixed"                    # or "free" (min-time, two via-points)
 //! [robot]                            # optional; defaults = paper Table 1
 //! [limits]                           # defaults = paper Table 3
 //! [path]
@@ -27,7 +28,7 @@ use triquint_shared::{Limits, Robot};
 
 use crate::bounded_read::{MAX_JOB_BYTES, MAX_POINTS_FILE_BYTES, io_reason, read_text};
 use crate::error::PlanError;
-use crate::job::Job;
+use crate::job::{Job, KnotPlacement};
 use crate::points_file::parse_points;
 
 /// Length unit of the via-points.
@@ -91,6 +92,8 @@ struct JobFile {
     robot: Option<Robot>,
     #[serde(default)]
     limits: Limits,
+    #[serde(default)]
+    knots: KnotPlacement,
     path: PathSpec,
 }
 
@@ -198,6 +201,7 @@ fn parse(
     builder
         .objective(f.objective)
         .limits(f.limits)
+        .knots(f.knots)
         .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
         .build()
 }

@@ -53,6 +53,7 @@ mod error;
 #[cfg(any(test, feature = "evolution"))]
 pub mod evolution;
 mod extrema;
+mod free_knots;
 mod inner;
 mod jerk_only;
 mod job;
@@ -85,7 +86,7 @@ mod search_tests;
 pub use bounded_read::{MAX_JOB_BYTES, MAX_PLAN_BYTES, MAX_POINTS_FILE_BYTES, read_text};
 pub use check::{CheckRow, check};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
-pub use job::{Job, JobBuilder};
+pub use job::{Job, JobBuilder, KnotPlacement};
 pub use options::{Control, MAX_STARTS, Observer, Options, Progress, Stage};
 pub use planning::{plan, plan_with};
 pub use triquint_shared::plan::{Objective, Plan};

@@ -3,7 +3,9 @@
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
-use triquint_shared::plan::{MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, Plan};
+use triquint_shared::plan::{
+    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, PLAN_FORMAT_FREE_KNOTS, Plan,
+};
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
@@ -18,7 +20,7 @@ pub enum LoadError {
     Json(String),
     /// Another format or version than this library reads.
     #[error(
-        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
     )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
@@ -40,7 +42,7 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
         // What each format records of the machine; an earlier format
         // gets the default machine's values for what it lacks.
         let records: &[&str] = match f {
-            PLAN_FORMAT => &["travel", "ceilings"],
+            PLAN_FORMAT | PLAN_FORMAT_FREE_KNOTS => &["travel", "ceilings"],
             PLAN_FORMAT_2 => &["travel"],
             PLAN_FORMAT_1 => &[],
             _ => return Err(LoadError::Format { found: one_line(f) }),
@@ -78,7 +80,7 @@ fn one_line(msg: &str) -> String {
 /// last included.
 pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if ![PLAN_FORMAT, PLAN_FORMAT_2, PLAN_FORMAT_1].contains(&plan.format.as_str()) {
+    if !known_format(&plan.format) {
         return Err(LoadError::Format {
             found: one_line(&plan.format),
         });
@@ -171,7 +173,44 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
             exact(t)
         ));
     }
-    via_points_are_knots(plan)
+    via_points_are_knots(plan)?;
+    free_knots_valid(plan)
+}
+
+/// The formats this loader reads.
+fn known_format(f: &str) -> bool {
+    [
+        PLAN_FORMAT,
+        PLAN_FORMAT_FREE_KNOTS,
+        PLAN_FORMAT_2,
+        PLAN_FORMAT_1,
+    ]
+    .contains(&f)
+}
+
+/// Free knots only in format 4 (and there at least one): interior knots, in
+/// increasing order.
+fn free_knots_valid(plan: &Plan) -> Result<(), LoadError> {
+    let free = &plan.free_knots;
+    let bad = |m: String| Err(LoadError::Invalid(m));
+    if (plan.format == PLAN_FORMAT_FREE_KNOTS) == free.is_empty() {
+        return bad(format!(
+            "a `{}` plan {} free knots",
+            plan.format,
+            if free.is_empty() { "needs" } else { "has no" }
+        ));
+    }
+    let last = plan.knots_m.len() - 1;
+    if let Some(k) = free.iter().find(|&&k| k == 0 || k >= last) {
+        return bad(format!(
+            "free knot {k} is not an interior knot (1..{})",
+            last - 1
+        ));
+    }
+    if free.windows(2).any(|w| w[0] >= w[1]) {
+        return bad("free knots are not in increasing order".to_string());
+    }
+    Ok(())
 }
 
 /// `x` with every digit that tells it apart (the checks compare to 1e-9),
@@ -263,6 +302,7 @@ mod tests {
             ceilings: Default::default(),
             via_points_m: vec![p, p],
             knots_m: vec![q; n + 1],
+            free_knots: Vec::new(),
             intervals_s: vec![1e-3; n],
             total_time_s: t,
             segments,

@@ -8,11 +8,14 @@ use std::time::Duration;
 use nalgebra::Vector3;
 use triquint_shared::Travel;
 use triquint_shared::plan::figures::kinematics;
-use triquint_shared::plan::{Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
+use triquint_shared::plan::{
+    Objective, PLAN_FORMAT, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
+};
 
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
-use crate::job::{Job, MAX_SEGMENT_S, MIN_SEGMENT_S};
+use crate::free_knots::free_knots;
+use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
 use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
@@ -83,13 +86,45 @@ pub fn plan_with(
 }
 
 fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanError> {
-    let p = job_problem(job, state)?;
-    let r = solve(job, &p, opts);
+    let fixed = job_problem(job, state)?;
+    let (p, free, r) = match job.knot_placement() {
+        KnotPlacement::Free => match solve_free(job, &fixed) {
+            Some((p, r, false)) => (p, true, r),
+            // Torque bound the free shape, which is only time-scaled for
+            // it: the fixed knots, reshaped by the search, may do better.
+            Some((p, r, true)) => {
+                let f = solve(job, &fixed, opts);
+                let total = |r: &Result<(Solution, usize), PlanError>| match r {
+                    Ok((s, _)) => s.h.iter().sum::<f64>(),
+                    Err(_) => f64::INFINITY,
+                };
+                if r.is_ok() && total(&r) <= total(&f) {
+                    (p, true, r)
+                } else {
+                    (fixed.clone(), false, f)
+                }
+            }
+            None => (fixed.clone(), false, solve(job, &fixed, opts)),
+        },
+        KnotPlacement::Fixed => (fixed.clone(), false, solve(job, &fixed, opts)),
+    };
     if let Some(reason) = state.cancelled() {
         return Err(PlanError::Cancelled { reason });
     }
     let (sol, starts) = r?;
     let mut plan = assemble(job, &p, &sol);
+    if free {
+        plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
+        plan.free_knots = (1..p.knots.len() - 1).collect();
+    }
+    let plan = if free && !passes_check(&plan)? {
+        // Nothing the planner writes fails the check: the fixed knots then.
+        let (sol, _) = solve(job, &fixed, opts)?;
+        assemble(job, &fixed, &sol)
+    } else {
+        plan
+    };
+    let mut plan = plan;
     if let Some(e) = leaves_travel(&plan, job.travel()) {
         return Err(e);
     }
@@ -102,6 +137,14 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     Ok(plan)
+}
+
+/// A free-knot plan's check (its maxima recorded first, as the plan will).
+fn passes_check(plan: &Plan) -> Result<bool, PlanError> {
+    let mut plan = plan.clone();
+    plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
+        .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
+    Ok(crate::check::check(&plan).is_ok_and(|rows| rows.iter().all(|r| r.ok)))
 }
 
 /// The first segment in which a slider leaves the travel, from the exact
@@ -250,6 +293,26 @@ fn solve(job: &Job, p: &Problem, opts: &Options) -> Result<(Solution, usize), Pl
     }
 }
 
+/// A plan's solution and search starts, or the verdict.
+type FreeResult = Result<(Solution, usize), PlanError>;
+
+/// Min-time at free knots ([`free_knots`]): the problem there and its
+/// shortest plan in whole microseconds (or the verdict against the job's
+/// total time), and whether torque slowed it; None when no time-scaling
+/// of the free-knot shape meets every limit, and the fixed knots are
+/// planned instead.
+fn solve_free(job: &Job, fixed: &Problem) -> Option<(Problem, FreeResult, bool)> {
+    fixed.run.set_stage(Stage::MinTime);
+    let (p, s, slowed) = free_knots(fixed)?;
+    let total_time = job.limits().total_time;
+    let r = if s.h.iter().sum::<f64>() > total_time * (1.0 + 1e-12) {
+        Err(too_short(&p, &s, total_time))
+    } else {
+        Ok((s, 0))
+    };
+    Some((p, r, slowed))
+}
+
 /// The verdict when the shortest plan `s` is longer than `total_time`: the
 /// limit it breaks when time-scaled to `total_time`, and its time. The
 /// scaled plan is evaluated exactly, not re-solved: re-solving its knot
@@ -303,6 +366,7 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
         ceilings: job.ceilings().clone(),
         via_points_m: job.points_m().to_vec(),
         knots_m: p.knots.q.clone(),
+        free_knots: Vec::new(),
         intervals_s: s.h.clone(),
         total_time_s: s.h.iter().sum(),
         segments,

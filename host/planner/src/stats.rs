@@ -6,18 +6,23 @@
 //! functions) and their means too: ∫|p′| between the roots of p′ is a
 //! change of p. Torque is sampled on [`TORQUE_INTERVALS`] intervals per
 //! segment, the grid maximum refined by golden-section search, and averaged
-//! by Simpson's rule.
+//! by Simpson's rule. The path's distance from the straight segments
+//! between the via-points ([`PathDeviation`]) is sampled densely, with a
+//! bound between samples.
 
 use nalgebra::Vector3;
 use serde::Serialize;
 use triquint_shared::Model;
 use triquint_shared::dynamics;
+use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{Plan, Segment};
 
 use crate::extrema::{argmax_abs_on_interval, derivative, integral_abs_on_interval};
 
 /// Torque grid intervals per segment (even, for Simpson's rule; ≥ 200).
 pub const TORQUE_INTERVALS: usize = 256;
+/// Longest time between two samples of the path's deviation (s).
+pub const DEVIATION_STEP_S: f64 = 2e-4;
 
 /// The dynamics (forward kinematics) failed along the trajectory.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -67,6 +72,114 @@ pub struct PlanStats {
     /// N·m
     pub torque: Quantity,
     pub segments: Vec<SegmentStats>,
+    /// How far the platform leaves the straight segments between the via-points.
+    pub path_deviation: PathDeviation,
+}
+
+/// The platform's largest distance from the straight Cartesian segment
+/// between the via-points it is travelling between. Forward kinematics is
+/// not polynomial, so it is sampled at most [`DEVIATION_STEP_S`] apart;
+/// between two samples the distance changes by at most the platform's
+/// speed times the time, and the speed is at most ‖∂r/∂q‖ (Frobenius, at
+/// the nearer sample) times the joints' exact largest speed |q̇| in the
+/// segment. `bound_m` adds half a step of that to the sampled maximum: a
+/// Lipschitz bound, exact but for ‖∂r/∂q‖ read at the samples (it changes
+/// by a tiny fraction over one step on a smooth path).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct PathDeviation {
+    /// Largest sampled distance (m).
+    pub max_m: f64,
+    /// Plan time of that sample (s).
+    pub at_s: f64,
+    /// The distance anywhere is at most this (m), as above.
+    pub bound_m: f64,
+    /// Time between samples (s), at most [`DEVIATION_STEP_S`].
+    pub step_s: f64,
+}
+
+/// Distance of `p` from the segment a–b.
+fn from_segment(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> f64 {
+    let ab = b - a;
+    let u = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+    (p - (a + ab * u)).norm()
+}
+
+/// For each segment of a (validated) plan, the via-points it runs between:
+/// the via-points are knots in order, at the knots nearest their IK images.
+fn via_of_segments(plan: &Plan, model: &Model<f64>) -> Vec<usize> {
+    let mut at = vec![0usize; plan.via_points_m.len()];
+    let mut next = 0;
+    for (i, p) in plan.via_points_m.iter().enumerate() {
+        let Ok(pose) = Pose::from_cartesian(model, Vector3::from(*p)) else {
+            continue;
+        };
+        let dist = |k: usize| {
+            (0..3)
+                .map(|j| (plan.knots_m[k][j] - pose.q[j]).abs())
+                .fold(0.0, f64::max)
+        };
+        let last = plan.knots_m.len() - 1;
+        let k = if i + 1 == plan.via_points_m.len() {
+            last
+        } else {
+            (next..=last)
+                .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
+                .unwrap_or(next)
+        };
+        at[i] = k;
+        next = k + 1;
+    }
+    (0..plan.segments.len())
+        .map(|k| {
+            at.iter()
+                .rposition(|&knot| knot <= k)
+                .unwrap_or(0)
+                .min(at.len() - 2)
+        })
+        .collect()
+}
+
+/// The path's deviation of a (validated) plan ([`PathDeviation`]).
+pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
+    let model = plan.robot.model::<f64>();
+    if plan.via_points_m.len() < 2 || plan.knots_m.len() != plan.segments.len() + 1 {
+        // Not a validated plan: no segments between via-points to measure.
+        return Ok(PathDeviation::default());
+    }
+    let via = via_of_segments(plan, &model);
+    let mut out = PathDeviation::default();
+    let mut lipschitz: f64 = 0.0;
+    for (k, seg) in plan.segments.iter().enumerate() {
+        let a = Vector3::from(plan.via_points_m[via[k]]);
+        let b = Vector3::from(plan.via_points_m[via[k] + 1]);
+        let h = seg.duration_s;
+        let n = (h / DEVIATION_STEP_S).ceil().max(1.0) as usize;
+        let step = h / n as f64;
+        out.step_s = out.step_s.max(step);
+        // The joints' exact largest speed in the segment.
+        let qd = (0..3)
+            .map(|j| argmax_abs_on_interval(&derivative(&seg.coeffs[j]), 0.0, h).1)
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt();
+        for i in 0..=n {
+            let t = step * i as f64;
+            let q = seg.quintic().eval(t).q;
+            let pose = Pose::from_joints(&model, q).map_err(|source| StatsError {
+                segment: k + 1,
+                time_s: seg.t0_s + t,
+                source,
+            })?;
+            let d = from_segment(pose.r, a, b);
+            if d > out.max_m {
+                out.max_m = d;
+                out.at_s = seg.t0_s + t;
+            }
+            lipschitz = lipschitz.max(pose.platform_jacobian().norm() * qd * step);
+        }
+    }
+    out.bound_m = out.max_m + 0.5 * lipschitz;
+    Ok(out)
 }
 
 /// Motor torques at segment-local time `t`.
@@ -103,6 +216,7 @@ pub fn plan_stats(plan: &Plan) -> Result<PlanStats, StatsError> {
         jerk: Quantity::default(),
         torque: Quantity::default(),
         segments: Vec::with_capacity(plan.segments.len()),
+        path_deviation: path_deviation(plan)?,
     };
     let mut integrals = [[0.0f64; 3]; 4];
     for (i, seg) in plan.segments.iter().enumerate() {

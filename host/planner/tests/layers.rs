@@ -40,6 +40,7 @@ const LAYERS: &[&str] = &[
     "time_descent", // the descent on the total time
     "min_time",     // the shortest total time
     "rounding",     // whole microseconds
+    "free_knots",   // a point-to-point move's knots chosen by the planner
     "planning",     // the entry point, `plan`
     "evolution",    // differential evolution, the search's independent check
 ];

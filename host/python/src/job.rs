@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
-use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
+use triquint_planner::{Control, Job, KnotPlacement, Options, Progress, Stage, plan_with};
 use triquint_shared::Limits;
 use triquint_shared::plan::Objective;
 
@@ -24,8 +24,9 @@ use crate::units::Units;
 /// (m/s²), jerk (m/s³), torque (N·m), total_time (s, an upper bound; the
 /// plan's duration for min-max-jerk). `objective` is 'min-max-jerk' (the
 /// smallest maximum |jerk| within total_time) or 'min-time' (the shortest
-/// time that meets every limit). Defaults: the paper's Table 3 limits and
-/// Table 1 robot.
+/// time that meets every limit). `knots` is 'fixed' or, for min-time
+/// between two via-points, 'free' (the planner chooses the knots). Defaults:
+/// the paper's Table 3 limits and Table 1 robot.
 ///
 /// `Job.from_toml(path)` reads a job file of `triquint plan`.
 #[pyclass(name = "Job", module = "triquint", frozen)]
@@ -46,10 +47,23 @@ pub fn parse_objective(py: Python<'_>, s: &str) -> PyResult<Objective> {
     }
 }
 
+fn parse_knots(py: Python<'_>, s: &str) -> PyResult<KnotPlacement> {
+    match s {
+        "fixed" => Ok(KnotPlacement::Fixed),
+        "free" => Ok(KnotPlacement::Free),
+        _ => Err(invalid_job(
+            py,
+            "knots",
+            &format!("must be \"fixed\" or \"free\", got {s:?}"),
+        )),
+    }
+}
+
 /// The keywords of a job, as `plan()` and `Job()` take them.
 pub struct JobArgs<'a, 'py> {
     pub units: Option<&'a str>,
     pub objective: Option<&'a str>,
+    pub knots: Option<&'a str>,
     pub total_time: Option<f64>,
     pub velocity: Option<f64>,
     pub acceleration: Option<f64>,
@@ -70,6 +84,7 @@ impl JobArgs<'_, '_> {
         };
         add("units", self.units.is_some());
         add("objective", self.objective.is_some());
+        add("knots", self.knots.is_some());
         add("total_time", self.total_time.is_some());
         add("velocity", self.velocity.is_some());
         add("acceleration", self.acceleration.is_some());
@@ -85,6 +100,7 @@ impl JobArgs<'_, '_> {
 pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> PyResult<PyJob> {
     let units = Units::parse(args.units.unwrap_or("mm"))?;
     let objective = parse_objective(py, args.objective.unwrap_or("min-max-jerk"))?;
+    let knots = parse_knots(py, args.knots.unwrap_or("fixed"))?;
     let d = Limits::default();
     let limits = Limits {
         velocity: args.velocity.unwrap_or(d.velocity),
@@ -117,6 +133,7 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
     let job = guard(py, || {
         builder
             .objective(objective)
+            .knots(knots)
             .limits(limits)
             .points_m(rows)
             .build()
@@ -128,10 +145,10 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
 #[pymethods]
 impl PyJob {
     #[new]
-    #[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
+    #[pyo3(signature = (points, *, units = None, objective = None, knots = None, total_time = None,
         velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
         machine = None),
-        text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
+        text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', total_time=5.0, \
             velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -139,6 +156,7 @@ impl PyJob {
         points: &Bound<'_, PyAny>,
         units: Option<&str>,
         objective: Option<&str>,
+        knots: Option<&str>,
         total_time: Option<f64>,
         velocity: Option<f64>,
         acceleration: Option<f64>,
@@ -150,6 +168,7 @@ impl PyJob {
         let args = JobArgs {
             units,
             objective,
+            knots,
             total_time,
             velocity,
             acceleration,
@@ -200,6 +219,15 @@ impl PyJob {
     #[getter]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         rows_array(py, self.job.points_m(), true)
+    }
+
+    /// 'fixed' or 'free': how the planner places the knots.
+    #[getter]
+    fn knot_placement(&self) -> &'static str {
+        match self.job.knot_placement() {
+            KnotPlacement::Fixed => "fixed",
+            KnotPlacement::Free => "free",
+        }
     }
 
     /// The knots the planner interpolates (metres): the via-points, with
@@ -297,10 +325,10 @@ impl From<&Progress> for PyProgress {
 /// (index, point), InfeasibleError (limit, reached, shortest_total_time),
 /// SolverError.
 #[pyfunction]
-#[pyo3(signature = (points, *, units = None, objective = None, total_time = None,
+#[pyo3(signature = (points, *, units = None, objective = None, knots = None, total_time = None,
     velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
     machine = None, starts = 8, seed = 1, progress = None),
-    text_signature = "(points, *, units='mm', objective='min-max-jerk', total_time=5.0, \
+    text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', total_time=5.0, \
         velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None, \
         starts=8, seed=1, progress=None)")]
 #[allow(clippy::too_many_arguments)]
@@ -309,6 +337,7 @@ pub fn plan(
     points: &Bound<'_, PyAny>,
     units: Option<&str>,
     objective: Option<&str>,
+    knots: Option<&str>,
     total_time: Option<f64>,
     velocity: Option<f64>,
     acceleration: Option<f64>,
@@ -323,6 +352,7 @@ pub fn plan(
     let args = JobArgs {
         units,
         objective,
+        knots,
         total_time,
         velocity,
         acceleration,

@@ -189,6 +189,29 @@ impl PyPlan {
         rows_array(py, &self.plan.knots_m, true)
     }
 
+    /// Indices into `knots` of the knots whose time and joint position the
+    /// planner chose (a min-time job with `knots = "free"`); empty otherwise.
+    #[getter]
+    fn free_knots(&self) -> Vec<usize> {
+        self.plan.free_knots.clone()
+    }
+
+    /// The platform's largest distance from the straight segment between
+    /// the via-points it travels between: a dict of 'max' (m, sampled),
+    /// 'at' (s, where), 'bound' (m, at most this anywhere: a Lipschitz bound
+    /// between samples) and 'step' (s, between samples).
+    #[getter]
+    fn path_deviation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = triquint_planner::stats::path_deviation(&self.plan)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let out = PyDict::new(py);
+        out.set_item("max", d.max_m)?;
+        out.set_item("at", d.at_s)?;
+        out.set_item("bound", d.bound_m)?;
+        out.set_item("step", d.step_s)?;
+        Ok(out)
+    }
+
     /// The segments: `t0`, `durations` (k,) and `coeffs` (k, 3, 6).
     #[getter]
     fn segments(&self, py: Python<'_>) -> PyResult<PySegments> {

@@ -48,7 +48,7 @@ def test_not_a_plan():
         triquint.Plan.from_json("{\"format\": 3}")
     assert e.value.kind == "json" and "line 1" in str(e.value)
     with pytest.raises(triquint.PlanFileError) as e:
-        triquint.Plan.from_json("{\"format\": \"triquint-plan/4\"}")
+        triquint.Plan.from_json("{\"format\": \"triquint-plan/9\"}")
     assert e.value.kind == "format"
     assert isinstance(e.value, ValueError)
 

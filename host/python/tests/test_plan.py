@@ -132,3 +132,39 @@ def test_job_from_toml_reads_the_examples():
     job = triquint.Job.from_toml(str(EXAMPLES / "paper-case2.toml"))
     assert job.points.shape == (11, 3)
     assert job.limits["total_time"] == 5.0
+
+
+def test_free_knots_and_the_path_deviation(tmp_path):
+    move = 'objective = "min-time"\nknots = "{}"\n[path]\nunits = "mm"\npoints = [[-90, 90, 680], [40, -60, 600]]\n'
+    plans = {}
+    for knots in ("free", "fixed"):
+        path = tmp_path / f"{knots}.toml"
+        path.write_text(move.format(knots))
+        plans[knots] = triquint.plan(triquint.Job.from_toml(str(path)))
+    free, fixed = plans["free"], plans["fixed"]
+    assert free.format == "triquint-plan/4" and fixed.format == "triquint-plan/3"
+    assert free.free_knots == list(range(1, len(free.knots) - 1))
+    assert fixed.free_knots == []
+    assert free.duration < fixed.duration
+    assert all(row["ok"] for row in free.check())
+    d, f = free.path_deviation, fixed.path_deviation
+    assert d["max"] <= d["bound"] and 0 < d["step"] <= 2e-4
+    # The free knots leave the straight line; the fixed ones stay near it.
+    assert f["bound"] < 0.5e-3 < d["max"]
+
+
+def test_knots_keyword():
+    move = [[-90, 90, 680], [40, -60, 600]]
+    free = triquint.plan(move, objective="min-time", knots="free")
+    job = triquint.Job(move, objective="min-time", knots="free")
+    assert job.knot_placement == "free"
+    assert triquint.plan(job).duration == free.duration
+    assert free.free_knots and free.duration < triquint.plan(move, objective="min-time").duration
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.plan(move, knots="free")  # min-max-jerk
+    assert e.value.field == "knots"
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.Job(move, knots="loose")
+    assert e.value.field == "knots"
+    with pytest.raises(TypeError):
+        triquint.plan(job, knots="free")

@@ -52,6 +52,15 @@ pub fn run(args: &ReportArgs) -> CliResult {
         outln!("{}", tables::intervals_table(&plan, &stats))?;
         outln!("{}", tables::joint_table(&plan, &stats))?;
         out!("{}", tables::recorded_check(&plan, &stats))?;
+        let d = &stats.path_deviation;
+        outln!(
+            "path: at most {:.3} mm from the straight segments between via-points \
+             ({:.3} mm sampled every {:.2} ms, the largest at t = {:.4} s)",
+            d.bound_m * 1e3,
+            d.max_m * 1e3,
+            d.step_s * 1e3,
+            d.at_s
+        )?;
     }
     for path in written {
         triquint_cli_common::errln!("wrote {}", path.display());
