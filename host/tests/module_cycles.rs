@@ -289,6 +289,33 @@ fn ops_use_neither_the_commands_nor_the_web_page() {
     );
 }
 
+/// The operations neither draw nor read a terminal (no progress bar, no
+/// stdin, no terminal modes): the commands watch a run through
+/// `ops::run::RunWatch`.
+#[test]
+fn ops_neither_draw_nor_read_a_terminal() {
+    let ops = root().join("host/src/ops");
+    let mut files = Vec::new();
+    rust_files(&ops, &mut files);
+    assert!(files.len() > 1, "{}: no sources found", ops.display());
+    let mut wrong = Vec::new();
+    for f in &files {
+        let text = strip_comments(&fs::read_to_string(f).expect("source readable"));
+        for name in ["indicatif", "termios", "stdin"] {
+            let named = text.match_indices(name).any(|(i, _)| {
+                let before = text[..i].chars().next_back();
+                let after = text[i + name.len()..].chars().next();
+                let ident = |c: Option<char>| c.is_some_and(|c| c.is_alphanumeric() || c == '_');
+                !ident(before) && !ident(after)
+            });
+            if named {
+                wrong.push(format!("{} names {name}", f.display()));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "ops reaches the terminal: {wrong:?}");
+}
+
 #[test]
 fn board_modules_import_one_way() {
     let boards = root().join("firmware/boards");

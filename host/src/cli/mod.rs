@@ -18,6 +18,7 @@ pub mod resume;
 pub mod simulate;
 pub mod status;
 pub mod stop;
+pub mod terminal_watch;
 pub mod torque;
 pub mod upload;
 

@@ -10,12 +10,13 @@ use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::Machine;
 
 use crate::cli::finite;
-use crate::cli::keys::Keys;
-use crate::cli::upload::{report, run_plan};
+use crate::cli::terminal_watch::TerminalWatch;
+use crate::cli::upload::report;
 use crate::exit::{CliError, CliResult};
 use crate::ops::bus::{BusArgs, check_bus_args};
 use crate::ops::joints::reported_joints;
 use crate::ops::plan_move::plan_move;
+use crate::ops::run::run_plan;
 
 #[derive(Args, Debug)]
 pub struct MoveToArgs {
@@ -60,8 +61,8 @@ pub fn run(args: &MoveToArgs, machine: &Machine) -> CliResult {
         outln!("already within 1 µm of the target on every axis")?;
         return Ok(());
     };
-    let mut keys = Keys::open(1000);
-    let summary = run_plan(&p, bus, machine, false, keys.as_mut())?;
-    drop(keys);
+    let mut watch = TerminalWatch::open();
+    let summary = run_plan(&p, bus, machine, false, &mut watch)?;
+    drop(watch);
     report(&summary, bus, args.json)
 }

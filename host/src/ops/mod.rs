@@ -1,7 +1,7 @@
 //! The host's operations on the machine, shared by the subcommands, the web
 //! control and the tests: the bus options, listening, sending a command,
-//! configuring the drives, where the joints are, planning a move, the
-//! feed commands (hold, resume, stop, override). Imports
+//! configuring the drives, where the joints are, planning a move, running
+//! a plan, the feed commands (hold, resume, stop, override). Imports
 //! go one way: `cli` and `web` use `ops`, never the reverse
 //! (`tests/module_cycles.rs`).
 
@@ -11,4 +11,5 @@ pub mod feed;
 pub mod joints;
 pub mod listen;
 pub mod plan_move;
+pub mod run;
 pub mod send;

@@ -1,0 +1,158 @@
+//! Uploading and running a plan on the drives over SocketCAN: heartbeat
+//! check, configuration, segment streaming with flow control, time sync,
+//! arm, common start, then each node's final state and fault code. Whoever
+//! runs it watches through [`RunWatch`] (the CLI's progress line and keys),
+//! so the loop itself neither draws nor reads a terminal.
+
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+use triquint_link::{DriveConfigs, Feed, Outcome, Progress, Session, SessionOptions, open_host};
+use triquint_shared::machine::Machine;
+use triquint_shared::plan::Plan;
+use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::{FaultCode, State};
+
+use crate::exit::{CliError, CliResult};
+use crate::ops::bus::{BusArgs, check_bus_args, upload_error};
+
+/// What an upload did.
+#[derive(Clone, Debug, Serialize)]
+pub struct UploadSummary {
+    pub completed: bool,
+    /// Stopped on request (a stop key, `triquint stop`): at rest on the path.
+    pub stopped: bool,
+    /// The override cap the drives were configured with (σ).
+    pub override_cap: f64,
+    pub segments: usize,
+    pub frames_sent: u64,
+    pub segment_frames: u64,
+    pub retransmits: u64,
+    /// From the first frame until every segment was acknowledged by every node (s).
+    pub upload_s: f64,
+    /// From the first frame until every node reported rest (s).
+    pub total_s: f64,
+    pub nodes: Vec<NodeSummary>,
+    pub faults: Vec<FaultSummary>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeSummary {
+    pub node: u8,
+    pub state: &'static str,
+    pub fault: u8,
+    pub fault_name: &'static str,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FaultSummary {
+    pub node: u8,
+    pub code: u8,
+    pub name: &'static str,
+}
+
+/// Who watches a run: is told its progress and may send feed commands.
+pub trait RunWatch {
+    /// The override (per mille) to set before the start; 100 % sends none.
+    fn initial_override_pm(&self) -> Option<u16>;
+    /// The run begins: `segments` to upload.
+    fn start(&mut self, segments: usize);
+    /// The feed commands to send now, from what the session knows
+    /// (`progress`); `cap_pm` is the configured override cap (per mille).
+    fn feed(&mut self, progress: &Progress, cap_pm: u16) -> Vec<Feed>;
+    /// Progress after one poll of the bus.
+    fn progress(&mut self, progress: &Progress);
+    /// The run failed.
+    fn abandon(&mut self);
+    /// The run ended (completed, stopped or faulted).
+    fn finish(&mut self);
+}
+
+/// Uploads and runs `plan` over `bus`, told to `watch`.
+pub fn run_plan(
+    plan: &Plan,
+    bus: &BusArgs,
+    machine: &Machine,
+    clear: bool,
+    watch: &mut dyn RunWatch,
+) -> CliResult<UploadSummary> {
+    check_bus_args(bus)?;
+    let settings = DriveSettings {
+        control_rate: bus.rate(),
+        node_ids: bus.ids()?,
+        ..machine.drive_settings()
+    };
+    let configs = DriveConfigs::for_plan(plan, &settings).map_err(CliError::bad_input)?;
+    let override_cap = configs.override_cap;
+    let cap_pm = configs.override_cap_permille();
+    let configs = configs.nodes;
+    let opts = SessionOptions {
+        fd: bus.fd,
+        response_timeout_us: (bus.timeout * 1e6) as u64,
+        clear_faults: clear,
+        // The override chosen while watching (in an approach before this plan).
+        feed_override: watch.initial_override_pm().filter(|pm| *pm != 1000),
+        ..SessionOptions::default()
+    };
+    let mut session = Session::new(plan, configs, opts).map_err(|e| upload_error(e, bus))?;
+    let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
+    watch.start(plan.segments.len());
+    let t0 = Instant::now();
+    let mut acked_at: Option<f64> = None;
+    let outcome: Outcome = loop {
+        for f in watch.feed(&session.progress(), cap_pm) {
+            session.feed(f);
+        }
+        let polled = session.poll(&mut port);
+        let p = session.progress();
+        watch.progress(&p);
+        if acked_at.is_none() && p.segments_acked == p.segments {
+            acked_at = Some(t0.elapsed().as_secs_f64());
+        }
+        match polled {
+            Ok(Some(o)) => break o,
+            Ok(None) => {}
+            Err(e) => {
+                watch.abandon();
+                return Err(upload_error(e, bus));
+            }
+        }
+        // 1 ms: the window (4 segments) stays full and time stamps come from
+        // the kernel, so polling faster only burns CPU.
+        std::thread::sleep(Duration::from_millis(1));
+    };
+    watch.finish();
+    let total_s = t0.elapsed().as_secs_f64();
+    let nodes = session
+        .node_states()
+        .iter()
+        .zip(session.nodes())
+        .map(|((state, fault), v)| NodeSummary {
+            node: v.id,
+            state: state.map_or("silent", State::name),
+            fault: *fault,
+            fault_name: FaultCode::from_u8(*fault).map_or("unknown", FaultCode::name),
+        })
+        .collect();
+    Ok(UploadSummary {
+        completed: outcome.completed,
+        stopped: outcome.stopped,
+        override_cap,
+        segments: plan.segments.len(),
+        frames_sent: outcome.frames_sent,
+        segment_frames: outcome.segment_frames_sent,
+        retransmits: outcome.retransmits,
+        upload_s: acked_at.unwrap_or(total_s),
+        total_s,
+        nodes,
+        faults: outcome
+            .faults
+            .iter()
+            .map(|f| FaultSummary {
+                node: f.node,
+                code: f.code as u8,
+                name: f.code.name(),
+            })
+            .collect(),
+    })
+}
