@@ -156,3 +156,87 @@ pub fn run_plan(
             .collect(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use triquint_shared::{Limits, Robot};
+    use triquint_sim::testplan;
+
+    use super::*;
+    use crate::exit::Status;
+
+    /// Which of its methods a run called.
+    #[derive(Default)]
+    struct Recorder {
+        calls: Vec<&'static str>,
+    }
+
+    impl RunWatch for Recorder {
+        fn initial_override_pm(&self) -> Option<u16> {
+            None
+        }
+        fn start(&mut self, _: usize) {
+            self.calls.push("start");
+        }
+        fn feed(&mut self, _: &Progress, _: u16) -> Vec<Feed> {
+            self.calls.push("feed");
+            Vec::new()
+        }
+        fn progress(&mut self, _: &Progress) {
+            self.calls.push("progress");
+        }
+        fn abandon(&mut self) {
+            self.calls.push("abandon");
+        }
+        fn finish(&mut self) {
+            self.calls.push("finish");
+        }
+    }
+
+    fn bus(iface: &str, timeout: f64) -> BusArgs {
+        BusArgs {
+            iface: iface.to_string(),
+            fd: false,
+            rate_arg: None,
+            timeout,
+            nodes_arg: None,
+            machine_ids: None,
+            machine_rate: None,
+        }
+    }
+
+    fn plan() -> Plan {
+        let pts = [[0.0, 0.0, 0.62], [0.005, 0.0, 0.62], [0.01, 0.0, 0.62]];
+        testplan::plan_through(&Robot::default(), &Limits::default(), &pts, &[0.5, 0.5])
+            .expect("a short move")
+    }
+
+    #[test]
+    fn a_run_that_cannot_begin_never_starts_its_watch() {
+        let (plan, machine) = (plan(), Machine::default());
+        let mut w = Recorder::default();
+        let e = run_plan(
+            &plan,
+            &bus("triquint-nosuch0", 2.0),
+            &machine,
+            false,
+            &mut w,
+        )
+        .expect_err("no such interface");
+        assert_eq!(e.status, Status::Device, "{}", e.message);
+        let e = run_plan(
+            &plan,
+            &bus("triquint-nosuch0", 0.0),
+            &machine,
+            false,
+            &mut w,
+        )
+        .expect_err("a zero timeout");
+        assert_eq!(e.status, Status::BadInput, "{}", e.message);
+        assert!(
+            w.calls.is_empty(),
+            "watched a run that never began: {:?}",
+            w.calls
+        );
+    }
+}
