@@ -86,3 +86,34 @@ fn a_correctly_wired_machine_rests_without_a_fault() {
     assert!(sim.faults().is_empty(), "{:?}", sim.faults());
     assert!(sim.nodes.iter().all(|n| n.node.state() == State::Idle));
 }
+
+/// Axis 1's encoder scale 32× off from its drive's `counts_per_metre`.
+/// Too many counts per metre: the drive sees its motion 32× magnified, a
+/// 32× loop gain, and faults within the runaway bounds. Too few: the drive
+/// sees 1/32 of it, so its 1 mm bound is 32 mm of real sag under gravity
+/// before the Fault; only a check at enable (the axis moves as told) would
+/// catch it sooner.
+#[test]
+fn a_wrong_encoder_scale_ends_in_following_error() {
+    for (k, max_s, max_m) in [(32.0, MAX_FAULT_S, MAX_TRAVEL_M), (1.0 / 32.0, 2.0, 0.035)] {
+        let robot = Robot::default();
+        let r = Vector3::new(-0.09, 0.09, 0.68);
+        let q0 = Pose::from_cartesian(&robot.model::<f64>(), r).unwrap().q;
+        let mut cfg = SimConfig {
+            record_every: 1000,
+            ..SimConfig::default()
+        };
+        cfg.counts_per_metre[0] *= k;
+        let mut sim = Sim::new(&robot, q0, cfg);
+        let (t, d) = configure_and_watch(&mut sim, 3.0).expect("no fault within 3 s");
+        let first = sim.faults()[0];
+        assert_eq!((first.node, first.code), (1, FaultCode::FollowingError));
+        println!(
+            "encoder scale ×{k}: Fault after {:.1} ms, {:.3} mm",
+            t * 1e3,
+            d * 1e3
+        );
+        assert!(t < max_s, "×{k}: {t} s");
+        assert!(d < max_m, "×{k}: {d} m");
+    }
+}
