@@ -505,8 +505,8 @@ impl<const Q: usize> Drive<Q> {
             }
         }
         let out = law::step(&mut self.law, &Gains::new(&self.cfg, &a), r_own, q, ff);
-        if let Some(code) = self.motion_fault(out.error, q) {
-            self.begin_stop(StopReason::Fault(code), false, now_us);
+        if let Some(code) = self.motion_fault(out.error, q, r_own) {
+            self.on_motion_fault(code, now_us);
         }
         motor.set_torque(out.torque * self.cfg.direction);
 

@@ -203,9 +203,13 @@ impl Rig {
             self.next_sync = self.t + 20_000;
         }
         let reference = self.node.stats.reference.q[1];
+        // The axis follows the reference and stays where it came to rest.
         let q = match self.node.state() {
             State::Idle | State::Loaded => self.parked + self.offset,
-            _ => reference + self.offset,
+            _ => {
+                self.parked = reference;
+                reference + self.offset
+            }
         };
         let counts = (q as f64 * self.cfg.counts_per_metre as f64).round() as i64;
         let mut m = Motor(0.0, false);
@@ -828,4 +832,94 @@ fn mid_transition_changes_are_sized_by_the_receive_side() {
     assert_eq!(r.node.state(), State::Stopping);
     assert_ne!(p.to, before);
     assert_eq!(r.node.drive.scaling(), p.to);
+}
+
+/// The loop is closed in every powered state: an axis pushed 2 mm off its
+/// hold position (beyond `following_error_max`) at rest, Idle, Loaded or
+/// Armed, ends in Fault with FollowingError and its Emergency, holding.
+#[test]
+fn a_following_error_at_rest_faults_in_every_powered_state() {
+    let segs = segments(4, 0.3);
+    for state in [State::Idle, State::Loaded, State::Armed] {
+        let mut r = match state {
+            State::Idle => {
+                let mut r = Rig::new();
+                r.parked = 0.3;
+                r.configure();
+                r
+            }
+            _ => Rig::loaded(&segs),
+        };
+        if state == State::Armed {
+            assert_eq!(r.command(CommandCode::Arm, 0), 0);
+        }
+        assert_eq!(r.node.state(), state);
+        r.run(50);
+        assert_eq!(r.node.state(), state, "quiet at rest");
+        assert!(r.emergencies().is_empty());
+        r.offset = 2.0 * r.cfg.following_error_max;
+        r.run(1);
+        assert_eq!(r.node.state(), State::Fault, "{state:?}");
+        assert_eq!(r.node.fault(), FaultCode::FollowingError);
+        assert_eq!(r.emergencies(), [FaultCode::FollowingError as u8]);
+    }
+}
+
+/// A following error while a commanded stop slows down: the stop goes on
+/// along the path and ends in Fault with FollowingError, not in Idle.
+#[test]
+fn a_following_error_while_stopping_ends_in_fault() {
+    let segs = segments(4, 0.3);
+    let mut r = Rig::loaded(&segs);
+    r.start();
+    r.run(200);
+    assert_eq!(r.command(CommandCode::Stop, 0), 0);
+    r.run(20);
+    assert_eq!(r.node.state(), State::Stopping);
+    r.offset = 2.0 * r.cfg.following_error_max;
+    r.run(1);
+    assert_eq!(r.node.state(), State::Stopping);
+    assert_eq!(r.node.fault(), FaultCode::FollowingError);
+    assert!(r.emergencies().contains(&(FaultCode::FollowingError as u8)));
+    r.run(500);
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::FollowingError);
+}
+
+/// Travel once homed, at rest: the measured position leaving the soft
+/// limits (within the following-error bound) while the axis holds inside
+/// them ends in Fault with SoftLimit; an axis that stands beyond a limit
+/// because it was powered on there is not faulted for standing still.
+#[test]
+fn the_travel_is_supervised_at_rest() {
+    let segs = segments(4, 0.3);
+    let (a, b) = own_span(&segs[0]);
+    let dir = (b - a).signum();
+    let mut r = Rig::new();
+    if dir > 0.0 {
+        r.cfg.soft_limit_min = a - 0.5e-3;
+    } else {
+        r.cfg.soft_limit_max = a + 0.5e-3;
+    }
+    let mut r = Rig::loaded_with(r, &segs);
+    assert!(r.node.is_homed());
+    r.offset = -0.9e-3 * dir;
+    assert!(0.9e-3 < r.cfg.following_error_max);
+    r.run(1);
+    assert_eq!(r.node.state(), State::Fault);
+    assert_eq!(r.node.fault(), FaultCode::SoftLimit);
+    assert_eq!(r.emergencies(), [FaultCode::SoftLimit as u8]);
+
+    // Parked beyond the limit from the start: no fault at rest.
+    let mut r = Rig::new();
+    if dir > 0.0 {
+        r.cfg.soft_limit_min = a + 0.5e-3;
+    } else {
+        r.cfg.soft_limit_max = a - 0.5e-3;
+    }
+    r.parked = a;
+    r.configure();
+    r.run(100);
+    assert_eq!(r.node.state(), State::Idle);
+    assert!(r.emergencies().is_empty());
 }

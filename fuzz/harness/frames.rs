@@ -8,7 +8,9 @@
 // reach Armed → Running → stop. Between frames the node ticks at the
 // configured 1 kHz (time advances FRAME_US per frame), the harness sends a
 // TimeSync every 100 ms and the encoder follows the reference (a perfect
-// axis, parked at the start of the last accepted first segment). Checked:
+// axis, parked at the start of the last accepted first segment; from the
+// start at `parked_start()`, so a plan from there is not a jump the drive's
+// following-error supervision at rest would fault on). Checked:
 // nothing panics; a completed segment is exactly what its body encodes; a
 // segment that failed the receive side's checks is never accepted; and the
 // segment the node executes is always one it accepted, bit for bit (seq, CRC).
@@ -19,6 +21,15 @@ pub const FRAME_US: u64 = 137;
 /// Harness tick period (µs): the default control rate, 1 kHz.
 #[allow(dead_code)]
 pub const TICK_US: u64 = 1000;
+/// Where the harness's axis stands before a first segment is accepted (m):
+/// axis 1 at the platform pose (0, 0, 0.62 m), where the corpus's plan starts.
+#[allow(dead_code)]
+pub fn parked_start() -> f32 {
+    let m = triquint_shared::Robot::default().model::<f64>();
+    let pose = nalgebra::Vector3::new(0.0, 0.0, 0.62);
+    triquint_shared::kinematics::Pose::from_cartesian(&m, pose).map_or(0.0, |p| p.q[1] as f32)
+}
+
 /// The pause pseudo-identifier.
 #[allow(dead_code)]
 pub const PAUSE_ID: u16 = 0x7FF;
@@ -206,7 +217,7 @@ pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
         next_tick: 0,
         next_sync: 0,
         sync_seq: 0,
-        parked: 0.0,
+        parked: parked_start(),
         accepted: std::collections::HashSet::new(),
         out: Outcome::default(),
     };

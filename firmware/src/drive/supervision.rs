@@ -107,18 +107,42 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
-    /// Supervision of the motion (Running): following error beyond its
-    /// bound, or a measured position outside the soft limits (accepted
-    /// segments stay inside them: a runaway axis), stopped along the path.
-    pub(super) fn motion_fault(&self, error: f32, q: f32) -> Option<FaultCode> {
-        if self.state != State::Running {
+    /// Supervision of the motion in every powered state (the servo loop is
+    /// closed from the configuration on): following error beyond its bound,
+    /// or, once homed, a measured position outside the soft limits (accepted
+    /// segments stay inside them: a runaway axis). At rest the travel check
+    /// needs the reference inside, so an axis powered on beyond a limit is
+    /// not faulted for standing still. Homing has its own bound; a Fault is
+    /// already held.
+    pub(super) fn motion_fault(&self, error: f32, q: f32, r: f32) -> Option<FaultCode> {
+        let inside = |x: f32| x >= self.cfg.soft_limit_min && x <= self.cfg.soft_limit_max;
+        if self.state == State::Fault || self.homing.is_some() {
             None
         } else if error.abs() > self.cfg.following_error_max {
             Some(FaultCode::FollowingError)
-        } else if !(q >= self.cfg.soft_limit_min && q <= self.cfg.soft_limit_max) {
+        } else if self.homed && !inside(q) && (self.state == State::Running || inside(r)) {
             Some(FaultCode::SoftLimit)
         } else {
             None
+        }
+    }
+
+    /// The reaction to a motion fault, the drive's existing ones: moving,
+    /// stop along the path (then Fault at rest); at rest, Fault holding the
+    /// reference.
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn on_motion_fault(&mut self, code: FaultCode, now_us: u64) {
+        match self.state {
+            State::Running => self.begin_stop(StopReason::Fault(code), false, now_us),
+            State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
+                self.stop_reason = Some(StopReason::Fault(code));
+                self.fault = code;
+                self.emergency(code);
+            }
+            State::Idle | State::Loaded | State::Armed => self.fault_now(code),
+            _ => {}
         }
     }
 }
