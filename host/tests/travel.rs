@@ -131,3 +131,38 @@ fn check_proves_the_travel_the_plan_records() {
     let (status, out, err) = triquint(&dir, &["check", "p.json"]);
     assert_eq!(status, 0, "{out}{err}");
 }
+
+#[test]
+fn a_path_that_overshoots_a_narrow_travel_plans_inside_it_and_checks() {
+    let dir = scratch("narrow-travel");
+    std::fs::write(
+        dir.join("narrow.toml"),
+        "[axis.1]\ntravel_max = 0.254\n[axis.2]\ntravel_max = 0.254\n[axis.3]\ntravel_max = 0.255\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("job.toml"),
+        "[limits]\ntotal_time = 4.0\n[path]\nunits = \"mm\"\n\
+         points = [[0, 0, 600], [0, 0, 640], [30, 0, 610], [0, 20, 630], [0, 0, 600]]\n",
+    )
+    .unwrap();
+    // Was exit 3: "slider 1 reaches 255.671 mm between knots 2 and 3".
+    let (status, out, err) = triquint(
+        &dir,
+        &[
+            "plan",
+            "job.toml",
+            "--machine",
+            "narrow.toml",
+            "-o",
+            "p.json",
+            "--quiet",
+        ],
+    );
+    assert_eq!(status, 0, "{out}{err}");
+    let (status, out, err) = triquint(&dir, &["check", "p.json", "--machine", "narrow.toml"]);
+    assert_eq!(status, 0, "{out}{err}");
+    let travel: Vec<&str> = out.lines().filter(|l| l.contains("travel")).collect();
+    assert_eq!(travel.len(), 6, "{out}");
+    assert!(travel.iter().all(|l| l.ends_with("ok")), "{out}");
+}

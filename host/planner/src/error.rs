@@ -131,10 +131,11 @@ pub enum PlanError {
         joint_m: f64,
         limit_m: f64,
     },
-    /// Every point is inside the travel, but the planned motion leaves it
-    /// between two knots (in segment `segment`, 0-based): slider `axis`
-    /// reaches `joint_m`, beyond `limit_m`. The planner refuses the plan
-    /// rather than write one that leaves the travel.
+    /// Every point is inside the travel, but no plan at these knots keeps
+    /// the sliders inside it (the planner keeps them inside between knots
+    /// as it keeps every other limit): its closest plan leaves it in
+    /// segment `segment` (0-based), where slider `axis` reaches `joint_m`,
+    /// beyond `limit_m`.
     #[error(
         "infeasible: slider {} reaches {} mm between knots {} and {}, beyond its travel limit {} mm; move the points away from the travel's end",
         axis + 1,

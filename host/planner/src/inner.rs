@@ -60,12 +60,17 @@ impl Problem {
     }
 
     /// [`Method::Direct`].
-    fn direct(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+    fn direct(&self, h: &[f64], x0: &[Vec<f64>; 3], rounds: usize) -> Option<Solution> {
         if self.jerk_only
             && self.run.cancelled().is_none()
             && let Some(x) = self.jerk_only_direct(h, x0)
         {
             let fig = self.evaluation(h, &x, self.torque_samples);
+            // The direct solve knows jerk alone: when its optimum leaves
+            // the travel, the cutting planes start from it.
+            if fig.violation > 0.0 {
+                return self.cutting_planes(h, &x, rounds);
+            }
             return Some(Solution {
                 h: h.to_vec(),
                 x,
@@ -75,7 +80,7 @@ impl Problem {
                 lp_solves: 0,
             });
         }
-        self.cutting_planes(h, x0, max_rounds)
+        self.cutting_planes(h, x0, rounds)
     }
 
     /// [`Method::CuttingPlanes`].

@@ -87,44 +87,21 @@ pub fn plan_with(
 
 fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanError> {
     let fixed = job_problem(job, state)?;
-    let (p, free, r) = match job.knot_placement() {
-        KnotPlacement::Free => match solve_free(job, &fixed) {
-            Some((p, r, false)) => (p, true, r),
-            // Torque bound the free shape, which is only time-scaled for
-            // it: the fixed knots, reshaped by the search, may do better.
-            Some((p, r, true)) => {
-                let f = solve(job, &fixed, opts);
-                let total = |r: &Result<(Solution, usize), PlanError>| match r {
-                    Ok((s, _)) => s.h.iter().sum::<f64>(),
-                    Err(_) => f64::INFINITY,
-                };
-                if r.is_ok() && total(&r) <= total(&f) {
-                    (p, true, r)
-                } else {
-                    (fixed.clone(), false, f)
-                }
-            }
-            None => (fixed.clone(), false, solve(job, &fixed, opts)),
-        },
-        KnotPlacement::Fixed => (fixed.clone(), false, solve(job, &fixed, opts)),
+    // The travel joins the problem when the plan without it leaves it, as
+    // the limits other than jerk join the relaxation when its optimum breaks
+    // one: without it the problem is a relaxation, whose optimum is the
+    // problem's own when it stays inside (and then the plan is the one the
+    // travel never touched).
+    let (mut plan, starts) = match planned(job, &fixed, opts, state)? {
+        (plan, _) if leaves_travel(&plan, job.travel()).is_some() => {
+            let bounded = Problem {
+                travel: Some(job.travel().clone()),
+                ..fixed.clone()
+            };
+            planned(job, &bounded, opts, state)?
+        }
+        done => done,
     };
-    if let Some(reason) = state.cancelled() {
-        return Err(PlanError::Cancelled { reason });
-    }
-    let (sol, starts) = r?;
-    let mut plan = assemble(job, &p, &sol);
-    if free {
-        plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
-        plan.free_knots = (1..p.knots.len() - 1).collect();
-    }
-    let plan = if free && !passes_check(&plan)? {
-        // Nothing the planner writes fails the check: the fixed knots then.
-        let (sol, _) = solve(job, &fixed, opts)?;
-        assemble(job, &fixed, &sol)
-    } else {
-        plan
-    };
-    let mut plan = plan;
     if let Some(e) = leaves_travel(&plan, job.travel()) {
         return Err(e);
     }
@@ -139,6 +116,53 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     Ok(plan)
 }
 
+/// The plan of `fixed` (the job's problem at its fixed knots, or the
+/// knots the planner chooses when the job asks for that) and its search
+/// starts, without its recorded figures.
+fn planned(
+    job: &Job,
+    fixed: &Problem,
+    opts: &Options,
+    state: &Arc<RunState>,
+) -> Result<(Plan, usize), PlanError> {
+    let (p, free, r) = match job.knot_placement() {
+        KnotPlacement::Free => match solve_free(job, fixed) {
+            Some((p, r, false)) => (p, true, r),
+            // Torque bound the free shape, which is only time-scaled for
+            // it: the fixed knots, reshaped by the search, may do better.
+            Some((p, r, true)) => {
+                let f = solve(job, fixed, opts);
+                let total = |r: &Result<(Solution, usize), PlanError>| match r {
+                    Ok((s, _)) => s.h.iter().sum::<f64>(),
+                    Err(_) => f64::INFINITY,
+                };
+                if r.is_ok() && total(&r) <= total(&f) {
+                    (p, true, r)
+                } else {
+                    (fixed.clone(), false, f)
+                }
+            }
+            None => (fixed.clone(), false, solve(job, fixed, opts)),
+        },
+        KnotPlacement::Fixed => (fixed.clone(), false, solve(job, fixed, opts)),
+    };
+    if let Some(reason) = state.cancelled() {
+        return Err(PlanError::Cancelled { reason });
+    }
+    let (sol, starts) = r?;
+    let mut plan = assemble(job, &p, &sol);
+    if free {
+        plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
+        plan.free_knots = (1..p.knots.len() - 1).collect();
+    }
+    if free && !passes_check(&plan)? {
+        // Nothing the planner writes fails the check: the fixed knots then.
+        let (sol, _) = solve(job, fixed, opts)?;
+        return Ok((assemble(job, fixed, &sol), starts));
+    }
+    Ok((plan, starts))
+}
+
 /// A free-knot plan's check (its maxima recorded first, as the plan will).
 fn passes_check(plan: &Plan) -> Result<bool, PlanError> {
     let mut plan = plan.clone();
@@ -148,7 +172,9 @@ fn passes_check(plan: &Plan) -> Result<bool, PlanError> {
 }
 
 /// The first segment in which a slider leaves the travel, from the exact
-/// extremes of its quintics (the knots are inside: the job checked them).
+/// extremes of its quintics as `check` finds them (the knots are inside:
+/// the job checked them). The solves keep the sliders inside; this is the
+/// guard that nothing written leaves it.
 fn leaves_travel(plan: &Plan, travel: &Travel) -> Option<PlanError> {
     plan.segments.iter().enumerate().find_map(|(segment, seg)| {
         let k = kinematics(std::slice::from_ref(seg));
@@ -181,21 +207,38 @@ pub(crate) fn job_problem(job: &Job, state: &Arc<RunState>) -> Result<Problem, P
     Ok(p)
 }
 
+/// The limit of a quantity bounded in magnitude (travel has its own error).
 fn limit_of(q: Limited) -> Limit {
     match q {
         Limited::Velocity => Limit::Velocity,
         Limited::Acceleration => Limit::Acceleration,
-        Limited::Jerk => Limit::Jerk,
+        Limited::Jerk | Limited::Travel => Limit::Jerk,
         Limited::Torque => Limit::Torque,
     }
 }
 
-/// The infeasibility of `s`: its binding limit and how far it got.
+/// The infeasibility of `s`: its binding limit and how far it got. When the
+/// travel binds, where the closest plan leaves it.
 fn infeasible(p: &Problem, s: &Solution, shortest: Option<f64>) -> PlanError {
     let q = if s.violation > 1e-9 {
         s.binding
     } else {
         Limited::Jerk
+    };
+    if q == Limited::Travel
+        && let Some((segment, axis, joint_m, limit_m)) = p.travel_breach(&s.h, &s.x)
+    {
+        return PlanError::LeavesTravel {
+            segment,
+            axis,
+            joint_m,
+            limit_m,
+        };
+    }
+    let q = if q == Limited::Travel {
+        Limited::Jerk
+    } else {
+        q
     };
     let limit_value = p.limit(q);
     let reached = match q {
@@ -378,7 +421,49 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::inner::{Method, ROUNDS};
     use crate::search_tests::example_problem;
+
+    /// Where travel binds, the verdict is where the closest plan leaves it.
+    #[test]
+    fn a_travel_that_binds_is_solved_for_and_named_when_it_cannot_be_met() {
+        let mut p = example_problem("paper-case1.toml");
+        let h = vec![p.total_time / p.knots.segments() as f64; p.knots.segments()];
+        let free = p.inner(&h, &p.zero_x(), Method::Final, ROUNDS).unwrap();
+        // Every knot inside, the ends a hair beyond the lowest and highest knot.
+        let end = |f: fn(f64, f64) -> f64, from: f64| {
+            [0, 1, 2].map(|j| p.knots.q.iter().map(|q| q[j]).fold(from, f))
+        };
+        let (bottom, top) = (end(f64::min, f64::MAX), end(f64::max, f64::MIN));
+        p.travel = Some(Travel {
+            min: bottom.map(|b| b - 1e-6),
+            max: top.map(|t| t + 1e-6),
+        });
+        let s = p.evaluate(&free.h, &free.x);
+        assert!(s.violation > 0.0 && s.binding == Limited::Travel, "{s:?}");
+        let Some((segment, axis, joint_m, limit_m)) = p.travel_breach(&s.h, &s.x) else {
+            panic!("no breach");
+        };
+        assert!(
+            (joint_m > limit_m && limit_m == top[axis] + 1e-6)
+                || (joint_m < limit_m && limit_m == bottom[axis] - 1e-6),
+            "{joint_m} {limit_m}"
+        );
+        assert_eq!(
+            infeasible(&p, &s, None),
+            PlanError::LeavesTravel {
+                segment,
+                axis,
+                joint_m,
+                limit_m,
+            }
+        );
+        // The solve at the same intervals keeps every slider inside.
+        let bound = p.inner(&h, &p.zero_x(), Method::Final, ROUNDS).unwrap();
+        assert_eq!(bound.violation, 0.0);
+        assert_eq!(p.travel_breach(&bound.h, &bound.x), None);
+        assert!(bound.jerk > free.jerk);
+    }
 
     #[test]
     fn an_infeasible_verdict_names_the_binding_limit_and_its_value() {

@@ -4,8 +4,10 @@
 //! budget; a [`Solution`] is intervals h and knot derivatives x with their
 //! exact figures. The evaluation is exact in continuous time: the jerk,
 //! acceleration and velocity of a segment are polynomials in time, so their
-//! extrema are found in closed form; torque is sampled. It also reports
-//! where the extrema are, which the programs cut at.
+//! extrema are found in closed form; torque is sampled. A slider's
+//! position is a quintic too: its extrema between knots are exact, and
+//! keep it inside its travel (the knots are inside: the job checked them).
+//! It also reports where the extrema are, which the programs cut at.
 //!
 //! Limits other than jerk enter with one elastic variable σ (relative
 //! violation), priced by a large weight, so every program is feasible and
@@ -17,7 +19,7 @@
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::quintic::eval_poly;
-use triquint_shared::{Limits, Model, dynamics};
+use triquint_shared::{Limits, Model, Travel, dynamics};
 
 use std::sync::Arc;
 
@@ -33,12 +35,24 @@ pub(crate) enum Limited {
     Acceleration,
     Jerk,
     Torque,
+    /// A slider's position, between its travel's ends.
+    Travel,
 }
 
 /// Torque samples per segment while searching (the final solve uses more).
 const TORQUE_SAMPLES: usize = 48;
 /// Fraction of a limit above which a local extremum gets a constraint.
 const CUT_THRESHOLD: f64 = 0.5;
+/// Fraction of a slider's travel span from either end within which a
+/// position extremum between knots gets a constraint.
+const TRAVEL_CUT: f64 = 1e-3;
+/// Fraction of the travel span the programs keep a position extremum inside
+/// the travel by: the cutting planes meet a bound to 1e-9 relative, and a
+/// plan must not leave the travel by that much.
+pub(crate) const TRAVEL_MARGIN: f64 = 1e-7;
+/// Normalised distance from a knot within which a position extremum gets no
+/// constraint: the position there is the knot's, which no program moves.
+const KNOT_U: f64 = 1e-6;
 
 /// One planning problem: knots, limits, dynamics and the time budget.
 #[derive(Clone, Debug)]
@@ -50,6 +64,10 @@ pub(crate) struct Problem {
     pub(crate) h_min: f64,
     /// Longest interval (the wire's segment limit).
     pub(crate) h_max: f64,
+    /// The sliders' travel, when the problem has one. Like jerk, it is part
+    /// of the relaxation: a shape's positions do not change with its time
+    /// scale.
+    pub(crate) travel: Option<Travel>,
     /// Cancellation and progress, shared by every copy of the problem.
     pub(crate) run: Arc<RunState>,
     /// Price of one unit of relative limit violation, in m/s³.
@@ -68,7 +86,8 @@ pub(crate) struct Solution {
     pub(crate) x: [Vec<f64>; 3],
     /// Exact continuous-time max |jerk| over all joints (m/s³).
     pub(crate) jerk: f64,
-    /// Largest relative violation of the velocity, acceleration and torque limits (0 if none).
+    /// Largest relative violation of the velocity, acceleration, torque and
+    /// travel limits (0 if none); travel's relative to its span.
     pub(crate) violation: f64,
     /// The quantity with the largest violation, or the closest to its limit.
     pub(crate) binding: Limited,
@@ -118,13 +137,69 @@ impl Problem {
         lp.solve()
     }
 
+    /// The limit of a quantity bounded in magnitude; travel is bounded by
+    /// its two ends instead ([`Problem::travel_of`]) and has none.
     pub(crate) fn limit(&self, q: Limited) -> f64 {
         match q {
             Limited::Velocity => self.limits.velocity,
             Limited::Acceleration => self.limits.acceleration,
             Limited::Jerk => self.limits.jerk,
             Limited::Torque => self.limits.torque,
+            Limited::Travel => f64::INFINITY,
         }
+    }
+
+    /// Joint j's travel (min, max, span), when the problem has one.
+    pub(crate) fn travel_of(&self, j: usize) -> Option<(f64, f64, f64)> {
+        self.travel
+            .as_ref()
+            .map(|t| (t.min[j], t.max[j], t.max[j] - t.min[j]))
+    }
+
+    /// Joint j's position extrema on segment k that come within
+    /// [`TRAVEL_CUT`] of its travel's ends, as (t, position): none when the
+    /// segment's Bernstein coefficients (whose hull holds the quintic)
+    /// keep away from them.
+    fn near_travel(&self, c: &[f64; 6], vel: &[f64], j: usize, hk: f64) -> Vec<(f64, f64)> {
+        let Some((lo, hi, span)) = self.travel_of(j) else {
+            return Vec::new();
+        };
+        let (lo, hi) = (lo + TRAVEL_CUT * span, hi - TRAVEL_CUT * span);
+        if bernstein(c, hk).iter().all(|b| (lo..=hi).contains(b)) {
+            return Vec::new();
+        }
+        roots_in(vel, 0.0, hk)
+            .into_iter()
+            .map(|t| (t, eval(c, t)))
+            .filter(|&(_, p)| p > hi || p < lo)
+            .collect()
+    }
+
+    /// The first segment and joint whose position leaves the travel, with
+    /// its farthest position and the end it passes: (k, j, position, end).
+    pub(crate) fn travel_breach(
+        &self,
+        h: &[f64],
+        x: &[Vec<f64>; 3],
+    ) -> Option<(usize, usize, f64, f64)> {
+        (0..self.nseg()).find_map(|k| {
+            (0..3).find_map(|j| {
+                let (lo, hi, _) = self.travel_of(j)?;
+                let c = self.knots.coefficients(&x[j], j, k, h[k]);
+                let far = self
+                    .near_travel(&c, &derivative(&c), j, h[k])
+                    .into_iter()
+                    .map(|(_, p)| p)
+                    .max_by(|a, b| (a - hi).max(lo - a).total_cmp(&(b - hi).max(lo - b)))?;
+                if far > hi {
+                    Some((k, j, far, hi))
+                } else if far < lo {
+                    Some((k, j, far, lo))
+                } else {
+                    None
+                }
+            })
+        })
     }
 
     /// Exact figures of (h, x) and the cut points at its local extrema.
@@ -141,8 +216,7 @@ impl Problem {
             cuts: Vec::new(),
         };
         let mut closest = f64::NEG_INFINITY;
-        let mut note = |fig: &mut Evaluation, q: Limited, value: f64| {
-            let rel = value / self.limit(q) - 1.0;
+        let mut note = |fig: &mut Evaluation, q: Limited, rel: f64| {
             if rel > closest {
                 closest = rel;
                 fig.binding = q;
@@ -157,6 +231,29 @@ impl Problem {
                 let acc = derivative(&vel);
                 let jerk = derivative(&acc);
                 fig.jerk = fig.jerk.max(argmax_abs_on_interval(&jerk, 0.0, hk).1);
+                // Travel only counts when left: a position inside it is no
+                // closer to binding than the others (and changes nothing).
+                let near = self.near_travel(&c, &vel, j, hk);
+                if let Some((lo, hi, span)) = self.travel_of(j)
+                    && !near.is_empty()
+                {
+                    let mut worst = f64::NEG_INFINITY;
+                    for &(t, p) in &near {
+                        let u = t / hk;
+                        if u > KNOT_U && u < 1.0 - KNOT_U {
+                            fig.cuts.push(Cut {
+                                q: Limited::Travel,
+                                j,
+                                k,
+                                u,
+                            });
+                        }
+                        worst = worst.max((p - hi).max(lo - p) / span);
+                    }
+                    if worst > 0.0 {
+                        note(&mut fig, Limited::Travel, worst);
+                    }
+                }
                 if self.jerk_only {
                     continue;
                 }
@@ -174,7 +271,7 @@ impl Problem {
                             fig.cuts.push(Cut { q, j, k, u: t / hk });
                         }
                     }
-                    note(&mut fig, q, best);
+                    note(&mut fig, q, best / lim - 1.0);
                 }
             }
             if self.jerk_only {
@@ -210,7 +307,7 @@ impl Problem {
                         });
                     }
                 }
-                note(&mut fig, Limited::Torque, best);
+                note(&mut fig, Limited::Torque, best / lim - 1.0);
             }
         }
         fig.violation = fig.violation.max(0.0);
@@ -324,6 +421,7 @@ pub(crate) fn problem(
     Problem {
         h_min: 1e-3,
         h_max: f64::INFINITY,
+        travel: None,
         run: Arc::new(RunState::new(None)),
         torque_samples: TORQUE_SAMPLES,
         jerk_only: false,
@@ -346,6 +444,27 @@ pub(crate) fn knots_from(
         q.push([pose.q.x, pose.q.y, pose.q.z]);
     }
     Ok(Knots { q })
+}
+
+/// Bernstein coefficients of the quintic with power coefficients `c` on
+/// [0, h]: their hull holds its values there.
+fn bernstein(c: &[f64; 6], h: f64) -> [f64; 6] {
+    // a_i = c_i hⁱ; b_k = Σ_{i≤k} C(k, i) / C(5, i) a_i.
+    const BINOM: [[f64; 6]; 6] = [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 2.0, 1.0, 0.0, 0.0, 0.0],
+        [1.0, 3.0, 3.0, 1.0, 0.0, 0.0],
+        [1.0, 4.0, 6.0, 4.0, 1.0, 0.0],
+        [1.0, 5.0, 10.0, 10.0, 5.0, 1.0],
+    ];
+    let mut a = *c;
+    let mut hp = 1.0;
+    for ai in a.iter_mut() {
+        *ai *= hp;
+        hp *= h;
+    }
+    core::array::from_fn(|k| (0..=k).map(|i| BINOM[k][i] / BINOM[5][i] * a[i]).sum())
 }
 
 /// A solution is feasible when no limit is violated beyond rounding.
@@ -394,6 +513,26 @@ mod tests {
         p.limits.velocity = 1e-6;
         let slow = p.evaluate(&h, &x);
         assert!(slow.violation > 0.0 && slow.binding == Limited::Velocity);
+    }
+
+    /// The Bernstein hull holds the quintic, and its ends are the quintic's.
+    #[test]
+    fn the_bernstein_hull_holds_the_segment() {
+        let c = [0.2, -0.3, 1.1, -2.0, 0.7, 0.4];
+        let h = 1.7;
+        let b = bernstein(&c, h);
+        let (lo, hi) = b
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, u), &x| (l.min(x), u.max(x)));
+        for i in 0..=1000 {
+            let v = eval(&c, h * i as f64 / 1000.0);
+            assert!(
+                v >= lo - 1e-12 && v <= hi + 1e-12,
+                "{v} outside [{lo}, {hi}]"
+            );
+        }
+        assert!((b[0] - eval(&c, 0.0)).abs() < 1e-12);
+        assert!((b[5] - eval(&c, h)).abs() < 1e-12);
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //! optimum is the min-max-jerk knot derivatives, with h fixed or, in a
 //! trust region, linearised in h.
 //!
-//! Velocity, acceleration and torque limits enter as cutting planes at the
-//! evaluation's extrema ([`crate::problem`]); torque is linearised in
+//! Velocity, acceleration, torque and travel limits enter as cutting planes
+//! at the evaluation's extrema ([`crate::problem`]); torque is linearised in
 //! (q, q̇, q̈) there.
 
 // Index loops over joints and segments mirror the maths.
@@ -13,7 +13,7 @@ use nalgebra::Vector3;
 use triquint_shared::dynamics;
 
 use crate::lp::Lp;
-use crate::problem::{Cut, Limited, Problem};
+use crate::problem::{Cut, Limited, Problem, TRAVEL_MARGIN};
 use crate::spline::Affine;
 
 /// Jerk (m/s³) below which a program's jerk rows are scaled to 1 (see
@@ -173,6 +173,7 @@ impl Problem {
                 }
                 q => {
                     let r = match q {
+                        Limited::Travel => 0,
                         Limited::Velocity => 1,
                         Limited::Acceleration => 2,
                         _ => 3,
@@ -190,6 +191,15 @@ impl Problem {
                     terms.iter_mut().for_each(|t| t.1 *= k_j);
                     terms.push((s_col, -k_j));
                     lp.at_most(&terms, -sign * row.constant * k_j);
+                } else if cut.q == Limited::Travel {
+                    // q ≤ max and −q ≤ −min, a hair inside, elastic in σ
+                    // relative to the span.
+                    let Some((lo, hi, span)) = self.travel_of(cut.j) else {
+                        continue;
+                    };
+                    let end = if sign > 0.0 { hi } else { -lo };
+                    terms.push((sigma, -span));
+                    lp.at_most(&terms, end - TRAVEL_MARGIN * span - sign * row.constant);
                 } else {
                     let lim = self.limit(cut.q);
                     terms.push((sigma, -lim));
