@@ -73,7 +73,7 @@ fn shell_blocks() -> Vec<Block> {
     pages()
         .iter()
         .flat_map(|p| blocks(p))
-        .filter(|b| b.info.starts_with("sh"))
+        .filter(|b| b.info.split_whitespace().next() == Some("sh"))
         .collect()
 }
 
