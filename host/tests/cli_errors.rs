@@ -337,6 +337,27 @@ fn cases() -> Vec<Case> {
             says: "triquint-nosuch0: cannot open SocketCAN interface",
         },
         Case {
+            name: "plan --plot - (no folder on standard output)",
+            files: vec![("job.toml", job("", GOOD_POINTS))],
+            args: vec!["plan", "job.toml", "-o", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
+            name: "report --plot - (no folder on standard output)",
+            files: vec![("p.json", full_plan_json())],
+            args: vec!["report", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
+            name: "simulate --plot - (no folder on standard output)",
+            files: vec![("p.json", full_plan_json())],
+            args: vec!["simulate", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
             // `ik` prints millimetres; pasted into `--q` (metres) they were
             // an error about struts, or, all equal, torques of a pose
             // hundreds of metres up.

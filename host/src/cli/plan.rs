@@ -99,6 +99,7 @@ impl Watcher {
 
 pub fn run(args: &PlanArgs) -> CliResult {
     let starts = parse_starts(&args.starts)?;
+    crate::cli::check_plot_folder(args.plot.as_deref())?;
     let machine = match &args.machine.file {
         Some(_) => Some(args.machine.load()?),
         None => None,

@@ -64,6 +64,7 @@ fn to_cli(e: SimulateError) -> CliError {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult {
+    crate::cli::check_plot_folder(args.plot.as_deref())?;
     let plan = crate::cli::load_plan(&args.plan)?;
     let machine = args.machine.load()?;
     let rate_hz = args.rate.unwrap_or(machine.drive.control_rate);
