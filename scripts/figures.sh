@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates the sample charts in docs/figures/ (referenced from the README):
+# Regenerates the sample charts in docs/figures/ (shown in docs/charts.md and the README):
 # for both paper cases, the plan overview, the 3-D platform path with its top
 # and front views, and the simulation traces with and without feedforward.
 # The SVGs come from `triquint plan/simulate --plot`; rsvg-convert turns them

@@ -50,6 +50,10 @@ CARGO_TARGET_DIR="$target_dir" nice "$venv/bin/pip" install --quiet --disable-pi
 echo "wheel built and installed in $(( $(date +%s) - py_start )) s"
 TRIQUINT_BIN="$target_dir/release/triquint" "$venv/bin/python" -m pytest -q host/python/tests
 
+step "getting started: the README's tutorial, as written, in a fresh clone"
+# Reuses the release build above for its `cargo install --path host`.
+CARGO_TARGET_DIR="$target_dir" ./scripts/getting-started.sh
+
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
 

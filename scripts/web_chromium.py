@@ -4,7 +4,7 @@
 Starts the monitor on a free loopback port replaying a testdata/hil log,
 loads the page in headless Chromium driven over the DevTools protocol
 (--remote-debugging-pipe: NUL-separated JSON on fds 3 and 4, no extra
-Python package), and checks: three node cards "Node 1..3" with protocol
+Python package), and checks: three axis cards "Axis 1..3" with protocol
 state names in the DOM, the traces gain points over time, no console
 errors or exceptions (DevTools events and the --enable-logging=stderr
 log); writes a screenshot (PNG).
@@ -161,8 +161,8 @@ def main():
                 break
             time.sleep(0.2)
         print(f"node cards: {cards}")
-        if [c[0] for c in cards] != ["Node 1", "Node 2", "Node 3"]:
-            failures.append(f"node cards {cards}, want Node 1..3")
+        if [c[0] for c in cards] != ["Axis 1", "Axis 2", "Axis 3"]:
+            failures.append(f"cards {cards}, want Axis 1..3")
         if not all(c[1] in STATES for c in cards):
             failures.append(f"state names {cards} not all protocol states")
         pts = "window.triquintMonitor ? window.triquintMonitor.points() : -1"

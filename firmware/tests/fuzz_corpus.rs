@@ -1,6 +1,6 @@
 //! The `frames` fuzz target's inputs as a normal test on stable Rust: its
 //! seed corpus, every committed regression input, and 3,000 seeded random
-//! streams and mutations (the long libFuzzer run is documented in the README);
+//! streams and mutations (the long libFuzzer run is documented in docs/verification.md);
 //! and that the harness does reach Running: a whole plan in an input runs.
 
 include!("../../fuzz/harness/frames.rs");

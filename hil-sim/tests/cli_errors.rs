@@ -1,5 +1,5 @@
 //! Bad input to the built `triquint-sim` binary (the machine and `proxy`):
-//! the exit status of the README's table, exactly one stderr line naming
+//! the exit status of the table in docs/cli.md, exactly one stderr line naming
 //! what is wrong, no panic.
 
 use std::process::{Command, Stdio};

@@ -57,7 +57,7 @@ fn run(cli: Cli) -> CliResult {
     match &cli.command {
         Command::Ik(a) => cli::ik::run(a, &a.machine.load()?),
         Command::Fk(a) => cli::fk::run(a, &a.machine.load()?),
-        Command::Torque(a) => cli::torque::run(a, &a.machine.load()?.robot),
+        Command::Torque(a) => cli::torque::run(a, &a.machine.load()?),
         Command::Plan(a) => cli::plan::run(a),
         Command::Check(a) => cli::check::run(a),
         Command::Report(a) => cli::report::run(a),

@@ -1,5 +1,5 @@
 //! Bad input to the built `triquint` binary, as a table: each case must end
-//! with the exit status of the README's table, exactly one line on stderr
+//! with the exit status of the table in docs/cli.md, exactly one line on stderr
 //! naming what is wrong, no panic, and no output file left behind.
 
 use std::path::{Path, PathBuf};
@@ -335,6 +335,60 @@ fn cases() -> Vec<Case> {
             args: vec!["override", "50", "--iface", NO_IFACE],
             status: 4,
             says: "triquint-nosuch0: cannot open SocketCAN interface",
+        },
+        Case {
+            name: "plan --plot - (no folder on standard output)",
+            files: vec![("job.toml", job("", GOOD_POINTS))],
+            args: vec!["plan", "job.toml", "-o", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
+            name: "report --plot - (no folder on standard output)",
+            files: vec![("p.json", full_plan_json())],
+            args: vec!["report", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
+            name: "simulate --plot - (no folder on standard output)",
+            files: vec![("p.json", full_plan_json())],
+            args: vec!["simulate", "p.json", "--plot", "-"],
+            status: 2,
+            says: "--plot -: plots are SVG files in a folder, not standard output",
+        },
+        Case {
+            // `ik` prints millimetres; pasted into `--q` (metres) they were
+            // an error about struts, or, all equal, torques of a pose
+            // hundreds of metres up.
+            name: "torque given ik's millimetres",
+            files: vec![],
+            args: vec![
+                "torque",
+                "--q",
+                "376.685,244.164,336.130",
+                "--qd",
+                "0,0,0",
+                "--qdd",
+                "0,0,0",
+            ],
+            status: 2,
+            says: "(--q is in metres; `triquint ik` prints millimetres: divide by 1000)",
+        },
+        Case {
+            name: "torque of equal sliders far above the travel",
+            files: vec![],
+            args: vec![
+                "torque",
+                "--q",
+                "300,300,300",
+                "--qd",
+                "0,0,0",
+                "--qdd",
+                "0,0,0",
+            ],
+            status: 2,
+            says: "--q 300,300,300: outside the travel",
         },
         Case {
             name: "override that is not a number",

@@ -3,7 +3,7 @@
 //! names, plots of a plan that is not written, inputs without an end,
 //! standard output closed or full, standard error closed, and job points
 //! of the wrong length.
-//! Each case ends with the README's exit status and one line on stderr, no
+//! Each case ends with the exit status of docs/cli.md and one line on stderr, no
 //! panic, and nothing written where it must not be.
 
 use std::path::{Path, PathBuf};

@@ -1,5 +1,5 @@
 //! `triquint plan` and `triquint check` exit statuses on bad, infeasible and
-//! tampered input (README, "Exit status").
+//! tampered input (docs/cli.md, "Errors, output files and input limits").
 
 use std::process::Command;
 

@@ -277,3 +277,42 @@ fn unwritable_plot_directory_is_an_error_not_a_panic() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The `P…` labels of a chart, in document order.
+fn point_labels(svg: &Svg) -> Vec<String> {
+    svg.texts
+        .iter()
+        .filter(|t| t.starts_with('P') && t[1..].starts_with(|c: char| c.is_ascii_digit()))
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn the_charts_and_the_report_name_the_users_points_alike() {
+    // Four via-points: the planner inserts straight-line knots (a C3
+    // quintic spline at rest needs five), which were P1..P7 on the time
+    // charts and in the report while the path plot said P1..P4.
+    let dir = temp_dir("labels");
+    let job = JOB.replace(", [60, -60, 650]]", "]");
+    std::fs::write(dir.join("job.toml"), job).unwrap();
+    run(triquint()
+        .current_dir(&dir)
+        .args(["plan", "job.toml", "-o", "p.json", "--plot", "plot", "-q"]));
+    let path = point_labels(&parse(&dir.join("plot/path3d.svg")));
+    for p in ["P1", "P2", "P3", "P4"] {
+        assert!(path.iter().any(|l| l == p), "{path:?}");
+    }
+    let time = point_labels(&parse(&dir.join("plot/position.svg")));
+    assert!(time.len() > 4, "no inserted knot: {time:?}");
+    let vias: Vec<&String> = time.iter().filter(|l| !l.contains('.')).collect();
+    assert_eq!(vias, ["P1", "P2", "P3", "P4"], "{time:?}");
+    assert!(time.iter().any(|l| l.contains('.')), "{time:?}");
+    let out = triquint()
+        .current_dir(&dir)
+        .args(["report", "p.json"])
+        .output()
+        .unwrap();
+    let report = String::from_utf8(out.stdout).unwrap();
+    assert!(report.contains("→P4 "), "{report}");
+    assert!(!report.contains("P5"), "{report}");
+}

@@ -1,11 +1,11 @@
 //! The project's exit-status table, shared by every `triquint` and
-//! `triquint-sim` command (README, "Exit status"), and how a command ends:
+//! `triquint-sim` command (docs/cli.md, "Exit status"), and how a command ends:
 //! one line on stderr, the status from the table.
 
 use std::fmt;
 use std::process::ExitCode;
 
-/// Exit statuses. Keep in step with the README table.
+/// Exit statuses. Keep in step with the table in docs/cli.md.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
     /// A check found a violation.

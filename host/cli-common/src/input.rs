@@ -1,8 +1,8 @@
 //! Bounded reads of the binaries' own input files (machine files, replay
 //! logs): a file, FIFO or standard input larger than its kind's limit is
 //! refused with a clear error instead of being read whole into memory.
-//! Each limit is many times the largest legitimate file (README, "Exit
-//! status"); job, points and plan files are bounded by the planner. The
+//! Each limit is many times the largest legitimate file (docs/cli.md,
+//! "Errors, output files and input limits"); job, points and plan files are bounded by the planner. The
 //! reader is shared's `bounded_read`, the planner's too.
 
 /// A machine file: five tables of a few dozen keys are under 4 KiB.

@@ -1,4 +1,4 @@
-//! Planner benchmarks, one for each row of the speed targets (README,
+//! Planner benchmarks, one for each row of the speed targets (docs/verification.md,
 //! "Planner speed and scale"): both paper cases with the default search
 //! (what `triquint plan` runs), Case II at minimum time, a point-to-point
 //! min-time move (what `triquint move-to` runs), the infeasible verdict on

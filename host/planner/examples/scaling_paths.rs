@@ -1,4 +1,4 @@
-//! Writes the scaling jobs of the planner's speed figures (README, "Planner
+//! Writes the scaling jobs of the planner's speed figures (docs/verification.md, "Planner
 //! speed"): the closed curve x = 90 sin t, y = 70 sin 2t,
 //! z = 600 + 60 sin(3t + 0.3) mm, t = 2πi/(n − 1), i = 0…n−1, as a
 //! min-max-jerk job of `n` via-points with the default limits.

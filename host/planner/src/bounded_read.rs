@@ -2,7 +2,7 @@
 //! (or a FIFO, or `/dev/stdin`) larger than its kind's limit is refused
 //! with a clear error instead of being read whole into memory (the reader
 //! is shared's `bounded_read`). Each limit is several times the largest
-//! legitimate file (README, "Exit status").
+//! legitimate file (docs/cli.md, "Errors, output files and input limits").
 
 /// A job file: [`crate::job::MAX_POINTS`] via-points inline at about 40 bytes
 /// each are under 100 KiB; the limit leaves room for a comment per point.

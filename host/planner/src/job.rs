@@ -154,12 +154,7 @@ impl JobBuilder {
             if !(value.is_finite() && (lo..=hi).contains(&value)) {
                 return Err(PlanError::invalid(
                     &format!("limits.{name}"),
-                    format!(
-                        "{} is not a number in {}..{}",
-                        readable(value),
-                        readable(lo),
-                        readable(hi)
-                    ),
+                    out_of_range(value, "", lo, hi),
                 ));
             }
         }
@@ -236,10 +231,8 @@ impl JobBuilder {
             return Err(PlanError::invalid(
                 "limits.total_time",
                 format!(
-                    "{} s is not a number in {}..{} s ({} segments of {} ms to {} s)",
-                    readable(t),
-                    readable(MIN_SEGMENT_S * segments),
-                    readable(longest),
+                    "{} ({} segments of {} ms to {} s)",
+                    out_of_range(t, " s", MIN_SEGMENT_S * segments, longest),
                     segments,
                     readable(MIN_SEGMENT_S * 1e3),
                     readable(MAX_SEGMENT_S)
@@ -354,12 +347,50 @@ pub(crate) fn knot_points(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
     out
 }
 
+/// "-5 is outside 1e-6..1e6", or "NaN is not a finite number (1e-6..1e6)":
+/// a finite number out of range is not "not a number".
+fn out_of_range(value: f64, unit: &str, lo: f64, hi: f64) -> String {
+    let (v, lo, hi) = (readable(value), readable(lo), readable(hi));
+    if value.is_finite() {
+        format!("{v}{unit} is outside {lo}..{hi}{unit}")
+    } else {
+        format!("{v} is not a finite number ({lo}..{hi}{unit})")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn err(b: JobBuilder) -> PlanError {
         b.build().unwrap_err()
+    }
+
+    #[test]
+    fn a_limit_out_of_range_is_outside_it_not_not_a_number() {
+        let two = [[-90.0, 90.0, 680.0], [-90.0, 90.0, 660.0]];
+        let mut limits = Limits {
+            jerk: -5.0,
+            ..Limits::default()
+        };
+        let e = err(Job::builder().points_mm(two).limits(limits.clone()));
+        assert_eq!(
+            e.to_string(),
+            "limits.jerk: -5 is outside 1e-6..1e6",
+            "{e:?}"
+        );
+        limits.jerk = f64::NAN;
+        let e = err(Job::builder().points_mm(two).limits(limits));
+        assert_eq!(
+            e.to_string(),
+            "limits.jerk: NaN is not a finite number (1e-6..1e6)"
+        );
+        let e = err(Job::builder().points_mm(two).total_time(1e4));
+        assert!(
+            e.to_string()
+                .starts_with("limits.total_time: 10000 s is outside "),
+            "{e}"
+        );
     }
 
     #[test]

@@ -173,10 +173,18 @@ fn parse(
                     reason: io_reason(&e),
                 }
             })?;
-            parse_points(&text).map_err(|e| PlanError::JobFile {
-                origin: shown,
-                line: e.line(),
-                reason: e.to_string(),
+            parse_points(&text).map_err(|e| {
+                // The file's line goes into `origin:line`, not twice.
+                let text = e.to_string();
+                let reason = e
+                    .line()
+                    .and_then(|l| text.strip_prefix(&format!("line {l}: ")))
+                    .map_or_else(|| text.clone(), str::to_string);
+                PlanError::JobFile {
+                    origin: shown,
+                    line: e.line(),
+                    reason,
+                }
             })?
         }
         _ => {
@@ -272,7 +280,11 @@ mod tests {
             matches!(e, PlanError::JobFile { line: Some(2), .. }),
             "{e:?}"
         );
-        assert!(e.to_string().contains("bad.csv:2"), "{e}");
+        assert!(
+            e.to_string()
+                .ends_with("bad.csv:2: expected 3 values (x, y, z), found 2"),
+            "{e}"
+        );
         std::fs::write(&job_path, "[path]\nunits = \"mm\"\nfile = \"none.csv\"\n").unwrap();
         assert!(
             Job::load(&job_path)

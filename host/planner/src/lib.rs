@@ -112,3 +112,9 @@ pub mod poly {
         max_abs_on_interval, roots_in,
     };
 }
+
+/// The planner's guide, `docs/planner.md`: its Rust examples are compiled
+/// and run as doctests (`cargo test -p triquint-planner --doc`).
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/planner.md")]
+pub struct PlannerGuide;

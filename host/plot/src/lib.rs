@@ -107,21 +107,58 @@ fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, px:
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
+/// A data line as plotters drew it, at whole pixels (its SVG backend rounds
+/// every point, which makes a smooth curve a staircase), with the exact
+/// coordinates to put in its place.
+struct ExactLine {
+    /// The opacity it was drawn with, which marks its polyline.
+    mark: String,
+    /// Its real opacity.
+    opacity: String,
+    /// `x,y x,y …` in pixels, to 0.01.
+    points: String,
+}
+
 /// Draws into a fresh SVG document of `w` × `h` pixels.
 fn svg_document(
     w: u32,
     h: u32,
-    draw: impl FnOnce(&Area) -> Result<(), PlotError>,
+    draw: impl FnOnce(&Area) -> Result<Vec<ExactLine>, PlotError>,
 ) -> Result<String, PlotError> {
     font_ready()?;
     let mut out = String::new();
+    let exact;
     {
         let root = SVGBackend::with_string(&mut out, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(err)?;
-        draw(&root)?;
+        exact = draw(&root)?;
         root.present().map_err(err)?;
     }
-    Ok(out)
+    Ok(with_exact_lines(&out, &exact))
+}
+
+/// `svg` with each marked polyline, in drawing order, given its exact
+/// points and real opacity.
+fn with_exact_lines(svg: &str, lines: &[ExactLine]) -> String {
+    let mut out = String::with_capacity(svg.len() + svg.len() / 2);
+    let mut rest = svg;
+    for l in lines {
+        let key = format!("opacity=\"{}\"", l.mark);
+        let Some(at) = rest.find(&key) else { break };
+        let Some(start) = rest[at..].find("points=\"").map(|i| at + i + 8) else {
+            break;
+        };
+        let Some(end) = rest[start..].find('"').map(|i| start + i) else {
+            break;
+        };
+        out.push_str(&rest[..at]);
+        out.push_str(&format!("opacity=\"{}\"", l.opacity));
+        out.push_str(&rest[at + key.len()..start]);
+        out.push_str(&l.points);
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// How a line is drawn.
@@ -352,7 +389,7 @@ impl Chart {
         (xs, ys)
     }
 
-    fn draw(&self, area: &Area) -> Result<(), PlotError> {
+    fn draw(&self, area: &Area) -> Result<Vec<ExactLine>, PlotError> {
         let (w, h) = area.dim_in_pixel();
         let (w, h) = (w as f64, h as f64);
         let mut y = header(area, &self.title, &self.notes, &self.legend(), 62.0)?;
@@ -431,6 +468,7 @@ impl Chart {
                     .map_err(err)?;
             }
         }
+        let mut exact = Vec::new();
         let mut order: Vec<&Line> = self.lines.iter().collect();
         order.sort_by_key(|l| match l.stroke {
             Stroke::Wide => 0,
@@ -443,23 +481,58 @@ impl Chart {
                     .draw_series(DashedLineSeries::new(l.finite(), 5, 3, l.style()))
                     .map_err(err)?;
             } else {
-                // Points closer than 2 px add only rounding zigzags (the
-                // backend draws whole pixels).
-                let mut last: Option<(i32, i32)> = None;
+                // Exact pixel positions: the axes map linearly between the
+                // plot area's corners ([`Axis`], rounded only there).
+                let (a, b) = (
+                    chart.backend_coord(&(xa.lo, ya.lo)),
+                    chart.backend_coord(&(xa.hi, ya.hi)),
+                );
+                let px = |(x, y): (f64, f64)| {
+                    (
+                        a.0 as f64 + (x - xa.lo) / (xa.hi - xa.lo) * (b.0 - a.0) as f64,
+                        a.1 as f64 + (y - ya.lo) / (ya.hi - ya.lo) * (b.1 - a.1) as f64,
+                    )
+                };
+                let inside = |(x, y): (f64, f64)| {
+                    (f64::from(a.0.min(b.0)) - 1.0..=f64::from(a.0.max(b.0)) + 1.0).contains(&x)
+                        && (f64::from(a.1.min(b.1)) - 1.0..=f64::from(a.1.max(b.1)) + 1.0)
+                            .contains(&y)
+                };
+                // Points closer than half a pixel add nothing visible.
                 let pts: Vec<(f64, f64)> = l.finite().collect();
                 let n = pts.len();
-                let thin = pts.iter().enumerate().filter(|(k, p)| {
-                    let px = chart.backend_coord(p);
-                    let keep = *k + 1 == n
-                        || last.is_none_or(|q| (px.0 - q.0).abs() + (px.1 - q.1).abs() >= 2);
-                    if keep {
-                        last = Some(px);
-                    }
-                    keep
-                });
-                let thin: Vec<(f64, f64)> = thin.map(|(_, p)| *p).collect();
+                let mut last: Option<(f64, f64)> = None;
+                let thin: Vec<((f64, f64), (f64, f64))> = pts
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(k, &p)| {
+                        let q = px(p);
+                        let keep = k + 1 == n
+                            || last.is_none_or(|r| (q.0 - r.0).abs() + (q.1 - r.1).abs() >= 0.5);
+                        keep.then(|| {
+                            last = Some(q);
+                            (p, q)
+                        })
+                    })
+                    .collect();
+                let mut style = l.style();
+                // Lines that leave the plot area stay as plotters clips them.
+                if thin.iter().all(|(_, q)| inside(*q)) {
+                    let opacity = style.color.3;
+                    let mark = opacity - 1e-9;
+                    style.color.3 = mark;
+                    exact.push(ExactLine {
+                        mark: format!("{mark}"),
+                        opacity: format!("{opacity}"),
+                        points: thin
+                            .iter()
+                            .map(|(_, q)| format!("{:.2},{:.2}", q.0, q.1))
+                            .collect::<Vec<_>>()
+                            .join(" "),
+                    });
+                }
                 chart
-                    .draw_series(LineSeries::new(thin, l.style()))
+                    .draw_series(LineSeries::new(thin.iter().map(|(p, _)| *p), style))
                     .map_err(err)?;
             }
         }
@@ -567,7 +640,7 @@ impl Chart {
             ))
             .map_err(err)?;
         }
-        Ok(())
+        Ok(exact)
     }
 }
 
@@ -713,7 +786,7 @@ impl From<Path3d> for Panel {
 }
 
 impl Panel {
-    fn draw(&self, area: &Area) -> Result<(), PlotError> {
+    fn draw(&self, area: &Area) -> Result<Vec<ExactLine>, PlotError> {
         match self {
             Panel::Chart(c) => c.draw(area),
             Panel::Path(p) => p.draw(area),
@@ -762,10 +835,11 @@ impl Figure {
             .map_err(err)?;
             let (_, grid) = root.split_vertically(title_h);
             let cells = grid.split_evenly((rows, cols));
+            let mut exact = Vec::new();
             for (p, cell) in self.panels.iter().zip(cells.iter()) {
-                p.draw(cell)?;
+                exact.extend(p.draw(cell)?);
             }
-            Ok(())
+            Ok(exact)
         })
     }
 }
@@ -801,6 +875,63 @@ mod tests {
         }
         assert!(svg.contains(FAMILY));
         assert!(!svg.contains("NaN"));
+    }
+
+    /// The `points` of every polyline drawn in `colour`.
+    fn polylines<'a>(svg: &'a str, colour: &str) -> Vec<&'a str> {
+        svg.split("<polyline")
+            .skip(1)
+            .filter(|p| p.contains(&format!("stroke=\"{colour}\"")))
+            .map(|p| {
+                p.split("points=\"")
+                    .nth(1)
+                    .unwrap()
+                    .split('"')
+                    .next()
+                    .unwrap()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn data_lines_keep_their_exact_pixels() {
+        // A smooth curve at whole pixels is a staircase.
+        let pts: Vec<(f64, f64)> = (0..=400)
+            .map(|k| (k as f64 * 0.01, (k as f64 * 0.01).sin()))
+            .collect();
+        let chart = Chart::new("sine").line(Line::joint(0, "joint 1", pts.clone()));
+        let svg = chart.to_svg().unwrap();
+        let blue = polylines(&svg, "#1F77B4");
+        let data = blue.iter().max_by_key(|p| p.len()).unwrap();
+        let fractional = data
+            .split_whitespace()
+            .filter(|xy| xy.split(',').any(|v| !v.ends_with(".00")))
+            .count();
+        assert!(fractional > 100, "{data}");
+        // Its real opacity, not the mark it was found by.
+        assert!(!svg.contains("0.999999999"), "a mark was left");
+        let wide = Chart::new("wide")
+            .line(Line::joint(0, "joint 1", pts).stroke(Stroke::Wide))
+            .to_svg()
+            .unwrap();
+        assert!(wide.contains("opacity=\"0.3\""), "{wide}");
+        assert!(!wide.contains("0.299999"));
+        // A line that leaves the plot (its x range cut) stays as plotters
+        // clips it, at whole pixels.
+        let cut = Chart::new("cut")
+            .line(Line::joint(
+                0,
+                "joint 1",
+                (0..=400).map(|k| (k as f64 * 0.01, 1.0)).collect(),
+            ))
+            .x_range(1.0, 2.0)
+            .to_svg()
+            .unwrap();
+        let long = polylines(&cut, "#1F77B4")
+            .into_iter()
+            .max_by_key(|p| p.len())
+            .unwrap();
+        assert!(!long.contains('.'), "{long}");
     }
 
     #[test]

@@ -5,8 +5,8 @@ use plotters::prelude::*;
 
 use crate::ticks::Axis;
 use crate::{
-    Area, Chart, DARK, KNOT_COLOUR, LegendEntry, LegendKind, Line, Markers, PlotError, err, font,
-    header, svg_document,
+    Area, Chart, DARK, ExactLine, KNOT_COLOUR, LegendEntry, LegendKind, Line, Markers, PlotError,
+    err, font, header, svg_document,
 };
 
 /// Colour of the platform path (not a joint's).
@@ -111,9 +111,12 @@ impl Path3d {
         chart
     }
 
-    pub(crate) fn draw(&self, area: &Area) -> Result<(), PlotError> {
+    /// The 3-D view stays at whole pixels (plotters projects it); the two
+    /// views are charts, drawn exactly.
+    pub(crate) fn draw(&self, area: &Area) -> Result<Vec<ExactLine>, PlotError> {
         if !self.projections {
-            return self.draw_iso(area);
+            self.draw_iso(area)?;
+            return Ok(Vec::new());
         }
         let (w, _) = area.dim_in_pixel();
         let (left, right) = area.split_horizontally((w as f64 * 0.56) as u32);
@@ -122,9 +125,9 @@ impl Path3d {
             let (_, h) = right.dim_in_pixel();
             right.split_vertically(h / 2)
         };
-        self.projection("Top view (x–y)", 0, 1).draw(&top)?;
-        self.projection("Front view (x–z)", 0, 2).draw(&front)?;
-        Ok(())
+        let mut exact = self.projection("Top view (x–y)", 0, 1).draw(&top)?;
+        exact.extend(self.projection("Front view (x–z)", 0, 2).draw(&front)?);
+        Ok(exact)
     }
 
     fn draw_iso(&self, area: &Area) -> Result<(), PlotError> {

@@ -11,7 +11,7 @@ def max_jerk(p):
 
 
 def test_paper_optima_at_5_s(case1, case2):
-    # README: 0.3325 and 1.5347 m/s³ (paper: 3.102 and 2.808).
+    # docs/verification.md: 0.3325 and 1.5347 m/s³ (paper: 3.102 and 2.808).
     assert max_jerk(case1) == pytest.approx(0.33251, abs=1e-4)
     assert max_jerk(case2) == pytest.approx(1.53472, abs=1e-4)
     for p in (case1, case2):

@@ -17,8 +17,19 @@ use crate::exit::{CliError, CliResult};
 pub struct CheckArgs {
     /// Plan file written by `triquint plan`.
     pub plan: PathBuf,
+    /// Print the checks as JSON: `{"ok", "checks": [{"check", "value", "bound", "ok"}]}`.
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub machine: crate::machine_arg::MachineArg,
+}
+
+/// One line of the table: what, the value found, its bound, whether it holds.
+struct Row {
+    what: String,
+    value: f64,
+    bound: f64,
+    ok: bool,
 }
 
 pub fn run(args: &CheckArgs) -> CliResult {
@@ -27,43 +38,55 @@ pub fn run(args: &CheckArgs) -> CliResult {
     let rows = triquint_planner::check(&plan).map_err(|e| {
         CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
     })?;
-    outln!("{:<42} {:>14} {:>14}  result", "check", "value", "bound")?;
-    for r in &rows {
-        outln!(
-            "{:<42} {:>14.6e} {:>14.6e}  {}",
-            r.what,
-            r.value,
-            r.bound,
-            if r.ok { "ok" } else { "VIOLATED" }
-        )?;
+    let mut table: Vec<Row> = rows
+        .into_iter()
+        .map(|r| Row {
+            what: r.what,
+            value: r.value,
+            bound: r.bound,
+            ok: r.ok,
+        })
+        .collect();
+    if let Some(s) = streamability(&plan) {
+        table.push(Row {
+            what: format!("streaming: segments {}–{} (s)", s.first, s.last),
+            value: s.run_us as f64 * 1e-6,
+            bound: s.need_us as f64 * 1e-6,
+            ok: s.run_us >= s.need_us,
+        });
     }
-    let stream = streamability(&plan);
-    if let Some(s) = &stream {
+    let failed = table.iter().filter(|r| !r.ok).count();
+    if args.json {
+        let checks: Vec<_> = table
+            .iter()
+            .map(|r| serde_json::json!({"check": r.what, "value": r.value, "bound": r.bound, "ok": r.ok}))
+            .collect();
         outln!(
-            "{:<42} {:>14.6e} {:>14.6e}  {}",
-            format!("streaming: segments {}–{} (s)", s.first, s.last),
-            s.run_us as f64 * 1e-6,
-            s.need_us as f64 * 1e-6,
-            if s.run_us >= s.need_us {
-                "ok"
-            } else {
-                "VIOLATED"
-            }
+            "{:#}",
+            serde_json::json!({"plan": args.plan.display().to_string(), "ok": failed == 0, "checks": checks})
         )?;
+    } else {
+        outln!("{:<42} {:>14} {:>14}  result", "check", "value", "bound")?;
+        for r in &table {
+            outln!(
+                "{:<42} {:>14.6e} {:>14.6e}  {}",
+                r.what,
+                r.value,
+                r.bound,
+                if r.ok { "ok" } else { "VIOLATED" }
+            )?;
+        }
     }
-    let unstreamable = stream.is_some_and(|s| s.run_us < s.need_us);
-    let failed = rows.iter().filter(|r| !r.ok).count() + usize::from(unstreamable);
     if failed > 0 {
         return Err(CliError::violation(format!(
             "{}: {failed} of {} checks failed",
             args.plan.display(),
-            rows.len() + usize::from(stream.is_some())
+            table.len()
         )));
     }
-    outln!(
-        "all {} checks hold",
-        rows.len() + usize::from(stream.is_some())
-    )?;
+    if !args.json {
+        outln!("all {} checks hold", table.len())?;
+    }
     Ok(())
 }
 

@@ -47,6 +47,18 @@ pub fn load_plan(path: &std::path::Path) -> CliResult<triquint_planner::Plan> {
         .map_err(|e| CliError::bad_input(format!("{}: not a valid plan: {e}", path.display())))
 }
 
+/// Refuses `--plot -`: plots are a folder of files, and `-` (standard
+/// output, as `plan -o -` takes it) would become a folder named `-`.
+pub fn check_plot_folder(dir: Option<&std::path::Path>) -> CliResult {
+    match dir {
+        Some(d) if d.as_os_str() == "-" => Err(CliError::bad_input(
+            "--plot -: plots are SVG files in a folder, not standard output; give a folder name"
+                .to_string(),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Text from the command line as quoted in an error: at most 32
 /// characters, so a pasted blob keeps the message one short line.
 pub fn shortened(text: &str) -> String {

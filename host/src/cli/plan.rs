@@ -44,6 +44,9 @@ pub struct PlanArgs {
     /// No progress bar or summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Print the summary as JSON on standard output (not with `-o -`).
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub machine: crate::machine_arg::MachineArg,
 }
@@ -96,6 +99,7 @@ impl Watcher {
 
 pub fn run(args: &PlanArgs) -> CliResult {
     let starts = parse_starts(&args.starts)?;
+    crate::cli::check_plot_folder(args.plot.as_deref())?;
     let machine = match &args.machine.file {
         Some(_) => Some(args.machine.load()?),
         None => None,
@@ -103,6 +107,11 @@ pub fn run(args: &PlanArgs) -> CliResult {
     let (job, inputs) = Job::load_for(&args.job, machine.as_ref()).map_err(plan_error)?;
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let to_stdout = args.output.as_os_str() == "-";
+    if to_stdout && args.json {
+        return Err(CliError::bad_input(
+            "--json: standard output already holds the plan (-o -)".to_string(),
+        ));
+    }
     // Refused outputs before the search, so they cost nothing.
     if !to_stdout {
         check_target(&args.output, &inputs).map_err(|e| output_error(&args.output, &e))?;
@@ -145,7 +154,18 @@ pub fn run(args: &PlanArgs) -> CliResult {
     if to_stdout {
         triquint_cli_common::out!("{json}")?;
     }
-    if !args.quiet {
+    if args.json {
+        let summary = serde_json::json!({
+            "plan": args.output.display().to_string(),
+            "segments": plan.segments.len(),
+            "total_time_s": plan.total_time_s,
+            "max_abs": &plan.max_abs,
+            "starts": plan.solver.starts,
+            "lp_solves": plan.solver.lp_solves,
+            "seconds": plan.solver.seconds,
+        });
+        triquint_cli_common::outln!("{summary:#}")?;
+    } else if !args.quiet {
         let m = &plan.max_abs;
         let max = |v: [f64; 3]| v.iter().fold(0.0f64, |a, b| a.max(*b));
         triquint_cli_common::errln!(

@@ -2,7 +2,7 @@
 
 use clap::Args;
 
-use crate::cli::load_plan;
+use crate::cli::{check_plot_folder, load_plan};
 use triquint_cli_common::output::write_outputs;
 use triquint_cli_common::{out, outln};
 
@@ -24,6 +24,7 @@ pub struct ReportArgs {
 }
 
 pub fn run(args: &ReportArgs) -> CliResult {
+    check_plot_folder(args.plot.as_deref())?;
     let plan = load_plan(&args.plan)?;
     args.machine.check_plan(&plan, &args.plan)?;
     let bad = |e: ReportError| CliError::bad_input(format!("{}: {e}", args.plan.display()));

@@ -64,6 +64,7 @@ fn to_cli(e: SimulateError) -> CliError {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult {
+    crate::cli::check_plot_folder(args.plot.as_deref())?;
     let plan = crate::cli::load_plan(&args.plan)?;
     let machine = args.machine.load()?;
     let rate_hz = args.rate.unwrap_or(machine.drive.control_rate);
@@ -173,6 +174,15 @@ fn print_residual(v: &Residual) -> CliResult {
     Ok(())
 }
 
+/// The bus as the summary names it: one name, each bit rate once.
+fn bus_name(fd: bool) -> &'static str {
+    if fd {
+        "CAN-FD (1 Mbit/s arbitration, 5 Mbit/s data)"
+    } else {
+        "classic CAN (1 Mbit/s)"
+    }
+}
+
 fn print_human(
     plan: &Plan,
     opts: &SimulateOptions,
@@ -180,21 +190,17 @@ fn print_human(
     faults: &[JsonFault],
 ) -> CliResult {
     outln!(
-        "{} segments, {:.3} s, {} CAN, {} Hz control, feedforward {}",
+        "{} segments, {:.3} s, {}, {} Hz control, feedforward {}",
         plan.segments.len(),
         plan.total_time_s,
-        if opts.fd {
-            "CAN-FD 1/5 Mbit/s"
-        } else {
-            "classic 1 Mbit/s"
-        },
+        bus_name(opts.fd),
         opts.rate_hz,
         if opts.feedforward { "on" } else { "off" }
     )?;
     outln!("axis   RMS error (µm)   max error (µm)   peak torque (N·m)")?;
     for j in 0..3 {
         outln!(
-            "q{}     {:>14.3}   {:>14.3}   {:>17.4}",
+            "{}      {:>14.3}   {:>14.3}   {:>17.4}",
             j + 1,
             r.run.rms_error_m[j] * 1e6,
             r.run.max_error_m[j] * 1e6,
@@ -216,7 +222,7 @@ fn print_human(
         None => "none (not every drive started)".to_string(),
     };
     outln!(
-        "start skew {skew} (tick {:.0} µs); stop time {:.3} s; f32 vs f64 evaluation error {:.3e} m",
+        "start skew {skew} (tick {:.0} µs); stop ramp T_s {:.3} s; f32 vs f64 evaluation error {:.3e} m",
         r.tick_ns as f64 * 1e-3,
         r.run.stop_ramp_s,
         r.f32_eval_error_m

@@ -3,7 +3,8 @@
 use clap::Args;
 use serde_json::json;
 use triquint_cli_common::outln;
-use triquint_shared::{Robot, dynamics};
+use triquint_shared::dynamics;
+use triquint_shared::machine::Machine;
 
 use super::{fmt_triple, parse_triple};
 use crate::exit::{CliError, CliResult};
@@ -27,8 +28,22 @@ pub struct TorqueArgs {
     pub machine: crate::machine_arg::MachineArg,
 }
 
-pub fn run(args: &TorqueArgs, robot: &Robot) -> CliResult {
+pub fn run(args: &TorqueArgs, machine: &Machine) -> CliResult {
+    let robot = &machine.robot;
     let q = parse_triple("--q", &args.q)?;
+    // `ik` prints millimetres; a pose pasted from it is far outside the
+    // travel in metres, and said so rather than computed.
+    if let Some(o) = machine.travel().outside(&q.into()) {
+        let hint = if q.iter().any(|x| x.abs() > 10.0) {
+            " (--q is in metres; `triquint ik` prints millimetres: divide by 1000)"
+        } else {
+            ""
+        };
+        return Err(CliError::bad_input(format!(
+            "--q {}: outside the travel: {o}{hint}",
+            args.q
+        )));
+    }
     let qd = parse_triple("--qd", &args.qd)?;
     let qdd = parse_triple("--qdd", &args.qdd)?;
     let tau = dynamics::torque(&robot.model::<f64>(), &q, &qd, &qdd)

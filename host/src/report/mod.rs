@@ -5,6 +5,7 @@
 //! - [`plots`]: SVG profiles against time and the platform path (paper Figures 10/12).
 //! - [`sim_plots`]: SVG traces of a simulation run.
 
+pub mod knot_labels;
 pub mod plots;
 pub mod sim_plots;
 pub mod tables;

@@ -8,6 +8,7 @@ use triquint_shared::plan::Plan;
 
 use super::ReportError;
 use super::extrema::{derivative, roots_in};
+use super::knot_labels::knot_labels;
 use super::stats::{PlanStats, Quantity, segment_torque};
 use triquint_plot::{Chart, Figure, Line, Path3d, PlotError};
 
@@ -77,15 +78,22 @@ fn sample(plan: &Plan) -> Result<Samples, ReportError> {
 }
 
 /// Knot times: each segment's start and the plan's end.
-fn knot_times(plan: &Plan) -> Vec<f64> {
+/// The knots' times and labels ([`knot_labels`]).
+fn knot_times(plan: &Plan) -> Vec<(f64, String)> {
     let mut t: Vec<f64> = plan.segments.iter().map(|s| s.t0_s).collect();
     if let Some(last) = plan.segments.last() {
         t.push(last.t0_s + last.duration_s);
     }
-    t
+    t.into_iter().zip(knot_labels(plan)).collect()
 }
 
-fn time_chart(title: &str, y_label: &str, samples: &Samples, q: usize, knots: &[f64]) -> Chart {
+fn time_chart(
+    title: &str,
+    y_label: &str,
+    samples: &Samples,
+    q: usize,
+    knots: &[(f64, String)],
+) -> Chart {
     let mut chart = Chart::new(title).x_label("time (s)").y_label(y_label);
     for j in 0..3 {
         let pts: Vec<(f64, f64)> = samples
@@ -96,10 +104,10 @@ fn time_chart(title: &str, y_label: &str, samples: &Samples, q: usize, knots: &[
             .collect();
         chart = chart.line(Line::joint(j, format!("joint {}", j + 1), pts));
     }
-    for (k, &t) in knots.iter().enumerate() {
-        chart = chart.knot(t, format!("P{}", k + 1));
+    for (t, label) in knots {
+        chart = chart.knot(*t, label.clone());
     }
-    if let (Some(&a), Some(&b)) = (knots.first(), knots.last()) {
+    if let (Some(&(a, _)), Some(&(b, _))) = (knots.first(), knots.last()) {
         chart = chart.x_range(a, b);
     }
     chart

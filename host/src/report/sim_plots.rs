@@ -10,6 +10,7 @@ use triquint_sim::metrics::plan_position;
 use triquint_sim::vibration::Residual;
 
 use super::ReportError;
+use super::knot_labels::knot_labels;
 use crate::inprocess::simulate::{SimReport, SimulateOptions};
 
 const TIME: &str = "time since start (s)";
@@ -20,10 +21,7 @@ fn knots(plan: &Plan) -> Vec<(f64, String)> {
     if let Some(last) = plan.segments.last() {
         t.push(last.t0_s + last.duration_s);
     }
-    t.into_iter()
-        .enumerate()
-        .map(|(k, t)| (t, format!("P{}", k + 1)))
-        .collect()
+    t.into_iter().zip(knot_labels(plan)).collect()
 }
 
 fn with_knots(mut chart: Chart, knots: &[(f64, String)]) -> Chart {

@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 
 use triquint_shared::plan::{Objective, Plan};
 
+use super::knot_labels::knot_labels;
 use super::stats::{PlanStats, Quantity};
 
 /// Left-aligned first column, right-aligned others, two spaces between.
@@ -57,12 +58,19 @@ pub fn intervals_table(plan: &Plan, stats: &PlanStats) -> String {
     ]
     .map(String::from)
     .to_vec();
+    let labels = knot_labels(plan);
+    let label = |k: usize| {
+        labels
+            .get(k)
+            .cloned()
+            .unwrap_or_else(|| format!("P{}", k + 1))
+    };
     let mut rows: Vec<Vec<String>> = stats
         .segments
         .iter()
         .map(|s| {
             vec![
-                format!("h{:<2} P{}→P{}", s.index, s.index, s.index + 1),
+                format!("h{:<2} {}→{}", s.index, label(s.index - 1), label(s.index)),
                 format!("{:.6}", s.t0_s),
                 format!("{:.6}", s.duration_s),
                 format!("{:.5}", max3(&s.max_velocity)),

@@ -63,7 +63,7 @@
     const age = n.heartbeat_age_s === null ? "never" : `${fmt(n.heartbeat_age_s, 2)} s`;
     const be = n.bus_errors || { tx: 0, rx: 0, rejects: 0 };
     const yes = (b) => (b ? "yes" : "no");
-    return `<header><h2>Node ${n.id}</h2><span class="axis">axis ${n.axis}</span>` +
+    return `<header><h2>Axis ${n.axis}</h2><span class="axis">node ${n.id}</span>` +
       (n.stale ? `<span class="badge">stale</span>` : "") +
       `<span class="state st-${esc(state)}">${esc(state)}</span></header>` +
       `<dl>` +
