@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""triquint against Ruckig on seeded point-to-point moves (issue 37).
+"""triquint against Ruckig on seeded point-to-point moves.
 
 Each move: two points drawn (seed 37) in x, y ±100 mm, z 540–680 mm, limits
 v 0.5 m/s, a 1.2 m/s², j 5 m/s³ per joint, torque 1000 N·m (never binding).

@@ -59,7 +59,7 @@ fn load_plan(name: &str) -> Plan {
 
 fn wire_segments(plan: &Plan) -> Vec<WireSegment> {
     plan.wire_segments()
-        .unwrap_or_else(|(i, e)| panic!("plan segment {i} on the wire: {e}"))
+        .unwrap_or_else(|e| panic!("plan {e} on the wire"))
 }
 
 /// FNV-1a over the frames a node queued for transmission.

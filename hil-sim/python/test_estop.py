@@ -1,4 +1,4 @@
-"""`triquint estop` over vcan (issue 33): it waits for every addressed drive
+"""`triquint estop` over vcan: it waits for every addressed drive
 to report the host's emergency (Fault or Stopping with HostEmergency), names
 any that did not, and exits 4 if one did not; idle drives, moving drives,
 drives on node ids 4, 5, 6, and a drive missing from the bus."""

@@ -1,8 +1,7 @@
 //! Free-knot plans on the in-process virtual hardware: a move of no more
-//! segments than the drives queue runs to completion. (A longer one does
-//! not stream on today's drives, which queue 8 segments and need about
-//! 1.5 s of plan ahead until the last is queued: issue 35; see
-//! docs/planner-speed.md.)
+//! segments than the drives queue runs to completion. (A longer one may
+//! not stream: the drives' queue must hold enough of the plan ahead,
+//! `protocol::streaming`; see docs/planner-speed.md.)
 
 use triquint_host::inprocess::simulate::{SimulateOptions, simulate};
 use triquint_planner::{Job, KnotPlacement, Objective, Options, plan};

@@ -4,6 +4,8 @@
 //! so neither can be read, tested or moved alone; shared logic belongs in a
 //! module both use (host/src/ops for the host's bus operations).
 //!
+//! And a subcommand (host/src/cli) uses no other subcommand.
+//!
 //! A module is a source file (`mod.rs` stands for its directory). Every
 //! `crate::` or `super::` path in a file, in `use` declarations or inline
 //! (the inline test module excepted), is resolved
@@ -314,6 +316,88 @@ fn ops_neither_draw_nor_read_a_terminal() {
         }
     }
     assert!(wrong.is_empty(), "ops reaches the terminal: {wrong:?}");
+}
+
+/// The subcommands (the modules whose `…Args` main.rs parses).
+fn subcommands(main: &str) -> BTreeSet<String> {
+    main.match_indices("(cli::")
+        .filter_map(|(i, _)| {
+            let rest = &main[i + "(cli::".len()..];
+            let (module, after) = rest.split_once("::")?;
+            let ty: String = after
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            ty.ends_with("Args").then(|| module.to_string())
+        })
+        .collect()
+}
+
+/// A subcommand imports no other subcommand: what two commands share lives
+/// in `ops` (the machine) or a shared `cli` module (the terminal).
+fn subcommand_imports(src: &Path) -> Vec<String> {
+    let main = fs::read_to_string(src.join("main.rs")).expect("host/src/main.rs");
+    let commands = subcommands(&main);
+    let is_command = |m: &Vec<String>| m.len() == 2 && m[0] == "cli" && commands.contains(&m[1]);
+    let mut wrong = Vec::new();
+    for (from, deps) in graph(src).iter().filter(|(m, _)| is_command(m)) {
+        for to in deps.iter().filter(|m| is_command(m)) {
+            wrong.push(format!(
+                "{} -> {}",
+                show(std::slice::from_ref(from)),
+                show(std::slice::from_ref(to))
+            ));
+        }
+    }
+    wrong
+}
+
+#[test]
+fn subcommands_use_no_other_subcommand() {
+    let src = root().join("host/src");
+    assert!(
+        subcommands(&fs::read_to_string(src.join("main.rs")).unwrap()).len() > 10,
+        "main.rs names the subcommands' Args"
+    );
+    let wrong = subcommand_imports(&src);
+    assert!(wrong.is_empty(), "a subcommand imports another: {wrong:?}");
+}
+
+#[test]
+fn the_checker_sees_a_subcommand_using_another() {
+    let dir = std::env::temp_dir().join(format!("subcommands-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(dir.join("cli")).unwrap();
+    fs::write(
+        dir.join("main.rs"),
+        "enum Command { Up(cli::up::UpArgs), Go(cli::go::GoArgs) }
+",
+    )
+    .unwrap();
+    fs::write(
+        dir.join("cli/mod.rs"),
+        "pub mod go;
+pub mod shown;
+pub mod up;
+",
+    )
+    .unwrap();
+    fs::write(dir.join("cli/shown.rs"), "\n").unwrap();
+    fs::write(
+        dir.join("cli/up.rs"),
+        "use crate::cli::shown::x;
+",
+    )
+    .unwrap();
+    fs::write(
+        dir.join("cli/go.rs"),
+        "use crate::cli::{shown::y, up::report};
+",
+    )
+    .unwrap();
+    let wrong = subcommand_imports(&dir);
+    fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(wrong, ["crate::cli::go -> crate::cli::up"]);
 }
 
 #[test]

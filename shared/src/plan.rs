@@ -36,6 +36,16 @@ pub const PLAN_FORMAT_FREE_KNOTS: &str = "triquint-plan/4";
 /// acknowledgement bookkeeping.
 pub const MAX_SEGMENTS: usize = u16::MAX as usize;
 
+/// The first of a plan's segments that cannot go on the wire.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("segment {index}: {source}")]
+pub struct WireError {
+    /// Its index in the plan (the first beyond [`MAX_SEGMENTS`] if there are more).
+    pub index: usize,
+    #[source]
+    pub source: SegmentError,
+}
+
 /// What the planner optimises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -212,9 +222,9 @@ impl Plan {
     }
 
     /// The segments as they go on the wire: sequence numbers from 0, first and
-    /// last flagged. On error, the index of the segment that cannot be sent
-    /// (the first beyond [`MAX_SEGMENTS`] if there are more).
-    pub fn wire_segments(&self) -> Result<Vec<WireSegment>, (usize, SegmentError)> {
+    /// last flagged. On error, the first segment that cannot be sent (the
+    /// first beyond [`MAX_SEGMENTS`] if there are more).
+    pub fn wire_segments(&self) -> Result<Vec<WireSegment>, WireError> {
         let n = self.segments.len();
         self.segments
             .iter()
@@ -222,7 +232,12 @@ impl Plan {
             .map(|(i, s)| {
                 let seq = match u16::try_from(i) {
                     Ok(seq) if i < MAX_SEGMENTS => seq,
-                    _ => return Err((i, SegmentError::TooMany(n))),
+                    _ => {
+                        return Err(WireError {
+                            index: i,
+                            source: SegmentError::TooMany(n),
+                        });
+                    }
                 };
                 let mut flags = 0;
                 if i == 0 {
@@ -231,7 +246,8 @@ impl Plan {
                 if i + 1 == n {
                     flags |= FLAG_LAST;
                 }
-                WireSegment::from_quintic(seq, &s.quintic(), flags).map_err(|e| (i, e))
+                WireSegment::from_quintic(seq, &s.quintic(), flags)
+                    .map_err(|source| WireError { index: i, source })
             })
             .collect()
     }
@@ -271,7 +287,10 @@ mod tests {
         assert_eq!(w.last().map(|s| s.seq), Some(u16::MAX - 1));
         assert_eq!(
             resting(MAX_SEGMENTS + 1).wire_segments().unwrap_err(),
-            (MAX_SEGMENTS, SegmentError::TooMany(MAX_SEGMENTS + 1))
+            WireError {
+                index: MAX_SEGMENTS,
+                source: SegmentError::TooMany(MAX_SEGMENTS + 1)
+            }
         );
     }
 }

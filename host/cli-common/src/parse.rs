@@ -14,8 +14,8 @@ pub const RATE_HZ: std::ops::RangeInclusive<f64> = 1000.0..=10000.0;
 
 /// The default node ids of the drives of axes 1–3 (the protocol's).
 pub use triquint_shared::protocol::NODES;
-/// Node ids the drives may have.
-pub const NODE_IDS: std::ops::RangeInclusive<u8> = 1..=15;
+/// Node ids the drives may have (the protocol's; 0 addresses them all).
+pub const NODE_IDS: std::ops::RangeInclusive<u8> = 1..=triquint_shared::protocol::MAX_NODE_ID;
 
 /// Parses one finite number, naming what it is on error.
 pub fn finite(what: &str, text: &str) -> CliResult<f64> {

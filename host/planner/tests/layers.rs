@@ -83,7 +83,8 @@ fn block_end(text: &str, from: usize) -> usize {
     text.len()
 }
 
-/// The text outside `#[cfg(test)]` items (a test module, a test-only `use`).
+/// The text outside `#[cfg(test)]` items (a test module, a test-only `use`),
+/// each item replaced by its line breaks so that line numbers stay the file's.
 fn without_tests(text: &str) -> String {
     let mut out = String::new();
     let mut rest = text;
@@ -92,11 +93,13 @@ fn without_tests(text: &str) -> String {
         let after = &rest[i..];
         let semi = after.find(';').unwrap_or(after.len());
         let brace = after.find('{').unwrap_or(after.len());
-        rest = if semi < brace {
-            &after[semi + 1..]
+        let end = if semi < brace {
+            semi + 1
         } else {
-            &after[block_end(after, 0)..]
+            block_end(after, 0)
         };
+        out.extend(after[..end].chars().filter(|c| *c == '\n'));
+        rest = &after[end..];
     }
     out.push_str(rest);
     out
@@ -265,7 +268,8 @@ fn the_check_catches_a_path_up_a_call_up_a_re_export_and_an_unlisted_module() {
         "//! See [`crate::search::global`].\nuse crate::spline::Knots;\n\
          impl Problem { fn evaluate(&self) {} }\n\
          fn f(p: &Problem) { p.evaluate(); p.descend_time(); }\n\
-         #[cfg(test)]\nmod tests { use crate::planning::plan; }\n",
+         #[cfg(test)]\nmod tests {\n    use crate::planning::plan;\n}\n\
+         fn g(p: &Problem) { p.descend_time(); }\n",
     )
     .unwrap();
     fs::write(
@@ -277,7 +281,7 @@ fn the_check_catches_a_path_up_a_call_up_a_re_export_and_an_unlisted_module() {
     fs::write(dir.join("extra.rs"), "\n").unwrap();
     let bad = violations(&dir);
     fs::remove_dir_all(&dir).unwrap();
-    assert_eq!(bad.len(), 4, "{bad:#?}");
+    assert_eq!(bad.len(), 5, "{bad:#?}");
     assert!(bad[0].contains("not in LAYERS"), "{}", bad[0]);
     assert!(
         bad[1].contains("problem.rs:1") && bad[1].contains("points up to crate::search"),
@@ -289,5 +293,10 @@ fn the_check_catches_a_path_up_a_call_up_a_re_export_and_an_unlisted_module() {
         "{}",
         bad[2]
     );
-    assert!(bad[3].contains("not a module path"), "{}", bad[3]);
+    assert!(
+        bad[3].contains("problem.rs:9") && bad[3].contains("calls descend_time"),
+        "{}",
+        bad[3]
+    );
+    assert!(bad[4].contains("not a module path"), "{}", bad[4]);
 }

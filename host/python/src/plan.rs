@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyType};
-use triquint_shared::plan::{JointState, PLAN_FORMAT, Plan};
+use triquint_shared::kinematics::KinematicsError;
+use triquint_shared::plan::{JointState, PLAN_FORMAT, Plan, SampleError};
 use triquint_shared::{dynamics, kinematics};
 
 use crate::arrays::{array, floats, rows_array};
@@ -120,8 +121,21 @@ struct Sampled {
     platform: Vec<[f64; 3]>,
 }
 
-fn sample(plan: &Plan, dt: f64) -> Result<Sampled, String> {
-    let samples = plan.sample(dt).map_err(|e| e.to_string())?;
+/// Why a plan cannot be sampled: the step, or a pose the model cannot take.
+#[derive(Debug, thiserror::Error)]
+enum SampleFailure {
+    #[error(transparent)]
+    Step(#[from] SampleError),
+    #[error("at t = {t} s: {source}")]
+    Pose {
+        t: f64,
+        #[source]
+        source: KinematicsError,
+    },
+}
+
+fn sample(plan: &Plan, dt: f64) -> Result<Sampled, SampleFailure> {
+    let samples = plan.sample(dt)?;
     let model = plan.robot.model::<f64>();
     let n = samples.len();
     let mut out = Sampled {
@@ -131,9 +145,9 @@ fn sample(plan: &Plan, dt: f64) -> Result<Sampled, String> {
         platform: Vec::with_capacity(n),
     };
     for (t, s) in samples {
-        let tau = dynamics::state_torque(&model, s).map_err(|e| format!("at t = {t} s: {e}"))?;
-        let r =
-            kinematics::platform_position(&model, s.q).map_err(|e| format!("at t = {t} s: {e}"))?;
+        let pose = |source| SampleFailure::Pose { t, source };
+        let tau = dynamics::state_torque(&model, s).map_err(pose)?;
+        let r = kinematics::platform_position(&model, s.q).map_err(pose)?;
         out.t.push(t);
         out.states.push(s);
         out.torque.push(tau.into());
@@ -308,7 +322,7 @@ impl PyPlan {
         let s = py
             .detach(|| std::panic::catch_unwind(|| sample(plan, dt)))
             .map_err(|p| crate::errors::internal_error(py, p.as_ref()))?
-            .map_err(PyValueError::new_err)?;
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let [q, v, a, jerk] = states_arrays(py, &s.states, true)?;
         Ok(PySamples {
             t: array(py, &s.t, &[s.t.len()])?.unbind(),

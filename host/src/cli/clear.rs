@@ -11,7 +11,7 @@ use triquint_link::Listener;
 use triquint_shared::Robot;
 use triquint_shared::protocol::{CommandCode, State};
 
-use crate::cli::status::print_text;
+use crate::cli::status_text::print_text;
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::{listen, open};
 use crate::ops::send::send_command;

@@ -13,7 +13,8 @@ use triquint_link::{EstopAnswer, EstopWatch, emergency_stop};
 use triquint_shared::protocol::{FaultCode, State};
 
 use crate::exit::{CliError, CliResult};
-use crate::ops::listen::{nodes_arg, open};
+use crate::ops::listen::open;
+use crate::ops::shown::nodes_arg;
 use triquint_cli_common::outln;
 
 /// Longest `--wait` (ms): an emergency stop must not hang.

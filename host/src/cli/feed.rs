@@ -7,8 +7,9 @@ use triquint_link::Feed;
 use triquint_shared::protocol::{FaultCode, State};
 
 use crate::exit::CliResult;
-use crate::ops::feed::{percent, send_feed, state_name, verdict};
+use crate::ops::feed::{send_feed, verdict};
 use crate::ops::listen::open;
+use crate::ops::shown::{percent, state_name};
 
 /// `what` to every drive on `iface`: prints each drive's answer; exit 0 when
 /// every drive did it, 8 when one refused (the cap for an override above

@@ -9,7 +9,7 @@ use clap::Args;
 use triquint_link::Feed;
 
 use crate::exit::{CliError, CliResult};
-use crate::ops::feed::percent;
+use crate::ops::shown::percent;
 
 #[derive(Args, Debug)]
 pub struct OverrideArgs {

@@ -14,11 +14,12 @@ use triquint_link::Listener;
 use triquint_shared::machine::Machine;
 use triquint_shared::protocol::{CommandCode, FaultCode, State, flags};
 
+use crate::cli::bus_args::BusArgs;
 use crate::exit::{CliError, CliResult};
-use crate::ops::bus::{BusArgs, check_bus_args};
 use crate::ops::configure::configure;
-use crate::ops::listen::{drain, nodes_arg, open};
+use crate::ops::listen::{drain, open};
 use crate::ops::send::{send_command, send_emergency};
+use crate::ops::shown::nodes_arg;
 
 #[derive(Args, Debug)]
 pub struct HomeArgs {
@@ -45,10 +46,9 @@ enum Progress {
 }
 
 pub fn run(args: &HomeArgs, machine: &Machine) -> CliResult {
-    let bus = &args.bus.for_machine(machine);
+    let bus = &args.bus.bus(machine)?;
     let homing = &machine.homing;
-    check_bus_args(bus)?;
-    let ids = bus.ids()?;
+    let ids = bus.ids;
     configure(machine, bus)?;
     let mut port = open(&bus.iface)?;
     // Every axis at once: the commands go out back to back (well within a tick).

@@ -1,5 +1,8 @@
-//! One module per `triquint` subcommand.
+//! One module per `triquint` subcommand, and what several of them share
+//! of the terminal: `bus_args`, `keys`, `terminal_watch`, `status_text`,
+//! `upload_summary`, `feed` (the feed commands' one run).
 
+pub mod bus_args;
 pub mod check;
 pub mod clear;
 pub mod estop;
@@ -17,10 +20,12 @@ pub mod report;
 pub mod resume;
 pub mod simulate;
 pub mod status;
+pub mod status_text;
 pub mod stop;
 pub mod terminal_watch;
 pub mod torque;
 pub mod upload;
+pub mod upload_summary;
 
 use nalgebra::Vector3;
 

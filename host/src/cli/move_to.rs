@@ -9,11 +9,11 @@ use triquint_cli_common::outln;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::Machine;
 
+use crate::cli::bus_args::BusArgs;
 use crate::cli::finite;
 use crate::cli::terminal_watch::TerminalWatch;
-use crate::cli::upload::report;
+use crate::cli::upload_summary;
 use crate::exit::{CliError, CliResult};
-use crate::ops::bus::{BusArgs, check_bus_args};
 use crate::ops::joints::reported_joints;
 use crate::ops::plan_move::plan_move;
 use crate::ops::run::run_plan;
@@ -39,7 +39,6 @@ pub struct MoveToArgs {
 }
 
 pub fn run(args: &MoveToArgs, machine: &Machine) -> CliResult {
-    let bus = &args.bus.for_machine(machine);
     let target_mm = Vector3::new(
         finite("X", &args.x)?,
         finite("Y", &args.y)?,
@@ -55,7 +54,7 @@ pub fn run(args: &MoveToArgs, machine: &Machine) -> CliResult {
             triquint_shared::readable::readable(target_mm.z)
         ))
     })?;
-    check_bus_args(bus)?;
+    let bus = &args.bus.bus(machine)?;
     let q0 = reported_joints(machine, bus)?;
     let Some(p) = plan_move(machine, q0, target)? else {
         outln!("already within 1 µm of the target on every axis")?;
@@ -64,5 +63,5 @@ pub fn run(args: &MoveToArgs, machine: &Machine) -> CliResult {
     let mut watch = TerminalWatch::open();
     let summary = run_plan(&p, bus, machine, false, &mut watch)?;
     drop(watch);
-    report(&summary, bus, args.json)
+    upload_summary::show(&summary, bus, args.json)
 }

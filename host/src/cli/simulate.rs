@@ -57,7 +57,9 @@ fn to_cli(e: SimulateError) -> CliError {
             CliError::bad_input(u)
         }
         SimulateError::Upload(u) if u.is_refusal() => CliError::refused(u),
-        SimulateError::Plan(m) => CliError::bad_input(m),
+        e @ (SimulateError::NoSegments | SimulateError::NoEnd | SimulateError::ClosedPath) => {
+            CliError::bad_input(e)
+        }
         e @ SimulateError::Config(_) => CliError::bad_input(e),
         other => CliError::device(other),
     }

@@ -88,7 +88,7 @@ fn progress_message(p: &Progress, keys: bool) -> String {
         m += ", HELD";
     }
     if let Some(pm) = p.override_permille.filter(|pm| *pm != 1000) {
-        m += &format!(", override {} %", crate::ops::feed::percent(pm));
+        m += &format!(", override {} %", crate::ops::shown::percent(pm));
     }
     if keys {
         m += &format!("  [{}]", Keys::help());

@@ -5,18 +5,19 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use triquint_cli_common::outln;
 use triquint_shared::machine::Machine;
 use triquint_shared::plan::Plan;
 
+use crate::cli::bus_args::BusArgs;
 use crate::cli::load_plan;
 use crate::cli::terminal_watch::TerminalWatch;
-use crate::exit::{CliError, CliResult, Status};
+use crate::cli::upload_summary;
+use crate::exit::{CliError, CliResult};
 use crate::machine_arg::{plan_for_machine, verified};
-use crate::ops::bus::{BusArgs, check_bus_args};
+use crate::ops::bus::Bus;
 use crate::ops::joints::reported_joints;
 use crate::ops::plan_move::plan_move;
-use crate::ops::run::{UploadSummary, run_plan};
+use crate::ops::run::run_plan;
 
 #[derive(Args, Debug)]
 pub struct UploadArgs {
@@ -39,54 +40,9 @@ pub struct UploadArgs {
     pub machine: crate::machine_arg::MachineArg,
 }
 
-/// Prints the summary; exit 0 only when every node completed without a fault.
-pub fn report(s: &UploadSummary, bus: &BusArgs, json: bool) -> CliResult {
-    if json {
-        outln!(
-            "{}",
-            serde_json::to_string(s).map_err(|e| CliError::device(e.to_string()))?
-        )?;
-    } else {
-        outln!(
-            "{} segments over {} ({}): {} frames ({} segment frames, {} retransmissions); all acknowledged after {:.3} s, done after {:.3} s",
-            s.segments,
-            bus.iface,
-            if bus.fd { "CAN-FD" } else { "classic CAN" },
-            s.frames_sent,
-            s.segment_frames,
-            s.retransmits,
-            s.upload_s,
-            s.total_s
-        )?;
-        for n in &s.nodes {
-            outln!(
-                "node {}: {}, fault {} ({})",
-                n.node,
-                n.state,
-                n.fault_name,
-                n.fault
-            )?;
-        }
-    }
-    if s.completed && s.faults.is_empty() {
-        return Ok(());
-    }
-    if s.stopped && s.faults.is_empty() {
-        return Err(CliError::new(
-            Status::Cancelled,
-            "stopped on request before the plan's end: at rest on its path, every drive Idle",
-        ));
-    }
-    Err(CliError::motion_fault(match s.faults.first() {
-        Some(f) => format!("node {} faulted: {} ({})", f.node, f.name, f.code),
-        None => "the plan did not complete".to_string(),
-    }))
-}
-
 pub fn run(args: &UploadArgs, machine: &Machine) -> CliResult {
     let plan = load_plan(&args.plan)?;
-    let bus = &args.bus.for_machine(machine);
-    check_bus_args(bus)?;
+    let bus = &args.bus.bus(machine)?;
     plan_for_machine(&plan, &args.plan, machine, &args.machine.shown())?;
     verified(&plan, &args.plan)?;
     let mut watch = TerminalWatch::open();
@@ -107,18 +63,18 @@ pub fn run(args: &UploadArgs, machine: &Machine) -> CliResult {
             let s = run_plan(&p, bus, machine, args.clear, &mut watch)?;
             if !(s.completed && s.faults.is_empty()) {
                 triquint_cli_common::errln!("the approach did not complete; the plan is not run");
-                return report(&s, bus, args.json);
+                return upload_summary::show(&s, bus, args.json);
             }
         }
     }
     let summary = run_plan(&plan, bus, machine, args.clear, &mut watch)?;
     drop(watch);
-    report(&summary, bus, args.json)
+    upload_summary::show(&summary, bus, args.json)
 }
 
 /// The minimum-time move (the planner of `move-to`) from where the drives
 /// report the platform to `start` (m); `None` if already there.
-fn approach_plan(machine: &Machine, bus: &BusArgs, start: [f64; 3]) -> CliResult<Option<Plan>> {
+fn approach_plan(machine: &Machine, bus: &Bus, start: [f64; 3]) -> CliResult<Option<Plan>> {
     let q0 = reported_joints(machine, bus)?;
-    plan_move(machine, q0, start.into())
+    Ok(plan_move(machine, q0, start.into())?)
 }

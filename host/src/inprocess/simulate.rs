@@ -63,8 +63,17 @@ pub enum SimulateError {
     Upload(#[from] UploadError),
     #[error(transparent)]
     Sim(#[from] SimError),
-    #[error("plan: {0}")]
-    Plan(String),
+    /// The plan has no segments: nothing to run.
+    #[error("the plan has no segments")]
+    NoSegments,
+    /// The plan has no position at its end time (a total time not a number).
+    #[error("the plan has no end")]
+    NoEnd,
+    /// A 7-phase reference needs a move; the plan's path is closed.
+    #[error(
+        "a 7-phase profile needs a move: the plan's start and end are the same (a closed path)"
+    )]
+    ClosedPath,
     #[error("plan: {0}")]
     Config(#[from] PlanConfigError),
     #[error("flexible plant: {0}")]
@@ -131,7 +140,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         .segments
         .first()
         .map(|s| s.quintic().eval(0.0).q)
-        .ok_or_else(|| SimulateError::Plan("the plan has no segments".into()))?
+        .ok_or(SimulateError::NoSegments)?
         + Vector3::from(opts.start_offset_m);
     let mut sim = match opts.plant {
         PlantKind::Rigid => Sim::new(&plan.robot, q0, sim_cfg),
@@ -178,9 +187,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
     );
     run.completed = outcome.completed;
     if let Some(flex) = sim.plant.flexible() {
-        let end = plan
-            .at(plan.total_time_s)
-            .ok_or_else(|| SimulateError::Plan("the plan has no end".into()))?;
+        let end = plan.at(plan.total_time_s).ok_or(SimulateError::NoEnd)?;
         run.vibration = flex
             .residual(end_s, SETTLE_WINDOW_S, Vector3::from(end.q))
             .map_err(|source| SimError::Plant { t_s: end_s, source })?;

@@ -1,4 +1,4 @@
-//! Streaming capacity end to end (issue 35): plans of many short segments
+//! Streaming capacity end to end: plans of many short segments
 //! on the in-process virtual hardware, classic CAN and CAN-FD, each
 //! checked against the streamability rule (`protocol::streaming`) before
 //! it runs; the figures are printed (`--nocapture`) for docs/protocol.md.

@@ -83,12 +83,8 @@ pub fn run(
             run_motion(plan, opts, kind, &|t| motion(plan, t), plan.total_time_s)
         }
         TestReference::SevenPhase => {
-            let seven = SevenPhase::new(start, end, &plan.limits).ok_or_else(|| {
-                SimulateError::Plan(
-                    "a 7-phase profile needs a move: the plan's start and end are the same (a closed path)"
-                        .into(),
-                )
-            })?;
+            let seven =
+                SevenPhase::new(start, end, &plan.limits).ok_or(SimulateError::ClosedPath)?;
             run_motion(plan, opts, kind, &|t| seven.at(t), seven.duration())
         }
         TestReference::Still => {
@@ -154,6 +150,28 @@ mod tests {
 
     use super::*;
     use crate::inprocess::simulate::simulate;
+
+    /// A closed path has no move for a 7-phase profile: a typed refusal.
+    #[test]
+    fn a_seven_phase_profile_of_a_closed_path_is_refused() {
+        let job = Job::builder()
+            .total_time(4.0)
+            .points_mm([
+                [-60.0, 40.0, 560.0],
+                [60.0, -40.0, 640.0],
+                [-60.0, 40.0, 560.0],
+            ])
+            .build()
+            .unwrap();
+        let closed = plan(&job, &Options::default()).unwrap();
+        let e = run(
+            &closed,
+            &SimulateOptions::default(),
+            TestReference::SevenPhase,
+        )
+        .unwrap_err();
+        assert!(matches!(e, SimulateError::ClosedPath), "{e}");
+    }
 
     /// The P2P move of docs/vibration.md on the flexible plant: at the
     /// lowest mode, the jerk-discontinuous 7-phase profile rings several

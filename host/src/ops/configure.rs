@@ -7,37 +7,37 @@ use triquint_shared::Limits;
 use triquint_shared::machine::Machine;
 use triquint_shared::protocol::config::DriveSettings;
 
-use crate::exit::{CliError, CliResult};
-use crate::ops::bus::{BusArgs, upload_error};
+use crate::ops::bus::Bus;
+use crate::ops::error::{OpError, OpResult};
 
 /// Writes and commits the drives' configuration (limits-sized, with the
 /// homing settings), without motion.
-pub fn configure(machine: &Machine, bus: &BusArgs) -> CliResult {
+pub fn configure(machine: &Machine, bus: &Bus) -> OpResult {
     let settings = DriveSettings {
-        control_rate: bus.rate(),
-        node_ids: bus.ids()?,
+        control_rate: bus.rate,
+        node_ids: bus.ids,
         ..machine.drive_settings()
     };
     let configs =
         DriveConfigs::for_limits(&machine.robot, &machine_limits(machine), &settings).nodes;
     let opts = SessionOptions {
         fd: bus.fd,
-        response_timeout_us: (bus.timeout * 1e6) as u64,
+        response_timeout_us: (bus.timeout_s * 1e6) as u64,
         ..SessionOptions::default()
     };
     let mut session = Session::configure(configs, opts);
-    let mut port = triquint_link::open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
+    let mut port = triquint_link::open_host(&bus.iface, bus.fd)?;
     loop {
         match session.poll(&mut port) {
             Ok(Some(_)) => return Ok(()),
             Ok(None) => std::thread::sleep(Duration::from_millis(1)),
-            Err(e @ (UploadError::Timeout { .. } | UploadError::Port(_))) => {
-                return Err(CliError::device(format!(
-                    "{}: configuring the drives: {e}",
-                    bus.iface
-                )));
+            Err(source @ (UploadError::Timeout { .. } | UploadError::Port(_))) => {
+                return Err(OpError::Configure {
+                    iface: bus.iface.clone(),
+                    source,
+                });
             }
-            Err(e) => return Err(upload_error(e, bus)),
+            Err(e) => return Err(OpError::upload(e, bus)),
         }
     }
 }

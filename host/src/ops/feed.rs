@@ -9,10 +9,9 @@
 use std::time::{Duration, Instant};
 
 use triquint_link::{CanPort, Feed, HostClock, Listener};
-use triquint_shared::protocol::{CommandAck, FaultCode, Msg, State, decode};
+use triquint_shared::protocol::{CommandAck, Msg, State, decode};
 
-use crate::exit::{CliError, CliResult};
-use crate::ops::listen::nodes_arg;
+use crate::ops::error::{OpError, OpResult};
 
 /// How long to listen first: a heartbeat from every drive (100 ms apart)
 /// and two TimeSyncs (100 ms apart while an upload runs).
@@ -35,12 +34,12 @@ pub struct Sent {
 
 /// Listens, then sends `f` to every drive of `ids` on `port` (SocketCAN;
 /// any port in tests).
-pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<Sent> {
+pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> OpResult<Sent> {
     let mut listener = Listener::new(ids);
     let mut clock = HostClock::default();
     let t0 = Instant::now();
     while t0.elapsed() < LISTEN && !(listener.all_heard() && clock.known()) {
-        match CanPort::recv(port).map_err(CliError::device)? {
+        match CanPort::recv(port)? {
             Some(rx) => {
                 listener.take(&rx);
                 clock.take(&rx);
@@ -50,11 +49,10 @@ pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<S
     }
     let states_before = listener.nodes.0.map(|v| v.state);
     if let Some(v) = listener.nodes.0.iter().find(|v| v.heartbeat_at.is_none()) {
-        return Err(CliError::device(format!(
-            "node {} sent no heartbeat within {} s",
-            v.id,
-            LISTEN.as_secs_f64()
-        )));
+        return Err(OpError::NoHeartbeat {
+            node: v.id,
+            within_s: LISTEN.as_secs_f64(),
+        });
     }
     // No TimeSync: no upload runs, no drive is moving; "on receipt" (0).
     let now = port.now_us();
@@ -69,14 +67,14 @@ pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<S
     let mut answers: [Option<CommandAck>; 3] = [None; 3];
     for _ in 0..=RESENDS {
         let sent_at = Instant::now();
-        while !CanPort::send(port, &frame).map_err(CliError::device)? {
+        while !CanPort::send(port, &frame)? {
             if sent_at.elapsed() > RESEND_AFTER {
-                return Err(CliError::device("the transmit queue stayed full"));
+                return Err(OpError::QueueFull);
             }
             std::thread::sleep(Duration::from_millis(1));
         }
         while sent_at.elapsed() < RESEND_AFTER && answers.iter().any(Option::is_none) {
-            let Some(rx) = CanPort::recv(port).map_err(CliError::device)? else {
+            let Some(rx) = CanPort::recv(port)? else {
                 std::thread::sleep(Duration::from_millis(1));
                 continue;
             };
@@ -99,71 +97,38 @@ pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> CliResult<S
     })
 }
 
-/// Name of a state in an acknowledgement.
-pub fn state_name(s: u8) -> &'static str {
-    State::from_u8(s).map_or("unknown", State::name)
-}
-
-/// Per mille as a percentage for people: 117.7 %, 50 %.
-pub fn percent(pm: u32) -> String {
-    let s = format!("{:.1}", pm as f64 / 10.0);
-    s.trim_end_matches(".0").to_string()
-}
-
-/// The exit status of the drives' `answers` to `f`: a refusal is 8 (with
-/// the cap for an override above it, with `clear` for a faulted drive), a
-/// silent drive 4, every drive done 0.
-pub fn verdict(iface: &str, ids: [u8; 3], f: Feed, answers: &[Option<CommandAck>; 3]) -> CliResult {
-    let n = nodes_arg(ids);
-    let answered: Vec<(u8, CommandAck)> = answers
+/// The drives' `answers` to `f`: a refusal (with the cap for an override
+/// above it, with `clear` for a faulted drive), a silent drive, or done.
+pub fn verdict(iface: &str, ids: [u8; 3], f: Feed, answers: &[Option<CommandAck>; 3]) -> OpResult {
+    let mut answered = answers
         .iter()
         .enumerate()
-        .filter_map(|(i, a)| a.map(|a| (ids[i], a)))
-        .collect();
-    if let Some((node, a)) = answered.iter().find(|(_, a)| a.result != 0) {
-        let code = FaultCode::from_u8(a.result);
-        return Err(CliError::refused(match (f, code) {
-            (Feed::Override(pm), Some(FaultCode::OverrideAboveCap)) => format!(
-                "{iface}: node {node} refused an override of {} %: the cap of the configured plan is {} % (`triquint override {} --iface {iface}{n}` at most)",
-                percent(pm as u32),
-                percent(a.value),
-                percent(a.value)
-            ),
-            (_, Some(FaultCode::WrongState)) if a.state == State::Fault as u8 => format!(
-                "{iface}: node {node} is in Fault: nothing to {}; see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}`",
-                verb(f)
-            ),
-            (_, code) => format!(
-                "{iface}: node {node} refused ({}) in state {}",
-                code.map_or("unknown code", FaultCode::name),
-                state_name(a.state)
-            ),
-        }));
+        .filter_map(|(i, a)| a.map(|a| (ids[i], a)));
+    if let Some((node, ack)) = answered.find(|(_, a)| a.result != 0) {
+        return Err(OpError::FeedRefused {
+            iface: iface.to_string(),
+            ids,
+            node,
+            feed: f,
+            ack,
+        });
     }
     if let Some(i) = answers.iter().position(Option::is_none) {
-        return Err(CliError::device(format!(
-            "{iface}: node {} did not answer the command within {} ms",
-            ids[i],
-            RESEND_AFTER.as_millis() * (RESENDS as u128 + 1)
-        )));
+        return Err(OpError::NoAnswer {
+            iface: iface.to_string(),
+            node: ids[i],
+            within_ms: RESEND_AFTER.as_millis() * (RESENDS as u128 + 1),
+        });
     }
     Ok(())
 }
 
-/// What `f` does, for messages.
-fn verb(f: Feed) -> &'static str {
-    match f {
-        Feed::Hold => "hold",
-        Feed::Resume => "resume",
-        Feed::Stop | Feed::QuickStop => "stop",
-        Feed::Override(_) => "override",
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use triquint_shared::protocol::FaultCode;
+
     use super::*;
-    use triquint_cli_common::exit::Status;
+    use crate::exit::{CliError, Status};
 
     fn ack(command: Feed, result: FaultCode, state: State, value: u32) -> Option<CommandAck> {
         Some(CommandAck {
@@ -183,7 +148,7 @@ mod tests {
         // Above the cap: refused, with the cap.
         let f = Feed::Override(1500);
         let capped = ack(f, FaultCode::OverrideAboveCap, State::Running, 1177);
-        let e = verdict("vcan0", ids, f, &[capped; 3]).unwrap_err();
+        let e = CliError::from(verdict("vcan0", ids, f, &[capped; 3]).unwrap_err());
         assert_eq!(e.status, Status::Refused);
         assert!(
             e.message.contains("150 %") && e.message.contains("117.7 %"),
@@ -191,7 +156,9 @@ mod tests {
         );
         // Faulted: refused, with what to run.
         let faulted = ack(Feed::Hold, FaultCode::WrongState, State::Fault, 0);
-        let e = verdict("vcan0", [4, 5, 6], Feed::Hold, &[ok, faulted, ok]).unwrap_err();
+        let e = CliError::from(
+            verdict("vcan0", [4, 5, 6], Feed::Hold, &[ok, faulted, ok]).unwrap_err(),
+        );
         assert_eq!(e.status, Status::Refused);
         assert!(e.message.contains("node 5 is in Fault"), "{e}");
         assert!(
@@ -200,7 +167,7 @@ mod tests {
             "{e}"
         );
         // Silent: device.
-        let e = verdict("vcan0", ids, Feed::Stop, &[ok, ok, None]).unwrap_err();
+        let e = CliError::from(verdict("vcan0", ids, Feed::Stop, &[ok, ok, None]).unwrap_err());
         assert_eq!(e.status, Status::Device);
         assert!(e.message.contains("node 3 did not answer"), "{e}");
     }
@@ -326,11 +293,5 @@ mod tests {
         assert_eq!(sent.host_us, None);
         assert_eq!(d.sent.len(), 1);
         assert_eq!(d.sent[0].arg, 0, "on receipt");
-    }
-
-    #[test]
-    fn percentages_print_short() {
-        assert_eq!(percent(1177), "117.7");
-        assert_eq!(percent(500), "50");
     }
 }

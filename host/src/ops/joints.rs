@@ -6,10 +6,10 @@ use nalgebra::Vector3;
 use triquint_link::{Listener, SocketCanPort};
 use triquint_shared::machine::Machine;
 
-use crate::exit::{CliError, CliResult};
-use crate::ops::bus::BusArgs;
+use crate::ops::bus::Bus;
 use crate::ops::configure::configure;
-use crate::ops::listen::{listen, nodes_arg, open};
+use crate::ops::error::{OpError, OpResult};
+use crate::ops::listen::{listen, open};
 
 /// Joint positions (m) from every drive's Telemetry within `wait`, and
 /// whether each is homed.
@@ -17,7 +17,7 @@ fn listen_positions(
     port: &mut SocketCanPort,
     ids: [u8; 3],
     wait: Duration,
-) -> CliResult<([Option<f64>; 3], [bool; 3])> {
+) -> OpResult<([Option<f64>; 3], [bool; 3])> {
     let mut l = Listener::new(ids);
     listen(port, &mut l, wait, true)?;
     Ok((
@@ -28,21 +28,21 @@ fn listen_positions(
 
 /// Where the drives on `bus` report the joints (m), configuring them first
 /// if they do not report a position; refused when one is not homed.
-pub fn reported_joints(machine: &Machine, bus: &BusArgs) -> CliResult<Vector3<f64>> {
-    let ids = bus.ids()?;
+pub fn reported_joints(machine: &Machine, bus: &Bus) -> OpResult<Vector3<f64>> {
+    let ids = bus.ids;
     let mut port = open(&bus.iface)?;
     let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
     if q.iter().any(Option::is_none) {
         configure(machine, bus)?;
-        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout))?;
+        (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout_s))?;
     }
     drop(port);
     if let Some(i) = homed.iter().position(|h| !h) {
-        let n = nodes_arg(ids);
-        return Err(CliError::refused(format!(
-            "{}: node {} is not homed (its position is unknown): run `triquint home --iface {}{n}` first",
-            bus.iface, ids[i], bus.iface
-        )));
+        return Err(OpError::NotHomed {
+            iface: bus.iface.clone(),
+            ids,
+            node: ids[i],
+        });
     }
     match q {
         [Some(a), Some(b), Some(c)] => Ok(Vector3::new(a, b, c)),
@@ -51,10 +51,11 @@ pub fn reported_joints(machine: &Machine, bus: &BusArgs) -> CliResult<Vector3<f6
                 .iter()
                 .position(Option::is_none)
                 .map_or(ids[0], |i| ids[i]);
-            Err(CliError::device(format!(
-                "{}: node {node}: no position (Telemetry) within {} s",
-                bus.iface, bus.timeout
-            )))
+            Err(OpError::NoPosition {
+                iface: bus.iface.clone(),
+                node,
+                within_s: bus.timeout_s,
+            })
         }
     }
 }

@@ -5,11 +5,11 @@ use std::time::{Duration, Instant, SystemTime};
 
 use triquint_link::{CanPort, Listener, SocketCanPort};
 
-use crate::exit::{CliError, CliResult};
+use crate::ops::error::OpResult;
 
 /// Opens `iface` for listening (a CAN-FD socket receives classic and FD frames).
-pub fn open(iface: &str) -> CliResult<SocketCanPort> {
-    SocketCanPort::open(iface, true, false, SystemTime::now()).map_err(CliError::device)
+pub fn open(iface: &str) -> OpResult<SocketCanPort> {
+    Ok(SocketCanPort::open(iface, true, false, SystemTime::now())?)
 }
 
 /// Takes in what the drives of `ids` send for `wait`, or until every one
@@ -19,10 +19,10 @@ pub fn listen(
     listener: &mut Listener,
     wait: Duration,
     positions: bool,
-) -> CliResult {
+) -> OpResult {
     let t0 = Instant::now();
     while t0.elapsed() < wait {
-        match CanPort::recv(port).map_err(CliError::device)? {
+        match CanPort::recv(port)? {
             Some(rx) => listener.take(&rx),
             None => std::thread::sleep(Duration::from_millis(1)),
         }
@@ -35,18 +35,9 @@ pub fn listen(
 }
 
 /// Takes in every frame waiting now, without waiting for more.
-pub fn drain(port: &mut SocketCanPort, listener: &mut Listener) -> CliResult {
-    while let Some(rx) = CanPort::recv(port).map_err(CliError::device)? {
+pub fn drain(port: &mut SocketCanPort, listener: &mut Listener) -> OpResult {
+    while let Some(rx) = CanPort::recv(port)? {
         listener.take(&rx);
     }
     Ok(())
-}
-
-/// `--nodes` as the command line had it, for the commands a message suggests.
-pub fn nodes_arg(ids: [u8; 3]) -> String {
-    if ids == [1, 2, 3] {
-        String::new()
-    } else {
-        format!(" --nodes {},{},{}", ids[0], ids[1], ids[2])
-    }
 }

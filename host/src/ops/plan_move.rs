@@ -6,7 +6,7 @@ use triquint_shared::Travel;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::Machine;
 
-use crate::exit::{CliError, CliResult, plan_error};
+use crate::ops::error::{OpError, OpResult};
 
 /// The minimum-time, minimum-jerk move within the default limits (held to
 /// the machine's ceilings) from
@@ -21,15 +21,13 @@ pub fn plan_move(
     machine: &Machine,
     q0: Vector3<f64>,
     target: Vector3<f64>,
-) -> CliResult<Option<Plan>> {
+) -> OpResult<Option<Plan>> {
     let m = machine.robot.model::<f64>();
-    let start = Pose::from_joints(&m, q0).map_err(|e| {
-        CliError::device(format!(
-            "the drives report joints {:?} m, which have no valid pose: {e}",
-            q0.as_slice()
-        ))
+    let start = Pose::from_joints(&m, q0).map_err(|source| OpError::NoPose {
+        q: q0.into(),
+        source,
     })?;
-    let goal = Pose::from_cartesian(&m, target).map_err(|e| CliError::bad_input(e.to_string()))?;
+    let goal = Pose::from_cartesian(&m, target).map_err(OpError::Unreachable)?;
     triquint_cli_common::errln!(
         "at ({:.3}, {:.3}, {:.3}) mm, moving to ({:.3}, {:.3}, {:.3}) mm",
         start.r.x * 1e3,
@@ -40,13 +38,11 @@ pub fn plan_move(
         target.z * 1e3
     );
     let travel = machine.travel();
-    if let Some(e) = travel.outside(&goal.q.into()) {
-        return Err(CliError::bad_input(format!(
-            "the target ({:.3}, {:.3}, {:.3}) mm is outside the travel: {e}",
-            target.x * 1e3,
-            target.y * 1e3,
-            target.z * 1e3
-        )));
+    if let Some(source) = travel.outside(&goal.q.into()) {
+        return Err(OpError::OutsideTravel {
+            target_mm: (target * 1e3).into(),
+            source,
+        });
     }
     if (goal.q - q0).amax() < 1e-6 {
         return Ok(None);
@@ -57,13 +53,12 @@ pub fn plan_move(
         .limits(crate::ops::configure::machine_limits(machine))
         .travel(travel_from(&travel, q0))
         .points_m([start.r.into(), target.into()])
-        .build()
-        .map_err(plan_error)?;
+        .build()?;
     let opts = Options {
         starts: 3,
         ..Options::default()
     };
-    let p = plan(&job, &opts).map_err(plan_error)?;
+    let p = plan(&job, &opts)?;
     triquint_cli_common::errln!(
         "planned {} segments, {:.3} s",
         p.segments.len(),

@@ -13,8 +13,8 @@ use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, State};
 
-use crate::exit::{CliError, CliResult};
-use crate::ops::bus::{BusArgs, check_bus_args, upload_error};
+use crate::ops::bus::Bus;
+use crate::ops::error::{OpError, OpResult};
 
 /// What an upload did.
 #[derive(Clone, Debug, Serialize)]
@@ -71,31 +71,30 @@ pub trait RunWatch {
 /// Uploads and runs `plan` over `bus`, told to `watch`.
 pub fn run_plan(
     plan: &Plan,
-    bus: &BusArgs,
+    bus: &Bus,
     machine: &Machine,
     clear: bool,
     watch: &mut dyn RunWatch,
-) -> CliResult<UploadSummary> {
-    check_bus_args(bus)?;
+) -> OpResult<UploadSummary> {
     let settings = DriveSettings {
-        control_rate: bus.rate(),
-        node_ids: bus.ids()?,
+        control_rate: bus.rate,
+        node_ids: bus.ids,
         ..machine.drive_settings()
     };
-    let configs = DriveConfigs::for_plan(plan, &settings).map_err(CliError::bad_input)?;
+    let configs = DriveConfigs::for_plan(plan, &settings)?;
     let override_cap = configs.override_cap;
     let cap_pm = configs.override_cap_permille();
     let configs = configs.nodes;
     let opts = SessionOptions {
         fd: bus.fd,
-        response_timeout_us: (bus.timeout * 1e6) as u64,
+        response_timeout_us: (bus.timeout_s * 1e6) as u64,
         clear_faults: clear,
         // The override chosen while watching (in an approach before this plan).
         feed_override: watch.initial_override_pm().filter(|pm| *pm != 1000),
         ..SessionOptions::default()
     };
-    let mut session = Session::new(plan, configs, opts).map_err(|e| upload_error(e, bus))?;
-    let mut port = open_host(&bus.iface, bus.fd).map_err(CliError::device)?;
+    let mut session = Session::new(plan, configs, opts).map_err(|e| OpError::upload(e, bus))?;
+    let mut port = open_host(&bus.iface, bus.fd)?;
     watch.start(plan.segments.len());
     let t0 = Instant::now();
     let mut acked_at: Option<f64> = None;
@@ -114,7 +113,7 @@ pub fn run_plan(
             Ok(None) => {}
             Err(e) => {
                 watch.abandon();
-                return Err(upload_error(e, bus));
+                return Err(OpError::upload(e, bus));
             }
         }
         // 1 ms: the window (4 segments) stays full and time stamps come from
@@ -163,7 +162,7 @@ mod tests {
     use triquint_sim::testplan;
 
     use super::*;
-    use crate::exit::Status;
+    use crate::exit::{CliError, Status};
 
     /// Which of its methods a run called.
     #[derive(Default)]
@@ -193,15 +192,13 @@ mod tests {
         }
     }
 
-    fn bus(iface: &str, timeout: f64) -> BusArgs {
-        BusArgs {
+    fn bus(iface: &str) -> Bus {
+        Bus {
             iface: iface.to_string(),
             fd: false,
-            rate_arg: None,
-            timeout,
-            nodes_arg: None,
-            machine_ids: None,
-            machine_rate: None,
+            ids: [1, 2, 3],
+            rate: 1000.0,
+            timeout_s: 2.0,
         }
     }
 
@@ -215,23 +212,24 @@ mod tests {
     fn a_run_that_cannot_begin_never_starts_its_watch() {
         let (plan, machine) = (plan(), Machine::default());
         let mut w = Recorder::default();
-        let e = run_plan(
-            &plan,
-            &bus("triquint-nosuch0", 2.0),
-            &machine,
-            false,
-            &mut w,
-        )
-        .expect_err("no such interface");
+        let e = run_plan(&plan, &bus("triquint-nosuch0"), &machine, false, &mut w)
+            .expect_err("no such interface");
+        assert!(matches!(e, OpError::Open(_)), "{e}");
+        let e = CliError::from(e);
         assert_eq!(e.status, Status::Device, "{}", e.message);
+        // A segment that is not a whole number of microseconds.
+        let mut unsendable = plan.clone();
+        unsendable.segments[0].duration_s += 0.4e-6;
         let e = run_plan(
-            &plan,
-            &bus("triquint-nosuch0", 0.0),
+            &unsendable,
+            &bus("triquint-nosuch0"),
             &machine,
             false,
             &mut w,
         )
-        .expect_err("a zero timeout");
+        .expect_err("an unsendable plan");
+        assert!(matches!(e, OpError::Upload { .. }), "{e}");
+        let e = CliError::from(e);
         assert_eq!(e.status, Status::BadInput, "{}", e.message);
         assert!(
             w.calls.is_empty(),

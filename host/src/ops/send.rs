@@ -6,10 +6,10 @@ use std::time::Duration;
 use triquint_link::{CanPort, SocketCanPort};
 use triquint_shared::protocol::{Command, CommandCode, Emergency, FaultCode, State};
 
-use crate::exit::{CliError, CliResult};
+use crate::ops::error::OpResult;
 
 /// Sends `code` to node `id`, waiting while the transmit queue is full.
-pub fn send_command(port: &mut SocketCanPort, id: u8, code: CommandCode, token: u8) -> CliResult {
+pub fn send_command(port: &mut SocketCanPort, id: u8, code: CommandCode, token: u8) -> OpResult {
     let f = Command {
         command: code as u8,
         token,
@@ -17,7 +17,7 @@ pub fn send_command(port: &mut SocketCanPort, id: u8, code: CommandCode, token: 
         arg2: 0,
     }
     .to_frame(id);
-    while !CanPort::send(port, &f).map_err(CliError::device)? {
+    while !CanPort::send(port, &f)? {
         std::thread::sleep(Duration::from_millis(1));
     }
     Ok(())
@@ -25,7 +25,7 @@ pub fn send_command(port: &mut SocketCanPort, id: u8, code: CommandCode, token: 
 
 /// Sends the host's emergency frame (every drive stops); false when the
 /// transmit queue stayed full for 100 ms.
-pub fn send_emergency(port: &mut SocketCanPort) -> CliResult<bool> {
+pub fn send_emergency(port: &mut SocketCanPort) -> OpResult<bool> {
     let f = Emergency {
         code: FaultCode::HostEmergency as u8,
         state: State::Fault as u8,
@@ -34,7 +34,7 @@ pub fn send_emergency(port: &mut SocketCanPort) -> CliResult<bool> {
     }
     .to_frame(0);
     for _ in 0..100 {
-        if CanPort::send(port, &f).map_err(CliError::device)? {
+        if CanPort::send(port, &f)? {
             return Ok(true);
         }
         std::thread::sleep(Duration::from_millis(1));

@@ -3,23 +3,11 @@
 //! Command to node 0 dated by the running upload's host time, resent until
 //! every drive answered; a refusal or a silent drive is an error).
 
-use triquint_link::{Feed, SocketCanError};
+use triquint_link::Feed;
 use triquint_shared::protocol::CommandCode;
 
-use crate::exit::CliError;
+use crate::ops::error::OpResult;
 use crate::ops::feed::{send_feed, verdict};
-
-/// Why a control request was not carried out (the page shows the message).
-#[derive(Debug, thiserror::Error)]
-pub enum ControlError {
-    /// The interface could not be opened.
-    #[error(transparent)]
-    Open(#[from] SocketCanError),
-    /// Sending failed, or a drive refused or stayed silent, as the
-    /// `hold`, `resume` and `stop` commands report it.
-    #[error(transparent)]
-    Feed(#[from] CliError),
-}
 
 /// A control request of the page.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,9 +43,11 @@ impl Action {
 
 /// Sends `action` to the drives `ids` on `iface` (node 0: all nodes); the
 /// drives answer with CommandAck frames, seen on the page like any frame.
-pub fn send(iface: &str, ids: [u8; 3], action: Action) -> Result<(), ControlError> {
+/// An error (the interface, a refusal, a silent drive) is the page's
+/// message, as `hold`, `resume` and `stop` report it.
+pub fn send(iface: &str, ids: [u8; 3], action: Action) -> OpResult {
     let mut port = super::source::open_live(iface)?;
     let f = action.feed();
     let sent = send_feed(&mut port, ids, f)?;
-    Ok(verdict(iface, ids, f, &sent.answers)?)
+    verdict(iface, ids, f, &sent.answers)
 }

@@ -173,13 +173,18 @@ pub fn trace_csv(model: &Model, window_s: f64) -> String {
     out
 }
 
-fn query_window(query: Option<&str>) -> Result<f64, String> {
+/// A trace window out of range or not a number, as the query gave it.
+#[derive(Debug, thiserror::Error)]
+#[error("window={0}: must be 0 to 60 seconds")]
+struct BadWindow(String);
+
+fn query_window(query: Option<&str>) -> Result<f64, BadWindow> {
     let Some(q) = query else { return Ok(10.0) };
     for kv in q.split('&') {
         if let Some(v) = kv.strip_prefix("window=") {
             return match v.parse::<f64>() {
                 Ok(w) if w > 0.0 && w <= 60.0 => Ok(w),
-                _ => Err(format!("window={v}: must be 0 to 60 seconds")),
+                _ => Err(BadWindow(v.to_string())),
             };
         }
     }
@@ -305,7 +310,7 @@ pub async fn handle(app: Arc<App>, peer: Peer, req: Request<Incoming>) -> Resp {
                 );
                 r
             }
-            Err(e) => text(StatusCode::BAD_REQUEST, e),
+            Err(e) => text(StatusCode::BAD_REQUEST, e.to_string()),
         },
         (p, _) if Action::from_path(p).is_some() => {
             if req.method() != Method::POST {

@@ -144,9 +144,10 @@ impl Session {
         configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Result<Self, UploadError> {
-        let segments = plan
-            .wire_segments()
-            .map_err(|(seq, source)| UploadError::Segment { seq, source })?;
+        let segments = plan.wire_segments().map_err(|e| UploadError::Segment {
+            seq: e.index,
+            source: e.source,
+        })?;
         let mut s = Self::with_segments(segments, configs, opts);
         s.plan_start = match (plan.via_points_m.first(), plan.segments.first()) {
             (Some(r), Some(seg)) => Some(PlanStart {
