@@ -57,10 +57,12 @@ fn runs_on_both_buses(name: &str, plan: &Plan) {
             "{what}"
         );
         eprintln!(
-            "{what}: {} segments, {:.3} s, {} frames/segment, bus load {:.4} (segments {:.4}), {} retransmissions",
+            "{what}: {} segments, {:.3} s, {:.2} frames/segment ({} of {} sent compact), bus load {:.4} (segments {:.4}), {} retransmissions",
             plan.segments.len(),
             plan.total_time_s,
             r.frames_per_segment,
+            r.compact_sent,
+            r.segments_sent,
             r.run.bus_load,
             r.run.segment_bus_load,
             r.retransmits

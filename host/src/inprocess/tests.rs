@@ -48,11 +48,14 @@ fn paper_cases_complete_on_classic_and_fd() {
             let r = run(&plan, |o| o.fd = fd).unwrap();
             let what = format!("{name} fd={fd}");
             assert_clean(&r, &what);
-            let per = if fd { 2 } else { 20 };
-            assert_eq!(r.frames_per_segment, per);
+            // The first segment in full, the others compact.
+            let (full, compact) = if fd { (2, 1) } else { (20, 5) };
+            assert_eq!(r.retransmits, 0, "{what}");
+            assert_eq!(r.segments_sent, plan.segments.len() as u64, "{what}");
+            assert_eq!(r.compact_sent, r.segments_sent - 1, "{what}");
             assert_eq!(
                 r.run.segment_frames,
-                (plan.segments.len() as u64 + r.retransmits) * per as u64,
+                full + (plan.segments.len() as u64 - 1) * compact,
                 "{what}"
             );
             for j in 0..3 {

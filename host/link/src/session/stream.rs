@@ -3,7 +3,13 @@
 //! acknowledged by every node within `retransmit_timeout_us` is sent again
 //! (at most `max_retransmits` times), and one a node rejected as corrupt,
 //! out of order or incomplete is resent at once without using up a try.
+//! Segments go compact when the segment sent just before is their
+//! predecessor (`protocol::compact`), in full otherwise: a resend, and the
+//! segment after it, re-anchor the chain; a node that does not hold the
+//! predecessor a compact segment was built on answers `NoPredecessor` and
+//! gets it in full.
 
+use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
 use super::nodes::{AXES, Nodes};
@@ -34,8 +40,15 @@ pub(crate) struct Stream {
     fd: bool,
     next_to_send: usize,
     in_flight: Vec<InFlight>,
-    /// Segment frames queued, retransmissions, rejections seen.
+    /// How segments go on the bus (full or compact).
+    chain: Chain,
+    /// Every version of a segment sent: (sequence number, body CRC of the
+    /// segment receivers hold once they take it in).
+    pub versions: Vec<(u16, u32)>,
+    /// Segment frames queued, segments sent (compact of them), retransmissions, rejections seen.
     pub segment_frames: u64,
+    pub segments_sent: u64,
+    pub compact_sent: u64,
     pub retransmits: u64,
     pub rejects_seen: u64,
 }
@@ -47,7 +60,11 @@ impl Stream {
             fd,
             next_to_send: 0,
             in_flight: Vec::new(),
+            chain: Chain::default(),
+            versions: Vec::new(),
             segment_frames: 0,
+            segments_sent: 0,
+            compact_sent: 0,
             retransmits: 0,
             rejects_seen: 0,
         }
@@ -82,7 +99,9 @@ impl Stream {
                     f.acked[i] = true;
                 }
             }
-            Some(Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete) => {
+            Some(
+                Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete | Reject::NoPredecessor,
+            ) => {
                 self.rejects_seen += 1;
                 // Resend at once the segment this node needs next (the
                 // rejected one may only be queued behind a lost one),
@@ -114,9 +133,16 @@ impl Stream {
 
     fn queue(&mut self, seq: usize, out: &mut Outbox) {
         if let Some(s) = self.segments.get(seq) {
-            for f in s.frames(self.fd) {
+            let sent = self.chain.next(s);
+            for f in sent.frames(self.fd) {
                 out.push_back(f);
                 self.segment_frames += 1;
+            }
+            self.segments_sent += 1;
+            self.compact_sent += sent.is_compact() as u64;
+            let v = (s.seq, sent.held().body_crc());
+            if !self.versions.contains(&v) {
+                self.versions.push(v);
             }
         }
     }
