@@ -6,6 +6,7 @@
 use triquint_firmware::QUEUE_CAPACITY;
 use triquint_link::{DriveConfigs, UploadError};
 use triquint_shared::plan::Plan;
+use triquint_shared::protocol::compact::{Chain, DeviationBound};
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::streaming::StreamRule;
 use triquint_shared::{Limits, Robot};
@@ -120,6 +121,51 @@ fn helix(n: usize, t: f64, short: Option<f64>) -> Plan {
     testplan::plan_through(&Robot::default(), &limits, &pts, &h).unwrap()
 }
 
+/// Sends `plan` through the link's chain (no bus): how many segments go
+/// compact, and the largest position difference (m) between what a drive
+/// holds and the plan's f64 segments, sampled 20 times a segment.
+fn chain_figures(plan: &Plan) -> (usize, f64) {
+    let mut chain = Chain::default();
+    let (mut compact, mut worst) = (0, 0.0f64);
+    for (w, s) in plan.wire_segments().unwrap().iter().zip(&plan.segments) {
+        let sent = chain.next(w);
+        compact += sent.is_compact() as usize;
+        let b = sent.held().normalised_f64();
+        let q = s.quintic();
+        for i in 0..=20 {
+            let tau = i as f64 / 20.0;
+            let want = q.eval(tau * s.duration_s).q;
+            for j in 0..3 {
+                let got = b[j].iter().rev().fold(0.0, |acc, x| acc * tau + x);
+                worst = worst.max((got - want[j]).abs());
+            }
+        }
+    }
+    (compact, worst)
+}
+
+#[test]
+fn compact_segments_stay_within_the_bound_of_the_f64_plan() {
+    let bound = DeviationBound::DEFAULT.position;
+    for (name, plan, min_compact) in [
+        ("15 segments", point_to_point(15, 0.9, 0.03), 14),
+        // The segment after each 2 ms one goes in full.
+        ("2 ms every tenth", helix(100, 20.0, Some(0.002)), 90),
+        // About one in twenty re-anchors: f32 rounding of b_4, b_5 leaves
+        // an end jerk error that the chain integrates.
+        ("400 segments of 50 ms", helix(400, 20.0, None), 370),
+    ] {
+        let (compact, worst) = chain_figures(&plan);
+        eprintln!(
+            "{name}: {compact} of {} compact, drive segments within {worst:.3e} m of the f64 plan",
+            plan.segments.len()
+        );
+        // The bound, plus the full encoding's own rounding (2^-40 m a coefficient).
+        assert!(worst <= bound + 1e-11, "{name}: {worst:e} m");
+        assert!(compact >= min_compact, "{name}: {compact} compact");
+    }
+}
+
 #[test]
 fn a_fifteen_segment_move_under_a_second_streams() {
     let plan = point_to_point(15, 0.9, 0.03);
@@ -175,3 +221,4 @@ fn an_unstreamable_plan_is_refused_before_anything_moves() {
         other => panic!("not refused: {:?}", other.map(|r| r.run.completed)),
     }
 }
+
