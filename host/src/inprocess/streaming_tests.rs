@@ -221,4 +221,3 @@ fn an_unstreamable_plan_is_refused_before_anything_moves() {
         other => panic!("not refused: {:?}", other.map(|r| r.run.completed)),
     }
 }
-
