@@ -47,7 +47,7 @@ fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
     );
     let axis = (cfg.axis as usize).min(2);
     for i in 0..=LIMIT_CHECK_INTERVALS {
-        let m = seg.eval(seg.start_ns + seg.duration_ns * i / LIMIT_CHECK_INTERVALS);
+        let m = seg.eval(seg.start_ns + seg.duration_ns() * i / LIMIT_CHECK_INTERVALS);
         if !(m.q.iter().all(|x| x.is_finite())
             && m.qd.amax() <= v
             && m.qdd.amax() <= a

@@ -167,7 +167,7 @@ fn golden_plans(out: &mut Out) -> f64 {
             let q64 = seg64.quintic();
             for i in 0..=16i64 {
                 // Include points just outside the segment (clamped).
-                let d = (seg.duration_ns * i) / 16 + if i == 16 { 1000 } else { 0 };
+                let d = (seg.duration_ns() * i) / 16 + if i == 16 { 1000 } else { 0 };
                 let s_ns = start + d - if i == 0 { 1000 } else { 0 };
                 let (sg, sd, sdd) = scalings[i as usize % scalings.len()];
                 let m = scale(&seg.eval(s_ns), sg, sd, sdd);
@@ -188,13 +188,13 @@ fn golden_plans(out: &mut Out) -> f64 {
                     }
                 }
                 // f64 side: the drive's f32 position against the plan.
-                let t_s = (s_ns - start).clamp(0, seg.duration_ns) as f64 * 1e-9;
+                let t_s = (s_ns - start).clamp(0, seg.duration_ns()) as f64 * 1e-9;
                 let p = q64.eval(t_s);
                 for j in 0..3 {
                     worst = worst.max((p.q[j] - m.q[j] as f64).abs());
                 }
             }
-            start += seg.duration_ns;
+            start += seg.duration_ns();
         }
     }
     worst

@@ -113,7 +113,7 @@ pub fn f32_eval_error(plan: &Plan, per_segment: usize) -> f64 {
         let seg = Seg::from_wire(chain.next(&w).held(), start_ns);
         let q = s.quintic();
         for k in 0..=per_segment {
-            let d_ns = seg.duration_ns * k as i64 / per_segment as i64;
+            let d_ns = seg.duration_ns() * k as i64 / per_segment as i64;
             let a = seg.eval(start_ns + d_ns);
             let b = q.eval(d_ns as f64 * 1e-9);
             for j in 0..3 {

@@ -76,7 +76,7 @@ impl<const Q: usize> Drive<Q> {
             return Err(Reject::OutOfOrder);
         }
         let max_ns = MAX_DURATION_US as i64 * 1000;
-        if seg.duration_ns == 0 || seg.duration_ns > max_ns || seg.first != (seg.seq == 0) {
+        if seg.duration_ns() == 0 || seg.duration_ns() > max_ns || seg.first != (seg.seq == 0) {
             return Err(Reject::Invalid);
         }
         if self.queue.is_full() {

@@ -550,7 +550,7 @@ fn a_hold_while_streaming_waits_with_full_queues_and_completes() {
     )
     .unwrap();
     let n = plan.segments.len();
-    assert!(n >= 5 * triquint_firmware::QUEUE_CAPACITY);
+    assert!(n >= 10 * triquint_firmware::QUEUE_CAPACITY);
     let (th, tr) = (0.3 * plan.total_time_s, 0.3 * plan.total_time_s + 6.0);
     let mut step = 0;
     let r = run(&plan, |t, s| match step {

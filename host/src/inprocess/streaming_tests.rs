@@ -35,8 +35,9 @@ fn durations(plan: &Plan) -> Vec<u32> {
 }
 
 /// Runs `plan` on classic CAN and CAN-FD: completed, no fault, every
-/// segment executed; prints the bus load.
-fn runs_on_both_buses(name: &str, plan: &Plan) {
+/// segment executed; prints the bus load, and with `full_too` also that of
+/// every segment sent in full (protocol version 3's frames) for the ratio.
+fn runs_on_both_buses(name: &str, plan: &Plan, full_too: bool) {
     let r = rule(plan);
     let shortest = r.shortest_run(&durations(plan));
     eprintln!(
@@ -46,28 +47,46 @@ fn runs_on_both_buses(name: &str, plan: &Plan) {
         shortest.map(|s| s.run_us as f64 * 1e-6)
     );
     for fd in [false, true] {
-        let o = SimulateOptions {
-            fd,
-            ..SimulateOptions::default()
-        };
-        let r = simulate(plan, &o).unwrap();
-        let what = format!("{name} fd={fd}");
-        assert!(r.run.completed, "{what}: faults {:?}", r.faults_on_nodes);
-        assert!(
-            r.faults.is_empty() && r.faults_on_nodes.is_empty(),
-            "{what}"
-        );
-        eprintln!(
-            "{what}: {} segments, {:.3} s, {:.2} frames/segment ({} of {} sent compact), bus load {:.4} (segments {:.4}), {} retransmissions",
-            plan.segments.len(),
-            plan.total_time_s,
-            r.frames_per_segment,
-            r.compact_sent,
-            r.segments_sent,
-            r.run.bus_load,
-            r.run.segment_bus_load,
-            r.retransmits
-        );
+        let mut loads = Vec::new();
+        for compact in if full_too {
+            vec![true, false]
+        } else {
+            vec![true]
+        } {
+            let mut o = SimulateOptions {
+                fd,
+                ..SimulateOptions::default()
+            };
+            o.session.compact = compact;
+            let r = simulate(plan, &o).unwrap();
+            let what = format!("{name} fd={fd} compact={compact}");
+            assert!(r.run.completed, "{what}: faults {:?}", r.faults_on_nodes);
+            assert!(
+                r.faults.is_empty() && r.faults_on_nodes.is_empty(),
+                "{what}"
+            );
+            assert_eq!(compact, r.compact_sent > 0, "{what}");
+            eprintln!(
+                "{what}: {} segments, {:.3} s, {:.2} frames/segment ({} of {} sent compact), bus load {:.4} (segments {:.4}), {} retransmissions",
+                plan.segments.len(),
+                plan.total_time_s,
+                r.frames_per_segment,
+                r.compact_sent,
+                r.segments_sent,
+                r.run.bus_load,
+                r.run.segment_bus_load,
+                r.retransmits
+            );
+            loads.push((r.frames_per_segment, r.run.bus_load, r.run.segment_bus_load));
+        }
+        if let [c, f] = loads[..] {
+            eprintln!(
+                "{name} fd={fd}: compact / full: frames per segment x{:.3}, bus load x{:.3}, segment bus load x{:.3}",
+                c.0 / f.0,
+                c.1 / f.1,
+                c.2 / f.2
+            );
+        }
     }
 }
 
@@ -176,7 +195,7 @@ fn a_fifteen_segment_move_under_a_second_streams() {
         assert!(plan.max_abs.jerk[j] <= l.jerk && plan.max_abs.velocity[j] <= l.velocity);
     }
     assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
-    runs_on_both_buses("15 segments in 0.9 s", &plan);
+    runs_on_both_buses("15 segments in 0.9 s", &plan, true);
 }
 
 #[test]
@@ -190,14 +209,14 @@ fn a_2_ms_segment_every_tenth_streams() {
         10
     );
     assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
-    runs_on_both_buses("2 ms every tenth", &plan);
+    runs_on_both_buses("2 ms every tenth", &plan, true);
 }
 
 #[test]
 fn a_2000_segment_plan_streams() {
     let plan = helix(2000, 100.0, None);
     assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()));
-    runs_on_both_buses("2000 segments", &plan);
+    runs_on_both_buses("2000 segments", &plan, false);
 }
 
 #[test]

@@ -111,7 +111,7 @@ fn stress_spiral_completes_on_classic_can_with_flow_control() {
         testplan::SPIRAL_TIME,
     )
     .unwrap();
-    assert!(plan.segments.len() >= 5 * QUEUE_CAPACITY);
+    assert!(plan.segments.len() >= 10 * QUEUE_CAPACITY);
     let r = run(&plan, |_| {}).unwrap();
     assert_clean(&r, "spiral");
     eprintln!(
@@ -196,7 +196,8 @@ fn arm_is_refused_away_from_the_plan_start() {
                 },
             ) => {
                 assert!(u.is_refusal());
-                // The offset as the drive measures it, holding against gravity.
+                // As the drive measures it, still settling against gravity
+                // when Arm comes (compact segments fill the queues sooner).
                 assert!(u.to_string().contains("axis 2 +1.00"), "{u}");
                 let d = distances_mm.map(|d| d.unwrap());
                 assert!(

@@ -174,7 +174,7 @@ impl Session {
         configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Self {
-        let stream = Stream::new(segments, opts.fd);
+        let stream = Stream::new(segments, opts.fd, opts.compact);
         let override_cap = configs[0].override_cap.max(1.0) as f64;
         let c = &configs[0];
         let stream_rule = StreamRule::new(

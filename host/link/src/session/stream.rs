@@ -9,7 +9,7 @@
 //! predecessor a compact segment was built on answers `NoPredecessor` and
 //! gets it in full.
 
-use triquint_shared::protocol::compact::Chain;
+use triquint_shared::protocol::compact::{Chain, Outgoing};
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
 use super::nodes::{AXES, Nodes};
@@ -38,6 +38,7 @@ struct InFlight {
 pub(crate) struct Stream {
     pub segments: Vec<WireSegment>,
     fd: bool,
+    compact: bool,
     next_to_send: usize,
     in_flight: Vec<InFlight>,
     /// How segments go on the bus (full or compact).
@@ -54,10 +55,11 @@ pub(crate) struct Stream {
 }
 
 impl Stream {
-    pub fn new(segments: Vec<WireSegment>, fd: bool) -> Self {
+    pub fn new(segments: Vec<WireSegment>, fd: bool, compact: bool) -> Self {
         Self {
             segments,
             fd,
+            compact,
             next_to_send: 0,
             in_flight: Vec::new(),
             chain: Chain::default(),
@@ -133,7 +135,11 @@ impl Stream {
 
     fn queue(&mut self, seq: usize, out: &mut Outbox) {
         if let Some(s) = self.segments.get(seq) {
-            let sent = self.chain.next(s);
+            let sent = if self.compact {
+                self.chain.next(s)
+            } else {
+                Outgoing::Full(*s)
+            };
             for f in sent.frames(self.fd) {
                 out.push_back(f);
                 self.segment_frames += 1;
