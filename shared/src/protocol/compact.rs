@@ -462,6 +462,13 @@ impl Chain {
         self.last = Some(*out.held());
         out
     }
+
+    /// `seg` in full (a resend: receivers may hold another version of its
+    /// predecessor than the one sent last).
+    pub fn full(&mut self, seg: &WireSegment) -> Outgoing {
+        self.last = Some(*seg);
+        Outgoing::Full(*seg)
+    }
 }
 
 /// What one compact part frame did.

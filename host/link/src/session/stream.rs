@@ -4,12 +4,14 @@
 //! (at most `max_retransmits` times), and one a node rejected as corrupt,
 //! out of order or incomplete is resent at once without using up a try.
 //! Segments go compact when the segment sent just before is their
-//! predecessor (`protocol::compact`), in full otherwise: a resend, and the
-//! segment after it, re-anchor the chain; a node that does not hold the
+//! predecessor (`protocol::compact`), in full otherwise; a resend always
+//! goes in full (a node may hold another version of its predecessor than
+//! the one sent last: a pair resent compact would be refused again), and
+//! the segment after it re-anchors the chain; a node that does not hold the
 //! predecessor a compact segment was built on answers `NoPredecessor` and
 //! gets it in full.
 
-use triquint_shared::protocol::compact::{Chain, Outgoing};
+use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
 use super::nodes::{AXES, Nodes};
@@ -133,12 +135,14 @@ impl Stream {
         Ok(())
     }
 
-    fn queue(&mut self, seq: usize, out: &mut Outbox) {
+    /// Queues segment `seq`: a resend always in full (a node may hold
+    /// another version of its predecessor than the one sent before it).
+    fn queue(&mut self, seq: usize, resend: bool, out: &mut Outbox) {
         if let Some(s) = self.segments.get(seq) {
-            let sent = if self.compact {
+            let sent = if self.compact && !resend {
                 self.chain.next(s)
             } else {
-                Outgoing::Full(*s)
+                self.chain.full(s)
             };
             for f in sent.frames(self.fd) {
                 out.push_back(f);
@@ -186,7 +190,7 @@ impl Stream {
                 f.early = false;
                 f.sent_at = now;
                 self.retransmits += 1;
-                self.queue(seq, out);
+                self.queue(seq, true, out);
             }
         }
         let limit = opts
@@ -199,7 +203,7 @@ impl Stream {
             && out.len() < OUTBOX_LIMIT
         {
             let seq = self.next_to_send;
-            self.queue(seq, out);
+            self.queue(seq, false, out);
             self.in_flight.push(InFlight {
                 seq,
                 sent_at: now,
