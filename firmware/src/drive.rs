@@ -89,6 +89,8 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     queued_end_ns: i64,
     /// End motion (q, q', q'', q''') of the last accepted segment.
     prev_end: Option<JointMotion<f32>>,
+    /// Body CRC of the last accepted segment (valid with `prev_end`).
+    prev_crc: u32,
     sync: SyncEstimator,
     scaling: TimeScaling,
     stop_reason: Option<StopReason>,
@@ -171,6 +173,7 @@ impl<const Q: usize> Drive<Q> {
             next_seq: 0,
             queued_end_ns: 0,
             prev_end: None,
+            prev_crc: 0,
             sync: SyncEstimator::default(),
             scaling: TimeScaling::nominal(0, 0),
             stop_reason: None,

@@ -163,6 +163,9 @@ pub struct CheckedSegment {
     pub verdict: Result<(), Reject>,
     /// CRC of the configuration it was checked against (0: none).
     pub config_crc: u32,
+    /// A compact continuation: the body CRC of the predecessor it was
+    /// rebuilt on, which the node must hold as its last accepted segment.
+    pub pred_crc: Option<u32>,
 }
 
 /// A configuration ready to run: values checked, robot model built, periods derived.

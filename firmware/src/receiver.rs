@@ -5,8 +5,8 @@
 //! [`Item`] (the hand-off types are in the `inbox` module).
 
 use triquint_shared::protocol::{
-    Command, CommandCode, DriveConfig, FaultCode, Msg, PARAM_COUNT, PartEvent, Reassembler, Reject,
-    WireSegment, config::config_crc, decode,
+    Command, CommandCode, DriveConfig, FaultCode, Msg, PARAM_COUNT, Reject, SegmentEvent,
+    SegmentRx, WireSegment, config::config_crc, decode,
 };
 
 use triquint_shared::protocol::contract::{
@@ -23,7 +23,8 @@ use crate::sync::SyncEstimator;
 /// Receive side of one node.
 pub struct Receiver {
     node_id: u8,
-    asm: Reassembler,
+    /// Segment reassembly, and the predecessor a compact segment continues.
+    segments: SegmentRx,
     written: [f32; PARAM_COUNT],
     written_mask: u64,
     flushes: u32,
@@ -46,7 +47,7 @@ fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
     );
     let axis = (cfg.axis as usize).min(2);
     for i in 0..=LIMIT_CHECK_INTERVALS {
-        let m = seg.eval(seg.start_ns + seg.duration_ns * i / LIMIT_CHECK_INTERVALS);
+        let m = seg.eval(seg.start_ns + seg.duration_ns() * i / LIMIT_CHECK_INTERVALS);
         if !(m.q.iter().all(|x| x.is_finite())
             && m.qd.amax() <= v
             && m.qdd.amax() <= a
@@ -66,7 +67,7 @@ impl Receiver {
     pub fn new(node_id: u8) -> Self {
         Self {
             node_id,
-            asm: Reassembler::default(),
+            segments: SegmentRx::default(),
             written: [0.0; PARAM_COUNT],
             written_mask: 0,
             flushes: 0,
@@ -83,7 +84,7 @@ impl Receiver {
     pub fn on_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
         if snapshot.flushes != self.flushes {
             self.flushes = snapshot.flushes;
-            self.asm.clear();
+            self.segments.clear();
         }
         let Ok((msg, node)) = decode(&rx.frame) else {
             return None;
@@ -127,8 +128,9 @@ impl Receiver {
                 }
                 None
             }
-            Msg::SegmentPart => self.part(rx.frame.payload(), false, snapshot.config_crc),
-            Msg::SegmentPartFd => self.part(rx.frame.payload(), true, snapshot.config_crc),
+            Msg::SegmentPart | Msg::SegmentPartFd | Msg::SegmentCompact | Msg::SegmentCompactFd => {
+                self.part(msg, rx.frame.payload(), snapshot.config_crc)
+            }
             _ => None,
         }
     }
@@ -199,21 +201,23 @@ impl Receiver {
         CommandData::Commit { crc, config }
     }
 
-    fn part(&mut self, payload: &[u8], fd: bool, active_crc: u32) -> Option<Item> {
-        match self.asm.push(payload, fd) {
-            PartEvent::Pending => None,
-            PartEvent::Ignored(r) => Some(Item::PartIgnored(r)),
-            PartEvent::Rejected { seq, reason } => Some(Item::PartRejected {
+    fn part(&mut self, msg: Msg, payload: &[u8], active_crc: u32) -> Option<Item> {
+        match self.segments.push(msg.kind(), payload)? {
+            SegmentEvent::Pending => None,
+            SegmentEvent::Ignored(r) => Some(Item::PartIgnored(r)),
+            SegmentEvent::Rejected { seq, reason } => Some(Item::PartRejected {
                 seq: seq.unwrap_or(0xFFFF),
                 reason,
             }),
-            PartEvent::Complete(w) => Some(Item::Segment(self.check(&w, active_crc))),
+            SegmentEvent::Complete {
+                segment, pred_crc, ..
+            } => Some(Item::Segment(self.check(&segment, pred_crc, active_crc))),
         }
     }
 
     /// The expensive part of accepting a segment, done here so the tick does
     /// not: conversion, limit checks at 65 points, start and end motion.
-    fn check(&self, w: &WireSegment, active_crc: u32) -> CheckedSegment {
+    fn check(&self, w: &WireSegment, pred_crc: Option<u32>, active_crc: u32) -> CheckedSegment {
         let seg = Seg::from_wire(w, 0);
         let cfg = self
             .configs
@@ -235,6 +239,7 @@ impl Receiver {
             seg,
             verdict,
             config_crc: cfg.map(|(c, _)| *c).unwrap_or(0),
+            pred_crc,
         }
     }
 }

@@ -13,9 +13,11 @@ pub struct Seg {
     pub seq: u16,
     /// Plan time at the segment start (ns).
     pub start_ns: i64,
-    pub duration_ns: i64,
-    /// 1/h, 1/h², 1/h³ (s⁻ᵏ).
-    pub inv_h: [f32; 3],
+    /// Duration h (µs): 96 bytes a queue slot, not 112 with h in ns and
+    /// 1/h² and 1/h³ stored.
+    pub duration_us: u32,
+    /// 1/h (s⁻¹).
+    pub inv_h: f32,
     /// Normalised coefficients b_jk (m).
     pub b: [[f32; 6]; 3],
     pub first: bool,
@@ -31,8 +33,8 @@ impl Seg {
         Self {
             seq: w.seq,
             start_ns,
-            duration_ns: w.duration_us as i64 * 1000,
-            inv_h: [ih, ih * ih, ih * ih * ih],
+            duration_us: w.duration_us,
+            inv_h: ih,
             b: w.normalised_f32(),
             first: w.flags & FLAG_FIRST != 0,
             last: w.flags & FLAG_LAST != 0,
@@ -40,8 +42,12 @@ impl Seg {
         }
     }
 
+    pub fn duration_ns(&self) -> i64 {
+        self.duration_us as i64 * 1000
+    }
+
     pub fn end_ns(&self) -> i64 {
-        self.start_ns + self.duration_ns
+        self.start_ns + self.duration_ns()
     }
 
     /// Positions at the start (τ = 0).
@@ -58,19 +64,22 @@ impl Seg {
     /// clamped into the segment.
     pub fn eval(&self, s_ns: i64) -> JointMotion<f32> {
         // max/min, not clamp: clamp has a panic path (min > max).
-        let d = (s_ns - self.start_ns).max(0).min(self.duration_ns);
-        let tau = if self.duration_ns > 0 {
-            to_f32(d) / to_f32(self.duration_ns)
+        let dur = self.duration_ns();
+        let d = (s_ns - self.start_ns).max(0).min(dur);
+        let tau = if dur > 0 {
+            to_f32(d) / to_f32(dur)
         } else {
             0.0
         };
+        let ih = self.inv_h;
+        let inv_h = [ih, ih * ih, ih * ih * ih];
         let mut m = JointMotion::default();
         for j in 0..3 {
             let [p, v, a, jk] = eval_poly(&self.b[j], tau);
             m.q[j] = p;
-            m.qd[j] = v * self.inv_h[0];
-            m.qdd[j] = a * self.inv_h[1];
-            m.qddd[j] = jk * self.inv_h[2];
+            m.qd[j] = v * inv_h[0];
+            m.qdd[j] = a * inv_h[1];
+            m.qddd[j] = jk * inv_h[2];
         }
         m
     }
@@ -84,5 +93,13 @@ pub fn scale(m: &JointMotion<f32>, sigma: f32, sigma_d: f32, sigma_dd: f32) -> J
         qd: m.qd * sigma,
         qdd: m.qdd * (sigma * sigma) + m.qd * sigma_d,
         qddd: m.qddd * (sigma * sigma * sigma) + m.qdd * (3.0 * sigma * sigma_d) + m.qd * sigma_dd,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_queue_slot_is_96_bytes() {
+        assert_eq!(core::mem::size_of::<super::Seg>(), 96);
     }
 }

@@ -32,6 +32,7 @@ use triquint_firmware::inbox::Inbox;
 use triquint_firmware::{Drive, Encoder, MotorOutput, QUEUE_CAPACITY, Receiver, RxFrame};
 use triquint_shared::dynamics;
 use triquint_shared::plan::Plan;
+use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
 use triquint_shared::protocol::{
     Command, CommandCode, Frame, State, TimeSync, WireSegment, config_write_frame,
@@ -166,7 +167,7 @@ fn golden_plans(out: &mut Out) -> f64 {
             let q64 = seg64.quintic();
             for i in 0..=16i64 {
                 // Include points just outside the segment (clamped).
-                let d = (seg.duration_ns * i) / 16 + if i == 16 { 1000 } else { 0 };
+                let d = (seg.duration_ns() * i) / 16 + if i == 16 { 1000 } else { 0 };
                 let s_ns = start + d - if i == 0 { 1000 } else { 0 };
                 let (sg, sd, sdd) = scalings[i as usize % scalings.len()];
                 let m = scale(&seg.eval(s_ns), sg, sd, sdd);
@@ -187,13 +188,13 @@ fn golden_plans(out: &mut Out) -> f64 {
                     }
                 }
                 // f64 side: the drive's f32 position against the plan.
-                let t_s = (s_ns - start).clamp(0, seg.duration_ns) as f64 * 1e-9;
+                let t_s = (s_ns - start).clamp(0, seg.duration_ns()) as f64 * 1e-9;
                 let p = q64.eval(t_s);
                 for j in 0..3 {
                     worst = worst.max((p.q[j] - m.q[j] as f64).abs());
                 }
             }
-            start += seg.duration_ns;
+            start += seg.duration_ns();
         }
     }
     worst
@@ -238,6 +239,10 @@ struct Recorder {
     ticks: u64,
     /// States visited, in order.
     states: Vec<State>,
+    /// Segments as the host sends them: compact after the first.
+    chain: Chain,
+    /// Segments sent compact.
+    compact: usize,
 }
 
 impl Recorder {
@@ -330,7 +335,9 @@ impl Recorder {
         });
         let room = self.node.queue_depth() < QUEUE_CAPACITY;
         if (self.node.queue_depth() < 3 || switch && room) && *next < segs.len() {
-            for f in segs[*next].frames(true) {
+            let out = self.chain.next(&segs[*next]);
+            self.compact += out.is_compact() as usize;
+            for f in out.frames(true) {
                 self.rx(f);
             }
             *next += 1;
@@ -369,6 +376,8 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         cpm: cfg.counts_per_metre as f64,
         ticks: 0,
         states: Vec::new(),
+        chain: Chain::default(),
+        compact: 0,
     };
     r.out.u8(b'N');
     r.out.u8(NODE);
@@ -385,7 +394,9 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     r.run_us(20_000);
     let mut next = 0;
     for w in segs.iter().take(3) {
-        for f in w.frames(false) {
+        let out = r.chain.next(w);
+        r.compact += out.is_compact() as usize;
+        for f in out.frames(false) {
             r.rx(f);
         }
         next += 1;
@@ -429,6 +440,9 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     r.command(CommandCode::Stop, 0);
     r.run_us(1_000_000);
     r.out.u8(b'Z');
+    // Every segment after the first went compact, and the node took them all.
+    assert_eq!(r.compact + 1, next, "segments sent compact");
+    assert_eq!(r.node.stats.rejects, 0, "segments or parts rejected");
     let ticks = r.ticks;
     (r.out, r.states, ticks)
 }

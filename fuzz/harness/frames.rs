@@ -90,7 +90,7 @@ pub fn fuzz_frames(data: &[u8]) -> [Outcome; 2] {
 pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
     use triquint_firmware::inbox::Item;
     use triquint_shared::protocol::{
-        CommandCode, Frame, Msg, PartEvent, Reassembler, Reject, State, TimeSync, WireSegment,
+        CommandCode, Frame, Msg, Reject, SegmentEvent, SegmentRx, State, TimeSync, WireSegment,
         config_write_frame, decode,
     };
 
@@ -237,7 +237,7 @@ pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
     }
     h.run_to(FIRST_FRAME_US);
 
-    let mut asm = Reassembler::default();
+    let mut asm = SegmentRx::default();
     let mut rest = data;
     while rest.len() >= 3 {
         let id = u16::from_le_bytes([rest[0], rest[1] & 0x07]);
@@ -250,10 +250,12 @@ pub fn fuzz_pass(data: &[u8], configured: bool) -> Outcome {
             h.run_to(h.t + ms * 1000);
             continue;
         }
-        if let Ok((Msg::SegmentPart | Msg::SegmentPartFd, _)) = decode(&frame)
-            && let PartEvent::Complete(s) = asm.push(frame.payload(), fd)
+        if let Ok((msg, _)) = decode(&frame)
+            && let Some(SegmentEvent::Complete { segment, crc, .. }) =
+                asm.push(msg.kind(), frame.payload())
         {
-            assert_eq!(WireSegment::decode_body(&s.encode_body()), Ok(s));
+            assert_eq!(crc, segment.body_crc());
+            assert_eq!(WireSegment::decode_body(&segment.encode_body()), Ok(segment));
         }
         h.frame(frame);
         h.run_to(h.t + FRAME_US);

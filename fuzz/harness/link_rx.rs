@@ -79,6 +79,8 @@ impl CanPort for FuzzPort {
                 | Msg::ConfigWrite { .. }
                 | Msg::SegmentPart
                 | Msg::SegmentPartFd
+                | Msg::SegmentCompact
+                | Msg::SegmentCompactFd
                 | Msg::Emergency(_),
                 _,
             )) => {}

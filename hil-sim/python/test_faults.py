@@ -42,16 +42,18 @@ def upload():
 
 
 def check_executed(report, sent, whole):
-    """Every segment a drive executed is one the host sent, bit for bit
-    (same sequence number and body CRC-32); with `whole`, every drive executed
-    the whole plan in order."""
-    sent = [tuple(s) for s in sent]
+    """Every segment a drive executed is a version of it the host sent, bit
+    for bit (same sequence number and body CRC-32; a compact segment as
+    rebuilt from the one before it); with `whole`, every drive executed the
+    whole plan in order."""
+    sent = {tuple(s) for s in sent}
     assert sent, "the proxy saw no segment from the host"
+    n = len({s[0] for s in sent})
     for node, ex in enumerate(report["executed"], start=1):
         for seq, crc in map(tuple, ex):
-            assert seq < len(sent) and sent[seq] == (seq, crc), f"node {node} executed {seq}, {crc:#x}: not as sent"
+            assert (seq, crc) in sent, f"node {node} executed {seq}, {crc:#x}: not as sent"
         if whole:
-            assert [tuple(e) for e in ex] == sent, f"node {node}: {ex}"
+            assert [e[0] for e in ex] == list(range(n)), f"node {node}: {ex}"
 
 
 def completed_unchanged(make_sim, bus, name, faults):
@@ -85,7 +87,7 @@ def completed_unchanged(make_sim, bus, name, faults):
     assert report["completed"] and report["faults"] == [] and report["skipped_ticks"] == 0
     check_executed(report, counts["segments_from_a"], whole=True)
     with open(plan_path(CASE)) as f:
-        assert len(counts["segments_from_a"]) == len(json.load(f)["segments"])
+        assert len({s[0] for s in counts["segments_from_a"]}) == len(json.load(f)["segments"])
     # The trajectory is the plan's: same tracking bound as without faults.
     assert max(report["max_error_m"]) < MAX_ERROR_M, (report["max_error_m"], counts["max_latency_us"])
     return summary, counts["faults"]

@@ -7,7 +7,15 @@ use std::collections::VecDeque;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_shared::protocol::{Frame, frame_time_ns};
+use triquint_shared::protocol::{Frame, MsgKind, frame_time_ns};
+
+/// The identifiers of segment frames, full and compact (broadcast: node 0).
+const SEGMENT_IDS: [u16; 4] = [
+    MsgKind::SegmentPart.def().addr.id(0),
+    MsgKind::SegmentCompact.def().addr.id(0),
+    MsgKind::SegmentPartFd.def().addr.id(0),
+    MsgKind::SegmentCompactFd.def().addr.id(0),
+];
 
 /// Bus timing and fault injection.
 #[derive(Clone, Debug, PartialEq)]
@@ -168,7 +176,7 @@ impl Bus {
             };
             let d = self.duration(&frame);
             self.busy_ns += d;
-            if frame.id == 0x100 || frame.id == 0x110 {
+            if SEGMENT_IDS.contains(&frame.id) {
                 self.segment_busy_ns += d;
             }
             self.in_flight = Some((s, frame, start + d));

@@ -90,12 +90,14 @@ pub fn segment_from_wire(w: &WireSegment, t0_s: f64) -> Segment {
 }
 
 /// Largest |q_f32 − q_f64| (m) over a whole plan: each segment goes through
-/// the wire encoding and the drive's f32 normalised-time evaluation, sampled
+/// the wire encoding as the link sends it (compact segments rebuilt from the
+/// one before) and the drive's f32 normalised-time evaluation, sampled
 /// `per_segment` times, against the plan's f64 coefficients.
 pub fn f32_eval_error(plan: &Plan, per_segment: usize) -> f64 {
     let mut worst: f64 = 0.0;
     let n = plan.segments.len();
     let mut start_ns = 0i64;
+    let mut chain = triquint_shared::protocol::compact::Chain::default();
     for (i, s) in plan.segments.iter().enumerate() {
         let mut flags = 0;
         if i == 0 {
@@ -107,10 +109,11 @@ pub fn f32_eval_error(plan: &Plan, per_segment: usize) -> f64 {
         let Ok(w) = WireSegment::from_quintic(i as u16, &s.quintic(), flags) else {
             return f64::INFINITY;
         };
-        let seg = Seg::from_wire(&w, start_ns);
+        // As the drive holds it: compact segments rebuilt from the one before.
+        let seg = Seg::from_wire(chain.next(&w).held(), start_ns);
         let q = s.quintic();
         for k in 0..=per_segment {
-            let d_ns = seg.duration_ns * k as i64 / per_segment as i64;
+            let d_ns = seg.duration_ns() * k as i64 / per_segment as i64;
             let a = seg.eval(start_ns + d_ns);
             let b = q.eval(d_ns as f64 * 1e-9);
             for j in 0..3 {

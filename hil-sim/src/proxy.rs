@@ -19,8 +19,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::SystemTime;
 
 use triquint_firmware::sync::OUTLIER_US;
-use triquint_shared::protocol::segment::{FLAG_FIRST, SEGMENT_PART, SEGMENT_PART_FD};
-use triquint_shared::protocol::{Frame, PartEvent, Reassembler, TimeSync};
+use triquint_shared::protocol::segment::FLAG_FIRST;
+use triquint_shared::protocol::{Frame, SegmentEvent, SegmentRx, TimeSync, decode};
 
 use crate::bus::Delivery;
 use crate::faults::{FaultInjector, FaultStats, FaultWindow};
@@ -42,9 +42,10 @@ pub struct ProxyReport {
     pub to_a: u64,
     /// What the fault model did.
     pub faults: FaultStats,
-    /// (sequence, body CRC-32) of each segment side A sent, reassembled
-    /// before the faults (the first copy of each; a first segment restarts
-    /// the list): what a drive that executed segment k must report.
+    /// (sequence, body CRC-32) of every version of a segment side A sent,
+    /// reassembled before the faults (a compact segment rebuilt on the one
+    /// before it, a resend in full; a first segment restarts the list): a
+    /// drive that executed segment k must report one of those of k.
     pub segments_from_a: Vec<(u16, u32)>,
     /// How late frames were written, beyond their receive time plus the
     /// injected delay: the proxy's own latency (µs), worst and mean.
@@ -65,8 +66,8 @@ pub struct Bridge {
     spec: Vec<FaultWindow>,
     inj: FaultInjector,
     t0_ns: Option<u64>,
-    /// Side A's segment stream (classic, FD), as sent.
-    tap: [Reassembler; 2],
+    /// Side A's segment stream, as sent.
+    tap: SegmentRx,
     /// Frames handed out by [`Bridge::ready`].
     delivered: u64,
     pub report: ProxyReport,
@@ -80,7 +81,7 @@ impl Bridge {
             // No window is active until side A has spoken.
             inj: FaultInjector::new(Vec::new(), seed, 2),
             t0_ns: None,
-            tap: [Reassembler::default(), Reassembler::default()],
+            tap: SegmentRx::default(),
             delivered: 0,
             report: ProxyReport::default(),
         }
@@ -117,20 +118,18 @@ impl Bridge {
     }
 
     fn tap(&mut self, f: &Frame) {
-        let r = if f.id == SEGMENT_PART.addr.id(0) {
-            &mut self.tap[0]
-        } else if f.id == SEGMENT_PART_FD.addr.id(0) {
-            &mut self.tap[1]
-        } else {
+        let Ok((msg, _)) = decode(f) else {
             return;
         };
-        if let PartEvent::Complete(w) = r.push(f.payload(), f.fd) {
+        if let Some(SegmentEvent::Complete { segment, crc, .. }) =
+            self.tap.push(msg.kind(), f.payload())
+        {
             let list = &mut self.report.segments_from_a;
-            if w.flags & FLAG_FIRST != 0 {
+            if segment.flags & FLAG_FIRST != 0 {
                 list.clear();
             }
-            if w.seq as usize == list.len() {
-                list.push((w.seq, w.body_crc()));
+            if !list.contains(&(segment.seq, crc)) {
+                list.push((segment.seq, crc));
             }
         }
     }
@@ -365,20 +364,33 @@ mod tests {
         let spec = vec![FaultWindow::new(Fault::Corrupt { rate: 0.3 }, 0, u64::MAX)];
         let mut br = Bridge::new(spec, 4);
         let mut t = 0;
-        let mut out = Reassembler::default();
+        let mut out = SegmentRx::default();
         let mut through = 0;
-        // Every segment twice (a retransmission): listed once.
+        let mut chain = triquint_shared::protocol::compact::Chain::default();
+        let mut want: Vec<(u16, u32)> = Vec::new();
+        // Every segment twice (a retransmission): each version listed once.
         for s in wire.iter().chain(&wire[1..]) {
-            for f in s.frames(false) {
+            let sent = chain.next(s);
+            let v = (s.seq, sent.held().body_crc());
+            if !want.contains(&v) {
+                want.push(v);
+            }
+            for f in sent.frames(false) {
                 t += 100_000;
                 br.received(A, f, t, t);
                 while let Some(g) = br.ready(B, t) {
-                    through +=
-                        matches!(out.push(g.payload(), false), PartEvent::Complete(_)) as usize;
+                    let Ok((msg, _)) = decode(&g) else {
+                        continue;
+                    };
+                    through += matches!(
+                        out.push(msg.kind(), g.payload()),
+                        Some(SegmentEvent::Complete { .. })
+                    ) as usize;
                 }
             }
         }
-        let want: Vec<(u16, u32)> = wire.iter().map(|w| (w.seq, w.body_crc())).collect();
+        // Compact versions, and the resends' own.
+        assert!(want.len() > n, "{} versions of {n} segments", want.len());
         assert_eq!(br.report.segments_from_a, want);
         // What crossed the faulty wire did get corrupted.
         assert!(br.report.faults.corrupted > 20 && through < 2 * n - 1);

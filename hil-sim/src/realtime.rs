@@ -19,7 +19,7 @@ use triquint_shared::machine::Machine;
 use triquint_shared::plan::{Segment, eval};
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 use triquint_shared::protocol::{
-    CommandCode, FaultCode, Frame, Msg, PartEvent, Reassembler, State, decode, frame_time_ns,
+    CommandCode, FaultCode, Frame, Msg, SegmentEvent, SegmentRx, State, decode, frame_time_ns,
 };
 
 use crate::flex::{FlexError, FlexParams};
@@ -120,8 +120,7 @@ struct Watch {
     segment_busy_ns: u64,
     frames: u64,
     segment_frames: u64,
-    classic: Reassembler,
-    fd: Reassembler,
+    rx: SegmentRx,
     segments: Vec<Segment>,
     start_arg: Option<u32>,
     start_host_ns: Option<i64>,
@@ -137,7 +136,9 @@ fn is_host_frame(msg: &Msg, node: u8) -> bool {
         | Msg::Command(_)
         | Msg::ConfigWrite { .. }
         | Msg::SegmentPart
-        | Msg::SegmentPartFd => true,
+        | Msg::SegmentPartFd
+        | Msg::SegmentCompact
+        | Msg::SegmentCompactFd => true,
         Msg::Emergency(_) => node == 0,
         _ => false,
     }
@@ -161,15 +162,12 @@ impl Watch {
         self.busy_ns += d;
         self.frames += 1;
         match msg {
-            Msg::SegmentPart | Msg::SegmentPartFd => {
+            Msg::SegmentPart | Msg::SegmentPartFd | Msg::SegmentCompact | Msg::SegmentCompactFd => {
                 self.segment_busy_ns += d;
                 self.segment_frames += 1;
-                let r = if f.fd {
-                    &mut self.fd
-                } else {
-                    &mut self.classic
-                };
-                if let PartEvent::Complete(w) = r.push(f.payload(), f.fd) {
+                if let Some(SegmentEvent::Complete { segment: w, .. }) =
+                    self.rx.push(msg.kind(), f.payload())
+                {
                     if w.flags & FLAG_FIRST != 0 {
                         self.segments.clear();
                     }
@@ -519,15 +517,18 @@ mod tests {
         let n = plan.segments.len();
         for fd in [false, true] {
             let mut w = Watch::default();
+            let mut frames = 0;
             for round in 0..2 {
-                // The second round repeats every frame (retransmissions).
+                // The second round repeats every segment (retransmissions).
                 let _ = round;
+                let mut chain = triquint_shared::protocol::compact::Chain::default();
                 for (i, s) in plan.segments.iter().enumerate() {
                     let flags = if i == 0 { FLAG_FIRST } else { 0 }
                         | if i + 1 == n { FLAG_LAST } else { 0 };
                     let ws = WireSegment::from_quintic(i as u16, &s.quintic(), flags).unwrap();
-                    for f in ws.frames(fd) {
+                    for f in chain.next(&ws).frames(fd) {
                         w.on_frame(&f, 1000, &cfg);
+                        frames += 1;
                     }
                 }
             }
@@ -535,7 +536,9 @@ mod tests {
             assert_eq!(w.segments.len(), n);
             let end = w.segments.last().map(|s| s.t0_s + s.duration_s).unwrap();
             assert!((end - plan.total_time_s).abs() < 1e-9);
-            assert_eq!(w.segment_frames as usize, 2 * n * if fd { 2 } else { 20 });
+            assert_eq!(w.segment_frames, frames);
+            // Compact after the first segment.
+            assert!(frames < 2 * n as u64 * if fd { 2 } else { 20 });
         }
     }
 }

@@ -56,7 +56,9 @@ fn reencode(msg: &Msg) -> Option<Vec<u8>> {
         Msg::HeartbeatExt(m) => m.encode().to_vec(),
         Msg::Telemetry(m) => m.encode().to_vec(),
         Msg::TelemetryExt(m) => m.encode().to_vec(),
-        Msg::SegmentPart | Msg::SegmentPartFd => return None,
+        Msg::SegmentPart | Msg::SegmentPartFd | Msg::SegmentCompact | Msg::SegmentCompactFd => {
+            return None;
+        }
     })
 }
 

@@ -1,5 +1,6 @@
 //! Filing a checked segment: the cheap, state-dependent checks (state,
-//! sequence, queue room, C3 continuity with the previous segment), its place
+//! sequence, queue room, the predecessor a compact segment was rebuilt on,
+//! C3 continuity with the previous segment), its place
 //! in plan time, and the SegmentAck that answers it.
 
 use triquint_shared::protocol::contract::{
@@ -75,7 +76,7 @@ impl<const Q: usize> Drive<Q> {
             return Err(Reject::OutOfOrder);
         }
         let max_ns = MAX_DURATION_US as i64 * 1000;
-        if seg.duration_ns == 0 || seg.duration_ns > max_ns || seg.first != (seg.seq == 0) {
+        if seg.duration_ns() == 0 || seg.duration_ns() > max_ns || seg.first != (seg.seq == 0) {
             return Err(Reject::Invalid);
         }
         if self.queue.is_full() {
@@ -86,6 +87,13 @@ impl<const Q: usize> Drive<Q> {
             return Err(Reject::WrongState);
         }
         c.verdict?;
+        // A continuation was rebuilt on a predecessor: it must be the one
+        // this node accepted last, bit for bit.
+        if let Some(p) = c.pred_crc
+            && (self.prev_end.is_none() || self.prev_crc != p)
+        {
+            return Err(Reject::NoPredecessor);
+        }
         if let Some(prev) = self.prev_end
             && !seg.first
             && !c3_continuous(&prev, &c.begin, &self.cfg)
@@ -101,6 +109,7 @@ impl<const Q: usize> Drive<Q> {
             self.queued_end_ns = s.end_ns();
         }
         self.prev_end = Some(c.end);
+        self.prev_crc = seg.crc;
         self.next_seq = self.next_seq.wrapping_add(1);
         if self.state == State::Idle {
             self.state = State::Loaded;

@@ -16,7 +16,7 @@ use serde_json::{Map, Value as Json, json};
 use triquint_cli_common::outln;
 use triquint_link::SocketCanPort;
 use triquint_shared::protocol::describe::{Described, Value, describe};
-use triquint_shared::protocol::{Frame, PartEvent, Reassembler};
+use triquint_shared::protocol::{Frame, SegmentEvent, SegmentRx, decode};
 
 use crate::exit::{CliError, CliResult};
 
@@ -130,7 +130,7 @@ pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
         SocketCanPort::open(iface, true, false, SystemTime::now()).map_err(CliError::device)?;
     let t0 = Instant::now();
     let mut seen = 0u64;
-    let mut parts = [Reassembler::default(), Reassembler::default()];
+    let mut parts = SegmentRx::default();
     while !stop.load(Ordering::Relaxed)
         && args.count.is_none_or(|n| seen < n)
         && args.duration.is_none_or(|d| t0.elapsed().as_secs_f64() < d)
@@ -149,8 +149,9 @@ pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
                 } else {
                     outln!("{t_s:12.6} {:<20} {d}", raw(&f))?;
                 }
-                if d.def.mux == Some("part")
-                    && let PartEvent::Complete(w) = parts[f.fd as usize].push(f.payload(), f.fd)
+                if let Some(SegmentEvent::Complete { segment: w, .. }) = decode(&f)
+                    .ok()
+                    .and_then(|(m, _)| parts.push(m.kind(), f.payload()))
                     && !args.json
                 {
                     outln!(

@@ -210,13 +210,15 @@ fn print_human(
         )?;
     }
     outln!(
-        "bus load {:.2} % over {:.3} s (segments {:.2} %); {} frames ({} segment frames, {} per segment, {} retransmissions)",
+        "bus load {:.2} % over {:.3} s (segments {:.2} %); {} frames ({} segment frames, {:.2} per segment, {} of {} segments compact, {} retransmissions)",
         r.run.bus_load * 100.0,
         r.sim_time_s,
         r.run.segment_bus_load * 100.0,
         r.run.frames,
         r.run.segment_frames,
         r.frames_per_segment,
+        r.compact_sent,
+        r.segments_sent,
         r.retransmits
     )?;
     let skew = match r.start_skew_ns {

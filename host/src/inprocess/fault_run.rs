@@ -189,7 +189,8 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         stop_ramp_s,
         sc.node_reset.map(|r| r.0),
     );
-    let mut figures = fault_figures(&plan, &sim, sc, &wire, &report);
+    let versions = session.versions().to_vec();
+    let mut figures = fault_figures(&plan, &sim, sc, &wire, &versions, &report);
     figures.host_error = host_error;
     figures.retransmits = session.retransmits();
     figures.sync_timeout_ns = (settings.sync_timeout * 1e9) as u64;
@@ -204,6 +205,7 @@ fn fault_figures(
     sim: &Sim,
     sc: &Scenario,
     wire: &[WireSegment],
+    versions: &[(u16, u32)],
     run: &RunReport,
 ) -> FaultRunFigures {
     let tick_ns = (1e9 / sim.cfg.rate_hz) as u64;
@@ -211,18 +213,21 @@ fn fault_figures(
         BadSegment::Limits(k) | BadSegment::Kink(k) => k,
     });
     let reset = sc.node_reset.map(|r| r.0);
-    let crc: Vec<u32> = wire.iter().map(WireSegment::body_crc).collect();
-    let want: Vec<(u16, u32)> = (0..wire.len()).map(|k| (k as u16, crc[k])).collect();
+    // What a drive may hold of segment k: a version the session sent
+    // (compact ones as rebuilt), or the plan's segment in full (the burst).
+    let mut sent: Vec<(u16, u32)> = versions.to_vec();
+    sent.extend(wire.iter().map(|w| (w.seq, w.body_crc())));
     let mut corrupted = 0;
     let mut whole = true;
     for (i, seqs) in run.executed.iter().enumerate() {
         for &(seq, c) in seqs {
-            let good = crc.get(seq as usize) == Some(&c);
+            let good = sent.contains(&(seq, c));
             if !good || Some(seq as usize) == bad {
                 corrupted += 1;
             }
         }
-        if *seqs != want || Some(i) == reset {
+        let in_order = seqs.iter().map(|e| e.0 as usize).eq(0..wire.len());
+        if !in_order || Some(i) == reset {
             whole = false;
         }
     }

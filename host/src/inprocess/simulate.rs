@@ -6,7 +6,6 @@ use triquint_link::configs::PlanConfigError;
 use triquint_link::{DriveConfigs, FaultReport, Session, SessionOptions, UploadError};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
-use triquint_shared::protocol::segment::parts_per_segment;
 use triquint_sim::flex::{AccelSample, FlexError, FlexParams};
 use triquint_sim::host_port::SimPort;
 use triquint_sim::metrics;
@@ -91,7 +90,11 @@ pub struct SimReport {
     pub faults: Vec<FaultReport>,
     /// Faults as the nodes raised them (true time).
     pub faults_on_nodes: Vec<triquint_sim::sim::FaultEvent>,
-    pub frames_per_segment: usize,
+    /// Segment frames per segment sent (full and compact, resends included).
+    pub frames_per_segment: f64,
+    /// Segments sent (resends included), and how many of them compact.
+    pub segments_sent: u64,
+    pub compact_sent: u64,
     pub retransmits: u64,
     /// True-time spread of the nodes' first Running tick (ns; `None` when
     /// not every node started).
@@ -196,7 +199,10 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
         run,
         faults: outcome.faults.clone(),
         faults_on_nodes: sim.faults(),
-        frames_per_segment: parts_per_segment(opts.fd),
+        frames_per_segment: outcome.segment_frames_sent as f64
+            / outcome.segments_sent.max(1) as f64,
+        segments_sent: outcome.segments_sent,
+        compact_sent: outcome.compact_sent,
         retransmits: outcome.retransmits,
         start_skew_ns: skew,
         tick_ns: (1e9 / opts.rate_hz) as u64,

@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use serde_json::{Value as Json, json};
 use triquint_link::{Listener, Received};
 use triquint_shared::kinematics::Pose;
-use triquint_shared::protocol::{Msg, PartEvent, Reassembler, WireSegment, decode, flags};
+use triquint_shared::protocol::{Msg, SegmentEvent, SegmentRx, WireSegment, decode, flags};
 use triquint_shared::{Model as Kinematics, Robot};
 
 use super::stats::BusStats;
@@ -42,7 +42,7 @@ pub struct Model {
     pub planned_version: u64,
     pub segments_seen: u64,
     pub stats: BusStats,
-    parts: [Reassembler; 2],
+    parts: SegmentRx,
     /// Bus time (µs) of the latest frame.
     pub now_us: u64,
     /// Latest torque command (N·m) and following error (m) per axis.
@@ -65,7 +65,7 @@ impl Model {
             planned_version: 0,
             segments_seen: 0,
             stats: BusStats::default(),
-            parts: [Reassembler::default(), Reassembler::default()],
+            parts: SegmentRx::default(),
             now_us: 0,
             ext: [None; 3],
             frames: 0,
@@ -120,11 +120,11 @@ impl Model {
             return;
         };
         match msg {
-            Msg::SegmentPart | Msg::SegmentPartFd => {
-                let fd = matches!(msg, Msg::SegmentPartFd);
-                if let PartEvent::Complete(w) = self.parts[fd as usize].push(rx.frame.payload(), fd)
+            Msg::SegmentPart | Msg::SegmentPartFd | Msg::SegmentCompact | Msg::SegmentCompactFd => {
+                if let Some(SegmentEvent::Complete { segment, .. }) =
+                    self.parts.push(msg.kind(), rx.frame.payload())
                 {
-                    self.segment(&w);
+                    self.segment(&segment);
                 }
             }
             Msg::Telemetry(tm) => {

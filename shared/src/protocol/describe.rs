@@ -80,6 +80,15 @@ fn field_value(f: &FieldDef, p: &[u8]) -> Value {
     }
 }
 
+/// Where the body bytes of a segment part begin: after its declared fields.
+fn body_at(def: &MessageDef) -> usize {
+    def.fields
+        .iter()
+        .map(|f| f.offset + f.ty.len())
+        .max()
+        .unwrap_or(0)
+}
+
 /// Describes a frame: the message, the node, every field with its unit.
 /// Configuration frames name the parameter and give its unit; segment parts
 /// give the part index, the sequence byte and the body words.
@@ -118,7 +127,7 @@ pub fn describe(frame: &Frame) -> Result<Described, DecodeError> {
             if def.mux == Some("part") {
                 fields.push(Field {
                     name: "words",
-                    value: Value::Bytes(p.get(2..).unwrap_or(&[]).to_vec()),
+                    value: Value::Bytes(p.get(body_at(def)..).unwrap_or(&[]).to_vec()),
                     unit: "",
                 });
             }
@@ -178,8 +187,9 @@ impl Described {
             ..
         }) = get("words")
         {
-            let n = b.len().min(f.data.len().saturating_sub(2));
-            f.data[2..2 + n].copy_from_slice(&b[..n]);
+            let at = body_at(self.def);
+            let n = b.len().min(f.data.len().saturating_sub(at));
+            f.data[at..at + n].copy_from_slice(&b[..n]);
         }
         f
     }

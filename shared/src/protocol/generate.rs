@@ -10,6 +10,7 @@ use alloc::string::String;
 use alloc::vec::Vec;
 use core::fmt::Write;
 
+use super::compact::{self, CLASSIC_CHUNK, COMPACT_FIELDS, COMPACT_LEN, Compact, DeviationBound};
 use super::config::PARAMS;
 use super::segment::{
     self, BODY_WORDS, FLAG_FIRST, FLAG_LAST, WORD_LEN, WireSegment, word_fields, words_per_part,
@@ -98,6 +99,28 @@ fn signals(def: &MessageDef) -> Vec<Sig> {
                         values: None,
                     });
                 }
+            }
+        }
+        Some(_) if def.name.starts_with("SegmentCompact") => {
+            // The fields that lie within one part (a classic part carries
+            // seven body bytes: fields across two parts are in the body table).
+            out.push(plain(&def.fields[0], Some(None)));
+            let chunk = if def.fd { COMPACT_LEN } else { CLASSIC_CHUNK };
+            for f in COMPACT_FIELDS {
+                let (part, at) = (f.offset / chunk, f.offset % chunk);
+                if at + f.ty.len() > chunk {
+                    continue;
+                }
+                out.push(Sig {
+                    name: String::from(f.name),
+                    byte: 1 + at,
+                    ty: f.ty,
+                    scale: 1.0,
+                    unit: f.unit,
+                    doc: escape(f.doc),
+                    mux: Some(Some(part)),
+                    values: None,
+                });
             }
         }
         Some(_) => {
@@ -271,7 +294,14 @@ pub fn markdown() -> String {
         }
         // Segment parts: the body words after the declared bytes. Parameter
         // frames need no extra row: index and value are declared fields.
-        if def.mux == Some("part") {
+        if def.name.starts_with("SegmentCompact") {
+            let chunk = if def.fd { COMPACT_LEN } else { CLASSIC_CHUNK };
+            let _ = writeln!(
+                o,
+                "| 1–{chunk} | body | {chunk} bytes | | | Compact body bytes {chunk}·part … {chunk}·part+{} |",
+                chunk - 1
+            );
+        } else if def.mux == Some("part") {
             let wpp = words_per_part(def.fd);
             let _ = writeln!(
                 o,
@@ -299,6 +329,21 @@ pub fn markdown() -> String {
                 f.doc.trim()
             );
         }
+    }
+    let _ = writeln!(
+        o,
+        "\n### Compact segment body ({COMPACT_LEN} bytes)\n\n| Byte in body | Field | Type | Unit | Description |\n|---:|---|---|---|---|"
+    );
+    for f in COMPACT_FIELDS {
+        let _ = writeln!(
+            o,
+            "| {} | {} | {} | {} | {} |",
+            f.offset,
+            f.name,
+            f.ty.name(),
+            f.unit,
+            f.doc.trim()
+        );
     }
     o.push_str("\n### Configuration parameters (ConfigWrite/ConfigValue index)\n\n| Index | Name | Unit | Description |\n|---:|---|---|---|\n");
     for p in PARAMS {
@@ -339,7 +384,8 @@ pub fn markdown() -> String {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Expect {
     Msg(Msg),
-    /// One part of this segment.
+    /// One part of this segment (a compact one: the segment rebuilt from
+    /// the full segment before it).
     Part(WireSegment),
 }
 
@@ -506,6 +552,7 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
     };
     add("TelemetryExt_1", t.to_frame(1), Msg::TelemetryExt(t));
     let seg = golden_segment();
+    let (next, rebuilt) = golden_continuation();
     for fd in [false, true] {
         for (p, f) in seg.frames(fd).enumerate() {
             let label = if fd {
@@ -515,8 +562,50 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
             };
             v.push((label, f, Expect::Part(seg)));
         }
+        for (p, f) in next.frames(fd).enumerate() {
+            let label = if fd {
+                format!("SegmentCompactFd part {p}")
+            } else {
+                format!("SegmentCompact part {p}")
+            };
+            v.push((label, f, Expect::Part(rebuilt)));
+        }
     }
     v
+}
+
+/// The golden segment's continuation (the same polynomial for 0.2 s more),
+/// compact, and the segment a receiver rebuilds from it.
+pub fn golden_continuation() -> (Compact, WireSegment) {
+    let seg = golden_segment();
+    let h = seg.duration_us as f64 * 1e-6;
+    let coeffs = seg.normalised_f64().map(|b| {
+        // Back to seconds, then shifted to t = h (Taylor coefficients there).
+        let c: [f64; 6] = core::array::from_fn(|k| b[k] / libm::pow(h, k as f64));
+        core::array::from_fn(|m| {
+            (m..6)
+                .map(|k| {
+                    let binom = (0..m).fold(1.0, |a, i| a * (k - i) as f64 / (i + 1) as f64);
+                    c[k] * binom * libm::pow(h, (k - m) as f64)
+                })
+                .sum()
+        })
+    });
+    let q = crate::quintic::Quintic {
+        coeffs,
+        duration: 0.2,
+    };
+    let next = WireSegment::from_quintic(seg.seq.wrapping_add(1), &q, FLAG_LAST).unwrap_or(seg);
+    Compact::continuing(&seg, &next, &DeviationBound::DEFAULT).unwrap_or((
+        Compact {
+            seq: 0,
+            duration_us: 0,
+            flags: 0,
+            b45: [[0.0; 2]; 3],
+            crc: 0,
+        },
+        seg,
+    ))
 }
 
 /// The golden vector file: one frame per line, `label | id | fd | hex payload`.
@@ -555,11 +644,14 @@ pub fn parse_golden_line(line: &str) -> Option<(String, Frame)> {
     Some((String::from(parts[0]), Frame::with_payload(id, &bytes?, fd)))
 }
 
-/// Frames per segment (classic, FD), for reports.
-pub const FRAMES_PER_SEGMENT: (usize, usize) = (
-    segment::parts_per_segment(false),
-    segment::parts_per_segment(true),
-);
+/// Frames per segment (classic, FD), full and compact, for reports.
+pub const FRAMES_PER_SEGMENT: [(usize, usize); 2] = [
+    (
+        segment::parts_per_segment(false),
+        segment::parts_per_segment(true),
+    ),
+    (compact::compact_parts(false), compact::compact_parts(true)),
+];
 
 #[cfg(test)]
 mod tests {
@@ -617,22 +709,31 @@ mod tests {
         let parsed: Vec<(String, Frame)> = text.lines().filter_map(parse_golden_line).collect();
         let samples = golden_frames();
         assert_eq!(parsed.len(), samples.len());
-        let mut asm = Reassembler::default();
+        let mut rx = SegmentRx::default();
+        let mut complete = 0;
         for ((label, frame), (l2, f2, expect)) in parsed.iter().zip(samples.iter()) {
             assert_eq!(label, l2);
             assert_eq!(frame, f2, "{label}: bytes differ");
+            let (msg, _) = decode(frame).unwrap();
             match expect {
-                Expect::Msg(m) => assert_eq!(decode(frame).map(|x| x.0), Ok(*m), "{label}"),
-                Expect::Part(seg) => {
-                    let fd = frame.fd;
-                    match asm.push(frame.payload(), fd) {
-                        PartEvent::Pending => {}
-                        PartEvent::Complete(s) => assert_eq!(s, *seg, "{label}"),
-                        e => panic!("{label}: {e:?}"),
+                Expect::Msg(m) => assert_eq!(msg, *m, "{label}"),
+                Expect::Part(seg) => match rx.push(msg.kind(), frame.payload()) {
+                    Some(SegmentEvent::Pending) => {}
+                    Some(SegmentEvent::Complete { segment, .. }) => {
+                        assert_eq!(segment, *seg, "{label}");
+                        complete += 1;
                     }
-                }
+                    e => panic!("{label}: {e:?}"),
+                },
             }
         }
+        // Full and compact, classic and CAN-FD.
+        assert_eq!(complete, 4);
+        assert_ne!(
+            golden_continuation().0.seq,
+            0,
+            "the continuation is compact"
+        );
     }
 
     #[test]

@@ -104,6 +104,8 @@ code_enum! {
         OutsideSoftLimits = 9,
         /// The axis is not homed: segments are refused until it is.
         NotHomed = 10,
+        /// A compact segment whose predecessor this node does not hold as the host built on it (lost, refused or resent): the host sends it in full.
+        NoPredecessor = 11,
     }
 }
 
@@ -139,7 +141,7 @@ code_enum! {
 
 /// Protocol version carried in every heartbeat: a host refuses nodes of
 /// another version. What each version changed: the top of `docs/protocol.md`.
-pub const PROTOCOL_VERSION: u8 = 3;
+pub const PROTOCOL_VERSION: u8 = 4;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {

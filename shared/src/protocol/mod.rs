@@ -12,6 +12,7 @@
 //! a node drives is its configuration (`axis`), by default node k drives
 //! axis k; node 0 is the host or "all nodes".
 
+pub mod compact;
 pub mod config;
 pub mod contract;
 pub mod crc;
@@ -21,14 +22,17 @@ pub mod describe;
 pub mod generate;
 pub mod messages;
 pub mod segment;
+pub mod segment_rx;
 pub mod stop_ramp;
 pub mod streaming;
 pub mod wire;
 
+pub use compact::Compact;
 pub use config::{DriveConfig, DriveSettings, PARAM_COUNT, PARAMS};
 pub use crc::crc32;
 pub use messages::*;
 pub use segment::{PartEvent, Reassembler, WireSegment};
+pub use segment_rx::{SegmentEvent, SegmentRx};
 pub use wire::{Addr, MAX_NODE_ID, MessageDef};
 
 /// Largest payload (CAN-FD).
@@ -112,6 +116,8 @@ pub enum Msg {
     ConfigWrite { index: u8, value: f32 },
     SegmentPart,
     SegmentPartFd,
+    SegmentCompact,
+    SegmentCompactFd,
     SegmentAck(SegmentAck),
     CommandAck(CommandAck),
     ConfigValue { index: u8, value: f32 },
@@ -146,7 +152,9 @@ pub enum MsgKind {
     Command,
     ConfigWrite,
     SegmentPart,
+    SegmentCompact,
     SegmentPartFd,
+    SegmentCompactFd,
     SegmentAck,
     CommandAck,
     ConfigValue,
@@ -158,13 +166,15 @@ pub enum MsgKind {
 
 impl MsgKind {
     /// Every kind, in identifier order.
-    pub const ALL: [MsgKind; 13] = [
+    pub const ALL: [MsgKind; 15] = [
         MsgKind::Emergency,
         MsgKind::TimeSync,
         MsgKind::Command,
         MsgKind::ConfigWrite,
         MsgKind::SegmentPart,
+        MsgKind::SegmentCompact,
         MsgKind::SegmentPartFd,
+        MsgKind::SegmentCompactFd,
         MsgKind::SegmentAck,
         MsgKind::CommandAck,
         MsgKind::ConfigValue,
@@ -183,6 +193,8 @@ impl MsgKind {
             MsgKind::ConfigWrite => &config::CONFIG_WRITE,
             MsgKind::SegmentPart => &segment::SEGMENT_PART,
             MsgKind::SegmentPartFd => &segment::SEGMENT_PART_FD,
+            MsgKind::SegmentCompact => &compact::SEGMENT_COMPACT,
+            MsgKind::SegmentCompactFd => &compact::SEGMENT_COMPACT_FD,
             MsgKind::SegmentAck => &SegmentAck::DEF,
             MsgKind::CommandAck => &CommandAck::DEF,
             MsgKind::ConfigValue => &config::CONFIG_VALUE,
@@ -206,6 +218,8 @@ impl MsgKind {
             }
             MsgKind::SegmentPart => Msg::SegmentPart,
             MsgKind::SegmentPartFd => Msg::SegmentPartFd,
+            MsgKind::SegmentCompact => Msg::SegmentCompact,
+            MsgKind::SegmentCompactFd => Msg::SegmentCompactFd,
             MsgKind::SegmentAck => Msg::SegmentAck(SegmentAck::decode(p)),
             MsgKind::CommandAck => Msg::CommandAck(CommandAck::decode(p)),
             MsgKind::ConfigValue => {
@@ -230,6 +244,8 @@ impl Msg {
             Msg::ConfigWrite { .. } => MsgKind::ConfigWrite,
             Msg::SegmentPart => MsgKind::SegmentPart,
             Msg::SegmentPartFd => MsgKind::SegmentPartFd,
+            Msg::SegmentCompact => MsgKind::SegmentCompact,
+            Msg::SegmentCompactFd => MsgKind::SegmentCompactFd,
             Msg::SegmentAck(_) => MsgKind::SegmentAck,
             Msg::CommandAck(_) => MsgKind::CommandAck,
             Msg::ConfigValue { .. } => MsgKind::ConfigValue,
@@ -242,13 +258,13 @@ impl Msg {
 }
 
 /// Every message declaration, in identifier order (fixed and multiplexed).
-pub fn all_messages() -> [&'static MessageDef; 13] {
+pub fn all_messages() -> [&'static MessageDef; 15] {
     MsgKind::ALL.map(MsgKind::def)
 }
 
 /// Decodes a frame into the message and the node number in its identifier
 /// (0 = host or broadcast). Segment parts are returned undecoded: feed their
-/// payload to a [`Reassembler`].
+/// payload to a [`SegmentRx`].
 pub fn decode(frame: &Frame) -> Result<(Msg, u8), DecodeError> {
     for kind in MsgKind::ALL {
         let def = kind.def();

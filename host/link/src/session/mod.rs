@@ -84,6 +84,9 @@ pub struct Outcome {
     pub start_us: u64,
     pub frames_sent: u64,
     pub segment_frames_sent: u64,
+    /// Segments sent (resends included), and how many of them compact.
+    pub segments_sent: u64,
+    pub compact_sent: u64,
     pub retransmits: u64,
     pub rejects_seen: u64,
 }
@@ -172,7 +175,7 @@ impl Session {
         configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Self {
-        let stream = Stream::new(segments, opts.fd);
+        let stream = Stream::new(segments, opts.fd, opts.compact);
         let override_cap = configs[0].override_cap.max(1.0) as f64;
         let c = &configs[0];
         let stream_rule = StreamRule::new(
@@ -228,9 +231,16 @@ impl Session {
         &self.faults
     }
 
-    /// The segments as they go on the wire, in order.
+    /// The plan's segments in full, in order.
     pub fn segments(&self) -> &[WireSegment] {
         &self.stream.segments
+    }
+
+    /// Every version of a segment sent so far: (sequence number, body CRC
+    /// of the segment a node holds once it takes it in). A compact segment
+    /// is held as rebuilt from the one sent before it.
+    pub fn versions(&self) -> &[(u16, u32)] {
+        &self.stream.versions
     }
 
     /// Segments retransmitted so far.
@@ -477,6 +487,8 @@ impl Session {
                 start_us: self.start.start_us,
                 frames_sent: self.out.sent,
                 segment_frames_sent: self.stream.segment_frames,
+                segments_sent: self.stream.segments_sent,
+                compact_sent: self.stream.compact_sent,
                 retransmits: self.stream.retransmits,
                 rejects_seen: self.stream.rejects_seen,
             }));

@@ -38,6 +38,9 @@ pub struct SessionOptions {
     /// (after its commit, which keeps an earlier override only within the
     /// new cap): how `upload --approach` carries the override to the plan.
     pub feed_override: Option<u16>,
+    /// Send continuations compact where possible (`protocol::compact`);
+    /// `false` sends every segment in full.
+    pub compact: bool,
 }
 
 impl Default for SessionOptions {
@@ -60,6 +63,7 @@ impl Default for SessionOptions {
             clear_faults: false,
             require_homed: true,
             feed_override: None,
+            compact: true,
         }
     }
 }

@@ -3,7 +3,15 @@
 //! acknowledged by every node within `retransmit_timeout_us` is sent again
 //! (at most `max_retransmits` times), and one a node rejected as corrupt,
 //! out of order or incomplete is resent at once without using up a try.
+//! Segments go compact when the segment sent just before is their
+//! predecessor (`protocol::compact`), in full otherwise; a resend always
+//! goes in full (a node may hold another version of its predecessor than
+//! the one sent last: a pair resent compact would be refused again), and
+//! the segment after it re-anchors the chain; a node that does not hold the
+//! predecessor a compact segment was built on answers `NoPredecessor` and
+//! gets it in full.
 
+use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 
 use super::nodes::{AXES, Nodes};
@@ -32,22 +40,35 @@ struct InFlight {
 pub(crate) struct Stream {
     pub segments: Vec<WireSegment>,
     fd: bool,
+    compact: bool,
     next_to_send: usize,
     in_flight: Vec<InFlight>,
-    /// Segment frames queued, retransmissions, rejections seen.
+    /// How segments go on the bus (full or compact).
+    chain: Chain,
+    /// Every version of a segment sent: (sequence number, body CRC of the
+    /// segment receivers hold once they take it in).
+    pub versions: Vec<(u16, u32)>,
+    /// Segment frames queued, segments sent (compact of them), retransmissions, rejections seen.
     pub segment_frames: u64,
+    pub segments_sent: u64,
+    pub compact_sent: u64,
     pub retransmits: u64,
     pub rejects_seen: u64,
 }
 
 impl Stream {
-    pub fn new(segments: Vec<WireSegment>, fd: bool) -> Self {
+    pub fn new(segments: Vec<WireSegment>, fd: bool, compact: bool) -> Self {
         Self {
             segments,
             fd,
+            compact,
             next_to_send: 0,
             in_flight: Vec::new(),
+            chain: Chain::default(),
+            versions: Vec::new(),
             segment_frames: 0,
+            segments_sent: 0,
+            compact_sent: 0,
             retransmits: 0,
             rejects_seen: 0,
         }
@@ -82,7 +103,9 @@ impl Stream {
                     f.acked[i] = true;
                 }
             }
-            Some(Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete) => {
+            Some(
+                Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete | Reject::NoPredecessor,
+            ) => {
                 self.rejects_seen += 1;
                 // Resend at once the segment this node needs next (the
                 // rejected one may only be queued behind a lost one),
@@ -112,11 +135,24 @@ impl Stream {
         Ok(())
     }
 
-    fn queue(&mut self, seq: usize, out: &mut Outbox) {
+    /// Queues segment `seq`: a resend always in full (a node may hold
+    /// another version of its predecessor than the one sent before it).
+    fn queue(&mut self, seq: usize, resend: bool, out: &mut Outbox) {
         if let Some(s) = self.segments.get(seq) {
-            for f in s.frames(self.fd) {
+            let sent = if self.compact && !resend {
+                self.chain.next(s)
+            } else {
+                self.chain.full(s)
+            };
+            for f in sent.frames(self.fd) {
                 out.push_back(f);
                 self.segment_frames += 1;
+            }
+            self.segments_sent += 1;
+            self.compact_sent += sent.is_compact() as u64;
+            let v = (s.seq, sent.held().body_crc());
+            if !self.versions.contains(&v) {
+                self.versions.push(v);
             }
         }
     }
@@ -154,7 +190,7 @@ impl Stream {
                 f.early = false;
                 f.sent_at = now;
                 self.retransmits += 1;
-                self.queue(seq, out);
+                self.queue(seq, true, out);
             }
         }
         let limit = opts
@@ -167,7 +203,7 @@ impl Stream {
             && out.len() < OUTBOX_LIMIT
         {
             let seq = self.next_to_send;
-            self.queue(seq, out);
+            self.queue(seq, false, out);
             self.in_flight.push(InFlight {
                 seq,
                 sent_at: now,

@@ -1,0 +1,749 @@
+//! Compact segments: a segment sent as the continuation of the one before.
+//!
+//! A plan is C3: a segment starts with the position, velocity, acceleration
+//! and jerk its predecessor ends with. A continuation carries only what the
+//! predecessor does not fix: the duration and the coefficients of τ⁴ and τ⁵
+//! of every axis (f32). The receiver rebuilds the full segment from the
+//! predecessor it holds, in the predecessor's exact integer form
+//! ([`Compact::reconstruct`], the same arithmetic on host and drive, so the
+//! host knows every bit the drive will hold):
+//!
+//! b_m = round(S_m · (h/h')^m), m = 0..3, with S_m = Σ_k C(k, m) b'_k,
+//!
+//! the Taylor coefficient of order m at the predecessor's end (b' its
+//! normalised coefficients, h' its duration); b_4, b_5 are the f32 values
+//! in units of [`COEFF_SCALE`]. Rounding the f32 coefficients leaves a
+//! deviation that the chain carries on (a jerk error persists and is
+//! integrated), so the host sends a segment compact only if what the drive
+//! rebuilds stays within [`DeviationBound::DEFAULT`] of the plan's segment;
+//! otherwise, and whenever the previous segment on the bus is not the
+//! predecessor (the first segment, a retransmission), it sends the full
+//! segment, which re-anchors the chain exactly.
+//!
+//! The body is 35 bytes: `seq` u16, `duration_us` u32, `flags` u8 (bit 1
+//! last), b_j4 and b_j5 (f32, m) for j = 1..3, and `crc` u32: the CRC-32 of
+//! the predecessor's body CRC (little-endian) followed by body bytes 0–30.
+//! A receiver holding another predecessor (or none) computes another CRC
+//! and answers [`Reject::NoPredecessor`]; the host then sends the full
+//! segment. Five classic frames of seven body bytes (byte 0 the part
+//! index), or one CAN-FD frame of 48 bytes.
+
+use super::Frame;
+use super::crc::Crc32;
+use super::messages::Reject;
+use super::segment::{COEFF_SCALE, FLAG_LAST, WireSegment};
+use super::wire::{Addr, FieldDef, I48_MAX, MessageDef, WireType};
+
+/// Body length (bytes).
+pub const COMPACT_LEN: usize = 35;
+/// Offset of the CRC in the body; it covers the predecessor's CRC and bytes 0..COMPACT_CRC_OFFSET.
+pub const COMPACT_CRC_OFFSET: usize = COMPACT_LEN - 4;
+/// Body bytes per classic part frame.
+pub const CLASSIC_CHUNK: usize = 7;
+/// Classic part frames per compact segment.
+pub const CLASSIC_PARTS: usize = COMPACT_LEN.div_ceil(CLASSIC_CHUNK);
+/// Payload length of the CAN-FD frame (a valid CAN-FD length ≥ 1 + body).
+pub const FD_LEN: usize = 48;
+
+/// Part frames per compact segment: 5 classic, 1 CAN-FD.
+pub const fn compact_parts(fd: bool) -> usize {
+    if fd { 1 } else { CLASSIC_PARTS }
+}
+
+/// Classic compact part (DLC 8).
+pub const SEGMENT_COMPACT: MessageDef = MessageDef {
+    name: "SegmentCompact",
+    addr: Addr::Broadcast(0x108),
+    len: 8,
+    sender: "host",
+    period: "streamed",
+    doc: " Seven bytes of a compact (continuation) segment body; 5 parts per segment.",
+    mux: Some("part"),
+    fd: false,
+    fields: &PART_FIELD,
+};
+
+/// CAN-FD compact segment (48 bytes).
+pub const SEGMENT_COMPACT_FD: MessageDef = MessageDef {
+    name: "SegmentCompactFd",
+    addr: Addr::Broadcast(0x118),
+    len: FD_LEN,
+    sender: "host",
+    period: "streamed",
+    doc: " A whole compact (continuation) segment body in one frame (CAN-FD, BRS).",
+    mux: Some("part"),
+    fd: true,
+    fields: &PART_FIELD,
+};
+
+const PART_FIELD: [FieldDef; 1] = [FieldDef {
+    name: "part",
+    offset: 0,
+    ty: WireType::U8,
+    scale: 1.0,
+    unit: "",
+    doc: " Part index (multiplexor).",
+    values: None,
+}];
+
+/// One field of the compact body (offset in the body).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyField {
+    pub name: &'static str,
+    pub offset: usize,
+    pub ty: WireType,
+    pub unit: &'static str,
+    pub doc: &'static str,
+}
+
+const fn coeff(name: &'static str, offset: usize) -> BodyField {
+    BodyField {
+        name,
+        offset,
+        ty: WireType::F32,
+        unit: "m",
+        doc: " Normalised coefficient b_jk = c_jk h^k (k = 4, 5).",
+    }
+}
+
+/// The compact body, field by field (the declaration of its layout).
+pub const COMPACT_FIELDS: [BodyField; 10] = [
+    BodyField {
+        name: "seq",
+        offset: 0,
+        ty: WireType::U16,
+        unit: "",
+        doc: " Segment sequence number (never 0: a plan's first segment is sent in full).",
+    },
+    BodyField {
+        name: "duration_us",
+        offset: 2,
+        ty: WireType::U32,
+        unit: "us",
+        doc: " Segment duration h.",
+    },
+    BodyField {
+        name: "flags",
+        offset: 6,
+        ty: WireType::U8,
+        unit: "",
+        doc: " Bit 1: last segment of the plan (bit 0 is never set).",
+    },
+    coeff("c1_4", 7),
+    coeff("c1_5", 11),
+    coeff("c2_4", 15),
+    coeff("c2_5", 19),
+    coeff("c3_4", 23),
+    coeff("c3_5", 27),
+    BodyField {
+        name: "crc",
+        offset: 31,
+        ty: WireType::U32,
+        unit: "",
+        doc: " CRC-32 of the predecessor's body CRC (4 bytes, little-endian), then body bytes 0-30.",
+    },
+];
+
+/// How far a rebuilt segment may deviate from the plan's, per derivative,
+/// bounded over the whole segment by the coefficient differences δb_k:
+/// |δq| ≤ Σ|δb_k|, |δq'| ≤ Σ k|δb_k|/h, |δq''| ≤ Σ k(k−1)|δb_k|/h²,
+/// |δq'''| ≤ Σ k(k−1)(k−2)|δb_k|/h³.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeviationBound {
+    /// Position (m).
+    pub position: f64,
+    /// Velocity (m/s).
+    pub velocity: f64,
+    /// Acceleration (m/s²).
+    pub acceleration: f64,
+    /// Jerk (m/s³).
+    pub jerk: f64,
+}
+
+impl DeviationBound {
+    /// What the host allows: well inside what a drive absorbs between
+    /// segments (10 µm, 1 % of its limits) and below an encoder count.
+    pub const DEFAULT: Self = Self {
+        position: 0.1e-6,
+        velocity: 10e-6,
+        acceleration: 1e-3,
+        jerk: 0.1,
+    };
+
+    /// The largest deviation of `a` from `b` (same duration), per derivative.
+    pub fn between(a: &WireSegment, b: &WireSegment) -> Self {
+        let h = a.duration_us as f64 * 1e-6;
+        let mut d = Self {
+            position: 0.0,
+            velocity: 0.0,
+            acceleration: 0.0,
+            jerk: 0.0,
+        };
+        for (ra, rb) in a.coeffs.iter().zip(&b.coeffs) {
+            let mut s = [0.0f64; 4];
+            for k in 0..6 {
+                let e = (ra[k] - rb[k]).unsigned_abs() as f64 * COEFF_SCALE;
+                let kf = k as f64;
+                s[0] += e;
+                s[1] += kf * e;
+                s[2] += kf * (kf - 1.0) * e;
+                s[3] += kf * (kf - 1.0) * (kf - 2.0) * e;
+            }
+            d.position = d.position.max(s[0]);
+            d.velocity = d.velocity.max(s[1] / h);
+            d.acceleration = d.acceleration.max(s[2] / (h * h));
+            d.jerk = d.jerk.max(s[3] / (h * h * h));
+        }
+        d
+    }
+
+    /// Every figure of `self` within `bound`.
+    pub fn within(&self, bound: &Self) -> bool {
+        self.position <= bound.position
+            && self.velocity <= bound.velocity
+            && self.acceleration <= bound.acceleration
+            && self.jerk <= bound.jerk
+    }
+}
+
+/// A continuation segment as carried on the wire.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Compact {
+    pub seq: u16,
+    pub duration_us: u32,
+    pub flags: u8,
+    /// b_j4, b_j5 (m).
+    pub b45: [[f32; 2]; 3],
+    pub crc: u32,
+}
+
+/// `C(k, m)` for k = 0..5, m = 0..3.
+const BINOMIAL: [[i64; 6]; 4] = [
+    [1, 1, 1, 1, 1, 1],
+    [0, 1, 2, 3, 4, 5],
+    [0, 0, 1, 3, 6, 10],
+    [0, 0, 0, 1, 4, 10],
+];
+
+/// x·h/d rounded half away from zero (d > 0): in i64 when the product
+/// fits (the common case; a 128-bit division costs a drive's receive side
+/// about ten times more), else in i128. Both give the same result.
+fn scale_round(x: i128, h: i128, d: i128) -> Option<i128> {
+    if let (Ok(x), Ok(h), Ok(d)) = (i64::try_from(x), i64::try_from(h), i64::try_from(d))
+        && let Some(n) = x.checked_mul(h)
+        && let Some(r) = n
+            .checked_add(if n < 0 { -d / 2 } else { d / 2 })
+            .and_then(|m| m.checked_div(d))
+    {
+        return Some(r as i128);
+    }
+    let n = x.checked_mul(h)?;
+    let half = if n < 0 { -d / 2 } else { d / 2 };
+    n.checked_add(half)?.checked_div(d)
+}
+
+/// An f32 coefficient (m) in units of [`COEFF_SCALE`] (2⁻⁴⁰ m), rounded half
+/// away from zero; `None` if not finite or outside the i48 range. From the
+/// bits, without floating point: the same on every receiver.
+fn f32_units(x: f32) -> Option<i64> {
+    let bits = x.to_bits();
+    let exp = ((bits >> 23) & 0xFF) as i32;
+    if exp == 0xFF {
+        return None;
+    }
+    let mant = (bits & 0x7F_FFFF) as i64 | if exp == 0 { 0 } else { 1 << 23 };
+    // x = mant · 2^(e − 150) (e = 1 for subnormals), in units × 2⁴⁰.
+    let shift = exp.max(1) - 150 + 40;
+    let mag = if shift >= 0 {
+        if shift > 23 {
+            return None;
+        }
+        mant << shift
+    } else if shift > -40 {
+        (mant + (1 << (-shift - 1))) >> -shift
+    } else {
+        0
+    };
+    let v = if bits >> 31 != 0 { -mag } else { mag };
+    (v.abs() <= I48_MAX).then_some(v)
+}
+
+/// The chained CRC of a body (bytes 0..COMPACT_CRC_OFFSET) after predecessor CRC `pred_crc`.
+fn chained_crc(pred_crc: u32, body: &[u8]) -> u32 {
+    let mut c = Crc32::new();
+    c.update(&pred_crc.to_le_bytes());
+    c.update(body.get(..COMPACT_CRC_OFFSET).unwrap_or(&[]));
+    c.finish()
+}
+
+impl Compact {
+    /// The start of a segment of `duration_us` continuing `pred`: b_0..b_3
+    /// in units, each scaled by h/h' m times with rounding after each step
+    /// (integers only: a drive's receive side uses no f64).
+    fn start(pred: &WireSegment, duration_us: u32) -> Option<[[i64; 4]; 3]> {
+        let (h, hp) = (duration_us as i128, pred.duration_us as i128);
+        if hp == 0 {
+            return None;
+        }
+        let mut out = [[0i64; 4]; 3];
+        for (o, row) in out.iter_mut().zip(&pred.coeffs) {
+            for (m, (b, binom)) in o.iter_mut().zip(&BINOMIAL).enumerate() {
+                // Exact: |b'_k| < 2⁴⁷ and Σ C(k, m) ≤ 20, so S_m < 2⁵².
+                let mut x: i128 = row.iter().zip(binom).map(|(x, c)| (x * c) as i128).sum();
+                for _ in 0..m {
+                    x = scale_round(x, h, hp)?;
+                    if x.unsigned_abs() > (I48_MAX as u128) << 8 {
+                        return None;
+                    }
+                }
+                *b = i64::try_from(x).ok().filter(|v| v.abs() <= I48_MAX)?;
+            }
+        }
+        Some(out)
+    }
+
+    /// The full segment this continuation of `pred` stands for.
+    fn rebuild(&self, pred: &WireSegment) -> Option<WireSegment> {
+        let start = Self::start(pred, self.duration_us)?;
+        let mut coeffs = [[0i64; 6]; 3];
+        for ((row, s), b45) in coeffs.iter_mut().zip(&start).zip(&self.b45) {
+            row[..4].copy_from_slice(s);
+            row[4] = f32_units(b45[0])?;
+            row[5] = f32_units(b45[1])?;
+        }
+        Some(WireSegment {
+            seq: self.seq,
+            duration_us: self.duration_us,
+            flags: (self.flags as u16) & FLAG_LAST,
+            coeffs,
+        })
+    }
+
+    /// Host side: `next` (the plan's segment) as a continuation of `pred`
+    /// (the segment the receivers hold before it, as they hold it), and the
+    /// segment they will rebuild from it; `None` if that would deviate from
+    /// `next` beyond `bound` (send `next` in full).
+    pub fn continuing(
+        pred: &WireSegment,
+        next: &WireSegment,
+        bound: &DeviationBound,
+    ) -> Option<(Self, WireSegment)> {
+        if next.seq != pred.seq.wrapping_add(1) || next.seq == 0 {
+            return None;
+        }
+        let b45 = next.coeffs.map(|r| {
+            [
+                (r[4] as f64 * COEFF_SCALE) as f32,
+                (r[5] as f64 * COEFF_SCALE) as f32,
+            ]
+        });
+        let mut c = Self {
+            seq: next.seq,
+            duration_us: next.duration_us,
+            flags: (next.flags & FLAG_LAST) as u8,
+            b45,
+            crc: 0,
+        };
+        let rebuilt = c.rebuild(pred)?;
+        if !DeviationBound::between(&rebuilt, next).within(bound) {
+            return None;
+        }
+        c.crc = chained_crc(pred.body_crc(), &c.encode_body());
+        Some((c, rebuilt))
+    }
+
+    /// Receiver side: the full segment, if `pred` (with body CRC `pred_crc`)
+    /// is the predecessor the host built this continuation on.
+    pub fn reconstruct(&self, pred: &WireSegment, pred_crc: u32) -> Result<WireSegment, Reject> {
+        if pred.seq.wrapping_add(1) != self.seq
+            || chained_crc(pred_crc, &self.encode_body()) != self.crc
+        {
+            return Err(Reject::NoPredecessor);
+        }
+        self.rebuild(pred).ok_or(Reject::Invalid)
+    }
+
+    /// The 35-byte body (with the CRC as it stands).
+    pub fn encode_body(&self) -> [u8; COMPACT_LEN] {
+        let mut b = [0u8; COMPACT_LEN];
+        b[0..2].copy_from_slice(&self.seq.to_le_bytes());
+        b[2..6].copy_from_slice(&self.duration_us.to_le_bytes());
+        b[6] = self.flags;
+        for (j, pair) in self.b45.iter().enumerate() {
+            for (k, x) in pair.iter().enumerate() {
+                let o = 7 + 8 * j + 4 * k;
+                b[o..o + 4].copy_from_slice(&x.to_le_bytes());
+            }
+        }
+        b[COMPACT_CRC_OFFSET..].copy_from_slice(&self.crc.to_le_bytes());
+        b
+    }
+
+    /// Decodes a body (its CRC is checked by [`Compact::reconstruct`]).
+    pub fn decode_body(b: &[u8; COMPACT_LEN]) -> Self {
+        let f = |o: usize| f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+        Self {
+            seq: u16::from_le_bytes([b[0], b[1]]),
+            duration_us: u32::from_le_bytes([b[2], b[3], b[4], b[5]]),
+            flags: b[6],
+            b45: [[f(7), f(11)], [f(15), f(19)], [f(23), f(27)]],
+            crc: u32::from_le_bytes([b[31], b[32], b[33], b[34]]),
+        }
+    }
+
+    /// All part frames of this segment, in order.
+    pub fn frames(&self, fd: bool) -> impl Iterator<Item = Frame> {
+        let body = self.encode_body();
+        (0..compact_parts(fd)).map(move |p| {
+            let (def, chunk) = if fd {
+                (&SEGMENT_COMPACT_FD, COMPACT_LEN)
+            } else {
+                (&SEGMENT_COMPACT, CLASSIC_CHUNK)
+            };
+            let mut f = Frame::new(def.addr.id(0), def.len, fd);
+            f.data[0] = p as u8;
+            let start = (p * chunk).min(COMPACT_LEN);
+            let end = ((p + 1) * chunk).min(COMPACT_LEN);
+            f.data[1..1 + end - start].copy_from_slice(&body[start..end]);
+            f
+        })
+    }
+}
+
+/// A segment as the host sends it: in full, or compact.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outgoing {
+    Full(WireSegment),
+    /// The continuation and the segment receivers rebuild from it.
+    Compact(Compact, WireSegment),
+}
+
+impl Outgoing {
+    /// Its part frames, in order.
+    pub fn frames(&self, fd: bool) -> heapless::Vec<Frame, 20> {
+        match self {
+            Outgoing::Full(w) => w.frames(fd).collect(),
+            Outgoing::Compact(c, _) => c.frames(fd).collect(),
+        }
+    }
+
+    /// The segment a receiver holds once it took this in.
+    pub fn held(&self) -> &WireSegment {
+        match self {
+            Outgoing::Full(w) | Outgoing::Compact(_, w) => w,
+        }
+    }
+
+    pub fn is_compact(&self) -> bool {
+        matches!(self, Outgoing::Compact(..))
+    }
+}
+
+/// The sending side of the chain: each segment compact when the segment
+/// sent just before is its predecessor and the rebuilt one stays within
+/// [`DeviationBound::DEFAULT`], in full otherwise.
+#[derive(Clone, Debug, Default)]
+pub struct Chain {
+    /// The last segment sent, as receivers hold it.
+    last: Option<WireSegment>,
+}
+
+impl Chain {
+    /// How `seg` goes on the bus now (it becomes the last segment sent).
+    pub fn next(&mut self, seg: &WireSegment) -> Outgoing {
+        let out = match self
+            .last
+            .as_ref()
+            .and_then(|p| Compact::continuing(p, seg, &DeviationBound::DEFAULT))
+        {
+            Some((c, held)) => Outgoing::Compact(c, held),
+            None => Outgoing::Full(*seg),
+        };
+        self.last = Some(*out.held());
+        out
+    }
+
+    /// `seg` in full (a resend: receivers may hold another version of its
+    /// predecessor than the one sent last).
+    pub fn full(&mut self, seg: &WireSegment) -> Outgoing {
+        self.last = Some(*seg);
+        Outgoing::Full(*seg)
+    }
+}
+
+/// What one compact part frame did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CompactEvent {
+    /// Stored; more parts to come.
+    Pending,
+    /// The last part arrived (the CRC is not yet checked).
+    Complete(Compact),
+    /// A partial compact segment was dropped.
+    Rejected { seq: Option<u16>, reason: Reject },
+    /// The part itself was ignored (a duplicate part).
+    Ignored(Reject),
+}
+
+/// Reassembles the classic parts of one compact segment (a CAN-FD one is whole).
+#[derive(Clone, Debug)]
+pub struct CompactAssembler {
+    body: [u8; COMPACT_LEN],
+    next_part: usize,
+}
+
+impl Default for CompactAssembler {
+    fn default() -> Self {
+        Self {
+            body: [0; COMPACT_LEN],
+            next_part: 0,
+        }
+    }
+}
+
+impl CompactAssembler {
+    /// Drops any partial segment.
+    pub fn clear(&mut self) {
+        self.next_part = 0;
+    }
+
+    fn seq(&self) -> u16 {
+        u16::from_le_bytes([self.body[0], self.body[1]])
+    }
+
+    /// Feeds one part frame (payload of a SegmentCompact or SegmentCompactFd).
+    pub fn push(&mut self, data: &[u8], fd: bool) -> CompactEvent {
+        let chunk = if fd { COMPACT_LEN } else { CLASSIC_CHUNK };
+        let Some(&part) = data.first() else {
+            return CompactEvent::Ignored(Reject::Invalid);
+        };
+        let part = part as usize;
+        let start = part * chunk;
+        let len = chunk.min(COMPACT_LEN.saturating_sub(start));
+        let Some(bytes) = data.get(1..1 + len) else {
+            return CompactEvent::Ignored(Reject::Invalid);
+        };
+        if part >= compact_parts(fd) {
+            return CompactEvent::Ignored(Reject::Invalid);
+        }
+        if part == 0 {
+            let abandoned = (self.next_part > 0).then(|| self.seq());
+            self.next_part = 0;
+            if let Some(seq) = abandoned {
+                self.store(start, bytes);
+                self.next_part = 1;
+                return CompactEvent::Rejected {
+                    seq: Some(seq),
+                    reason: Reject::Incomplete,
+                };
+            }
+        } else if part < self.next_part {
+            return CompactEvent::Ignored(Reject::Duplicate);
+        } else if part > self.next_part || self.next_part == 0 {
+            let seq = (self.next_part > 0).then(|| self.seq());
+            self.clear();
+            return CompactEvent::Rejected {
+                seq,
+                reason: Reject::OutOfOrder,
+            };
+        }
+        self.store(start, bytes);
+        self.next_part = part + 1;
+        if self.next_part < compact_parts(fd) {
+            return CompactEvent::Pending;
+        }
+        self.clear();
+        CompactEvent::Complete(Compact::decode_body(&self.body))
+    }
+
+    fn store(&mut self, start: usize, bytes: &[u8]) {
+        for (d, s) in self.body.iter_mut().skip(start).zip(bytes) {
+            *d = *s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quintic::Quintic;
+
+    /// Two C3-joined segments of a quintic x(t) = Σ p_k t^k split at t = h0.
+    fn pair(h0: f64, h1: f64) -> (WireSegment, WireSegment) {
+        let p = [
+            [0.31, 0.02, -0.4, 0.9, -0.6, 0.12],
+            [0.2, 0.0, 0.3, -0.2, 0.05, 0.01],
+            [0.35, -0.1, 0.0, 0.25, -0.3, 0.08],
+        ];
+        let shifted = |t0: f64| -> [[f64; 6]; 3] {
+            p.map(|r| {
+                core::array::from_fn(|m| {
+                    (m..6)
+                        .map(|k| r[k] * choose(k, m) * t0.powi((k - m) as i32))
+                        .sum()
+                })
+            })
+        };
+        let a = Quintic {
+            coeffs: shifted(0.0),
+            duration: h0,
+        };
+        let b = Quintic {
+            coeffs: shifted(h0),
+            duration: h1,
+        };
+        (
+            WireSegment::from_quintic(4, &a, 0).unwrap(),
+            WireSegment::from_quintic(5, &b, FLAG_LAST).unwrap(),
+        )
+    }
+
+    fn choose(k: usize, m: usize) -> f64 {
+        (0..m).fold(1.0, |acc, i| acc * (k - i) as f64 / (i + 1) as f64)
+    }
+
+    #[test]
+    fn a_continuation_rebuilds_its_segment_within_the_bound() {
+        for (h0, h1) in [(0.25, 0.5), (0.002, 0.05), (0.6, 0.002), (0.1, 0.1)] {
+            let (a, b) = pair(h0, h1);
+            let (c, rebuilt) = Compact::continuing(&a, &b, &DeviationBound::DEFAULT)
+                .unwrap_or_else(|| panic!("{h0} {h1}: sent in full"));
+            let got = c.reconstruct(&a, a.body_crc()).unwrap();
+            assert_eq!(got, rebuilt);
+            let d = DeviationBound::between(&got, &b);
+            assert!(d.within(&DeviationBound::DEFAULT), "{d:?}");
+            // Positions agree with the plan's to the bound (checked pointwise).
+            let (nb, ng) = (b.normalised_f64(), got.normalised_f64());
+            for i in 0..=20 {
+                let tau = i as f64 / 20.0;
+                for j in 0..3 {
+                    let ev = |c: &[f64; 6]| c.iter().rev().fold(0.0, |acc, x| acc * tau + x);
+                    assert!((ev(&nb[j]) - ev(&ng[j])).abs() <= DeviationBound::DEFAULT.position);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn f32_coefficients_convert_to_units_exactly() {
+        let mut x = 1.234_567e-9f32;
+        while x < 200.0 {
+            for v in [x, -x, x * 1.37, f32::from_bits(x.to_bits() + 1)] {
+                let want = libm::round(v as f64 / COEFF_SCALE);
+                let got = f32_units(v);
+                if want.abs() <= I48_MAX as f64 {
+                    assert_eq!(got, Some(want as i64), "{v:e}");
+                } else {
+                    assert_eq!(got, None, "{v:e}");
+                }
+            }
+            x *= 1.9;
+        }
+        assert_eq!(f32_units(0.0), Some(0));
+        assert_eq!(f32_units(f32::NAN), None);
+        assert_eq!(f32_units(f32::INFINITY), None);
+        assert_eq!(f32_units(1e-30), Some(0));
+    }
+
+    #[test]
+    fn scaling_rounds_alike_in_64_and_128_bits() {
+        for (x, h, d) in [
+            (7i128, 3i128, 2i128),
+            (-7, 3, 2),
+            (1 << 50, 60_000_000, 2_000),
+            (-(1 << 51), 50_000, 49_999),
+            (i64::MAX as i128 / 3, 3, 7),
+        ] {
+            let n = x * h;
+            let want = (n + if n < 0 { -d / 2 } else { d / 2 }) / d;
+            assert_eq!(scale_round(x, h, d), Some(want), "{x} {h} {d}");
+        }
+    }
+
+    #[test]
+    fn another_predecessor_is_refused() {
+        let (a, b) = pair(0.25, 0.5);
+        let (c, _) = Compact::continuing(&a, &b, &DeviationBound::DEFAULT).unwrap();
+        let mut other = a;
+        other.coeffs[1][3] += 1;
+        assert_eq!(
+            c.reconstruct(&other, other.body_crc()),
+            Err(Reject::NoPredecessor)
+        );
+        let mut earlier = a;
+        earlier.seq = 3;
+        assert_eq!(
+            c.reconstruct(&earlier, a.body_crc()),
+            Err(Reject::NoPredecessor)
+        );
+        // A flipped bit in the body is refused the same way.
+        let mut bad = c;
+        bad.b45[2][1] = f32::from_bits(bad.b45[2][1].to_bits() ^ 1);
+        assert_eq!(
+            bad.reconstruct(&a, a.body_crc()),
+            Err(Reject::NoPredecessor)
+        );
+    }
+
+    #[test]
+    fn a_segment_beyond_the_bound_is_sent_in_full() {
+        // A long segment after a very short one: the short one's integer
+        // coefficients fix its end jerk only to about 3e-4 m/s³, which over
+        // the next 0.3 s moves the position by about 1.5 µm.
+        let (a, b) = pair(0.002, 0.3);
+        assert!(Compact::continuing(&a, &b, &DeviationBound::DEFAULT).is_none());
+        let (a, mut b) = pair(0.25, 0.5);
+        // A kink: the next segment does not start where `a` ends.
+        b.coeffs[0][1] += 1_000_000;
+        assert!(Compact::continuing(&a, &b, &DeviationBound::DEFAULT).is_none());
+    }
+
+    #[test]
+    fn parts_round_trip() {
+        let (a, b) = pair(0.25, 0.5);
+        let (c, _) = Compact::continuing(&a, &b, &DeviationBound::DEFAULT).unwrap();
+        for fd in [false, true] {
+            let frames: heapless::Vec<Frame, 8> = c.frames(fd).collect();
+            assert_eq!(frames.len(), if fd { 1 } else { 5 });
+            let mut r = CompactAssembler::default();
+            let mut out = None;
+            for (i, f) in frames.iter().enumerate() {
+                match r.push(f.payload(), fd) {
+                    CompactEvent::Pending => assert!(i + 1 < frames.len()),
+                    CompactEvent::Complete(x) => out = Some(x),
+                    e => panic!("{e:?}"),
+                }
+            }
+            assert_eq!(out, Some(c));
+        }
+        // Out of order and duplicate parts.
+        let frames: heapless::Vec<Frame, 8> = c.frames(false).collect();
+        let mut r = CompactAssembler::default();
+        assert_eq!(r.push(frames[0].payload(), false), CompactEvent::Pending);
+        assert_eq!(
+            r.push(frames[0].payload(), false),
+            CompactEvent::Rejected {
+                seq: Some(5),
+                reason: Reject::Incomplete
+            }
+        );
+        assert_eq!(r.push(frames[1].payload(), false), CompactEvent::Pending);
+        assert_eq!(
+            r.push(frames[1].payload(), false),
+            CompactEvent::Ignored(Reject::Duplicate)
+        );
+        assert_eq!(
+            r.push(frames[3].payload(), false),
+            CompactEvent::Rejected {
+                seq: Some(5),
+                reason: Reject::OutOfOrder
+            }
+        );
+        assert_eq!(
+            r.push(frames[2].payload(), false),
+            CompactEvent::Rejected {
+                seq: None,
+                reason: Reject::OutOfOrder
+            }
+        );
+    }
+}
