@@ -119,6 +119,7 @@ impl<const Q: usize> Drive<Q> {
                     self.state = State::Fault;
                     self.fault = code;
                     self.queue.clear();
+                    self.react_at_rest(code);
                 }
                 _ => {
                     self.flush();
