@@ -416,6 +416,9 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
+    // Out of line: rare (a plan's end, a stop's), and the tick's own code
+    // must fit the ESC1's CCM SRAM.
+    #[inline(never)]
     fn flush(&mut self) {
         self.queue.clear();
         self.flushes = self.flushes.wrapping_add(1);
@@ -453,6 +456,9 @@ impl<const Q: usize> Drive<Q> {
 
     /// In Fault at rest: the reaction table's reaction at rest (Hold is
     /// what Fault does anyway).
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
     fn react_at_rest(&mut self, code: FaultCode) {
         match reaction::reaction(code, false, self.reaction_axis()) {
             Reaction::TorqueOff => {
@@ -468,27 +474,12 @@ impl<const Q: usize> Drive<Q> {
     }
 
     /// The motor torque that holds the axis still against gravity: the
-    /// load the enable check measured; without one, by the model at the
-    /// hold pose when the drive knows it, otherwise the axis's share of
-    /// the weight (its slider, half its strut, a third of the platform).
+    /// load the enable check measured; without one, the model's weight of
+    /// the axis's share (its slider, half its strut, a third of the
+    /// platform).
     fn static_torque(&self) -> f32 {
-        let Some(a) = self.active else {
-            return 0.0;
-        };
-        if let Some(t) = self.measured_load {
-            return t;
-        }
-        let rest = JointMotion {
-            q: self.hold_reference().q,
-            ..JointMotion::default()
-        };
-        match (
-            self.hold,
-            law::feedforward(&self.model, &self.cfg, &rest, a.axis),
-        ) {
-            (Some(_), Some(t)) => t,
-            _ => Expected::of(&self.model).load,
-        }
+        self.measured_load
+            .unwrap_or_else(|| Expected::of(&self.model).load)
     }
 
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
@@ -564,12 +555,8 @@ impl<const Q: usize> Drive<Q> {
             self.periodic(now_us);
             return;
         };
-        if self.torque_off {
-            self.power_off(&a, enc, motor, now_us);
+        if (self.torque_off || !self.enabled) && self.power_stage(enc, motor, now_us) {
             return;
-        }
-        if !self.enabled {
-            self.release(&a, motor);
         }
         let q = self.measure(&a, enc);
         let host = self.sync.host_ns(now_us);
@@ -617,35 +604,41 @@ impl<const Q: usize> Drive<Q> {
         self.periodic(now_us);
     }
 
-    /// The power stage comes on (the brake releases): the loop starts
-    /// afresh and the enable check begins.
+    /// The power stage off (torque off by the fault reaction: the tick is
+    /// done, true) or coming on (the brake releases: the loop starts afresh
+    /// and the enable check begins).
     #[cold]
     #[inline(never)]
-    fn release<M: MotorOutput>(&mut self, a: &DerivedConfig, motor: &mut M) {
+    fn power_stage<E: Encoder, M: MotorOutput>(
+        &mut self,
+        enc: &mut E,
+        motor: &mut M,
+        now_us: u64,
+    ) -> bool {
+        if self.torque_off {
+            self.power_off(enc, motor, now_us);
+            return true;
+        }
         motor.enable(true);
         self.enabled = true;
         self.law.integral = 0.0;
         self.last_q = None;
         self.verified = false;
         self.measured_load = None;
-        self.check = Some(EnableCheck::new(a.dt));
+        self.check = self.active.map(|a| EnableCheck::new(a.dt));
+        false
     }
 
     /// A tick with the torque off by the fault reaction: power stage off,
     /// the position still measured and reported.
-    #[cold]
-    #[inline(never)]
-    fn power_off<E: Encoder, M: MotorOutput>(
-        &mut self,
-        a: &DerivedConfig,
-        enc: &mut E,
-        motor: &mut M,
-        now_us: u64,
-    ) {
+    fn power_off<E: Encoder, M: MotorOutput>(&mut self, enc: &mut E, motor: &mut M, now_us: u64) {
         motor.enable(false);
         motor.set_torque(0.0);
         self.enabled = false;
-        let q = self.measure(a, enc);
+        let Some(a) = self.active else {
+            return;
+        };
+        let q = self.measure(&a, enc);
         self.stats.torque = 0.0;
         self.stats.q = q;
         self.stats.v = self.vel;

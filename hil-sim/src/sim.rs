@@ -40,6 +40,9 @@ pub struct SimConfig {
     /// machine at rest from power-on); otherwise its axis is free under
     /// gravity.
     pub brake: [bool; 3],
+    /// An external torque on one axis's motor (a push, a collision):
+    /// (axis, from, until true time in ns, N·m lifting).
+    pub push: Option<(usize, u64, u64, f64)>,
     /// Communication service interval of the nodes (µs of local time).
     pub comm_interval_us: u64,
     /// Record a sample every this many control ticks of node 1 (0 = every tick).
@@ -60,6 +63,7 @@ impl Default for SimConfig {
             counts_per_metre: [131_072.0 / 0.010; 3],
             motor_direction: [1.0; 3],
             brake: [false; 3],
+            push: None,
             comm_interval_us: 50,
             record_every: 1,
             tx_mailboxes: 3,
@@ -542,7 +546,12 @@ impl Sim {
         let cpm = self.cfg.counts_per_metre[i];
         let t_ns = self.t_ns;
         let tau = self.nodes[i].control_tick(local_us, self.plant.q()[i], cpm, t_ns);
-        self.plant.set_torque(i, self.cfg.motor_direction[i] * tau);
+        let push = match self.cfg.push {
+            Some((axis, from, until, t)) if axis == i && (from..until).contains(&t_ns) => t,
+            _ => 0.0,
+        };
+        self.plant
+            .set_torque(i, self.cfg.motor_direction[i] * tau + push);
         let brake = self.cfg.brake;
         let held = self
             .nodes
