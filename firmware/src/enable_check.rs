@@ -19,6 +19,11 @@ pub const GAIN_FACTOR: f32 = 4.0;
 /// Smallest measured travel (m, in the drive's own scale) that allows a
 /// verdict: below it the axis did not move enough to tell.
 pub const MIN_TRAVEL_M: f32 = 5.0e-6;
+/// The window begins at the axis's first motion (its first count): the
+/// platform is free only once every axis's brake is off, so a drive
+/// enabled before its peers sees its axis held first. Longest wait for
+/// that first motion (s): beyond it, no verdict.
+pub const START_TIMEOUT_S: f32 = 0.5;
 
 /// The check's verdict.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +43,10 @@ pub enum Verdict {
 pub struct EnableCheck {
     ticks: u32,
     window: u32,
+    /// Ticks waited for the first motion.
+    waited: u32,
+    /// The first measurement while held (`None` before the first tick).
+    rest: Option<f32>,
     q0: f32,
     /// ∫τ dt and ∬τ dt² of the acting torque (N·m·s, N·m·s²).
     tau_int: f32,
@@ -91,9 +100,18 @@ impl EnableCheck {
     /// (N·m, before the motor's direction), period `dt` (s). The verdict
     /// once the window is over.
     pub fn step(&mut self, q: f32, torque: f32, dt: f32, model: &Expected) -> Option<Verdict> {
-        // Time since the first measurement `q0` (this tick's own is 0).
+        // The window starts at the last tick at rest before the first
+        // motion: there, from rest, no torque has acted yet (a held axis
+        // has no error, so the loop commands none).
         if self.ticks == 0 {
-            self.q0 = q;
+            let q_rest = *self.rest.get_or_insert(q);
+            if q == q_rest {
+                self.waited += 1;
+                return (self.waited as f32 * dt > START_TIMEOUT_S)
+                    .then_some(Verdict::Inconclusive);
+            }
+            self.q0 = q_rest;
+            self.ticks = 1;
         }
         let t = self.ticks as f32 * dt;
         self.ticks += 1;

@@ -245,7 +245,7 @@ fn the_enable_check_names_a_wrong_direction_or_scale() {
             let drift = (r.plant.unwrap().q - p0.q).abs();
             // Torque off, it would fall 0.5·g_axis·t² (no friction here).
             let fall = 0.5 * p0.load * p0.gain * 0.5 * 0.5;
-            assert!(drift < 0.25 * fall, "{drift} m of {fall} m");
+            assert!(drift < 0.5 * fall, "{drift} m of {fall} m");
         } else if want != FaultCode::None {
             assert!(!r.powered, "encoder ×{encoder}");
         }
@@ -262,13 +262,16 @@ fn the_enable_check_names_a_wrong_direction_or_scale() {
     r.run(200);
     assert_eq!(r.node.fault(), FaultCode::WrongDirection);
     assert!(!r.powered);
-    // A plant that does not move (no gravity, no torque): no verdict.
+    // A plant that does not move (no gravity, no torque): no verdict once
+    // the wait for its first motion is over.
     let mut r = Rig::new();
     r.trusted = false;
     r.cfg.gravity = 0.0;
     r.parked = 0.3;
     r.configure();
     r.run(200);
+    assert!(r.node.drive.is_checking(), "waiting for the first motion");
+    r.run(400);
     assert_eq!(r.node.state(), State::Idle);
     assert!(!r.node.drive.is_verified() && !r.node.drive.is_checking());
 }
