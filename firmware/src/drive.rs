@@ -23,11 +23,13 @@ use triquint_shared::protocol::{
 use triquint_shared::quintic::JointMotion;
 
 use crate::derived_config::DerivedConfig;
+use crate::enable_check::{EnableCheck, Expected};
 use crate::f32_cast::to_f32;
 use crate::hal::{Encoder, LimitSwitch, MotorOutput, NoSwitch};
 use crate::homing::Homing;
 use crate::inbox::{Item, Source, TAKE_PER_TICK, TickSnapshot};
 use crate::law::{self, Gains, LawState};
+use crate::reaction::{self, Reaction};
 use crate::scaling::{Phase, Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -69,6 +71,10 @@ pub struct Stats {
     pub reference: JointMotion<f32>,
     /// Host time (ns) of the first Running tick.
     pub started_at_ns: Option<i64>,
+    /// The last enable check's fitted gain over the model's (0: none yet).
+    pub check_gain_ratio: f32,
+    /// Its fitted load torque over the model's (0: none yet).
+    pub check_load_ratio: f32,
     pub ticks: u64,
 }
 
@@ -109,6 +115,18 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     last_q: Option<f32>,
     vel: f32,
     enabled: bool,
+    /// The fault reaction took the torque off: the power stage stays off
+    /// (the brake applied) until ClearFault.
+    torque_off: bool,
+    /// The fault reaction holds by this static torque (N·m, before the
+    /// motor's direction) with no position feedback.
+    open_loop: Option<f32>,
+    /// The load torque the last enable check measured (N·m).
+    measured_load: Option<f32>,
+    /// The enable check in progress since the power stage came on.
+    check: Option<EnableCheck>,
+    /// The enable check passed since the power stage came on.
+    verified: bool,
     next_heartbeat_us: u64,
     next_telemetry_us: u64,
     last_local_us: u64,
@@ -188,6 +206,11 @@ impl<const Q: usize> Drive<Q> {
             last_q: None,
             vel: 0.0,
             enabled: false,
+            torque_off: false,
+            open_loop: None,
+            measured_load: None,
+            check: None,
+            verified: false,
             next_heartbeat_us: 0,
             next_telemetry_us: 0,
             last_local_us: 0,
@@ -245,6 +268,27 @@ impl<const Q: usize> Drive<Q> {
     /// The homing run (state Homing).
     pub fn homing(&self) -> Option<&Homing> {
         self.homing.as_ref()
+    }
+    /// The fault reaction took the torque off (the power stage is off).
+    pub fn is_torque_off(&self) -> bool {
+        self.torque_off
+    }
+    /// The enable check passed since the power stage came on.
+    pub fn is_verified(&self) -> bool {
+        self.verified
+    }
+    /// Tests with an ideal encoder (no plant to answer the enable check):
+    /// the check counts as passed.
+    #[cfg(test)]
+    pub(crate) fn assume_verified(&mut self) {
+        if self.enabled {
+            self.verified = true;
+            self.check = None;
+        }
+    }
+    /// The enable check is running.
+    pub fn is_checking(&self) -> bool {
+        self.check.is_some()
     }
     pub fn config(&self) -> Option<DriveConfig> {
         self.active.as_ref().map(|_| self.cfg)
@@ -375,6 +419,9 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
+    // Out of line: rare (a plan's end, a stop's), and the tick's own code
+    // must fit the ESC1's CCM SRAM.
+    #[inline(never)]
     fn flush(&mut self) {
         self.queue.clear();
         self.flushes = self.flushes.wrapping_add(1);
@@ -398,6 +445,44 @@ impl<const Q: usize> Drive<Q> {
         self.fault = code;
         self.start_ns = None;
         self.emergency(code);
+        self.react_at_rest(code);
+    }
+
+    /// What the axis knows of itself for the fault reaction table.
+    fn reaction_axis(&self) -> reaction::Axis {
+        reaction::Axis {
+            brake: self.cfg.brake != 0.0,
+            gravity_loaded: self.cfg.gravity != 0.0,
+            verified: self.verified,
+        }
+    }
+
+    /// In Fault at rest: the reaction table's reaction at rest (Hold is
+    /// what Fault does anyway).
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
+    fn react_at_rest(&mut self, code: FaultCode) {
+        match reaction::reaction(code, false, self.reaction_axis()) {
+            Reaction::TorqueOff => {
+                self.torque_off = true;
+                self.check = None;
+            }
+            Reaction::HoldOpenLoop => {
+                self.open_loop = Some(self.static_torque());
+                self.check = None;
+            }
+            Reaction::Hold | Reaction::StopOnPath => {}
+        }
+    }
+
+    /// The motor torque that holds the axis still against gravity: the
+    /// load the enable check measured; without one, the model's weight of
+    /// the axis's share (its slider, half its strut, a third of the
+    /// platform).
+    fn static_torque(&self) -> f32 {
+        self.measured_load
+            .unwrap_or_else(|| Expected::of(&self.model).load)
     }
 
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
@@ -473,11 +558,8 @@ impl<const Q: usize> Drive<Q> {
             self.periodic(now_us);
             return;
         };
-        if !self.enabled {
-            motor.enable(true);
-            self.enabled = true;
-            self.law.integral = 0.0;
-            self.last_q = None;
+        if (self.torque_off || !self.enabled) && self.power_stage(enc, motor, now_us) {
+            return;
         }
         let q = self.measure(&a, enc);
         let host = self.sync.host_ns(now_us);
@@ -507,9 +589,13 @@ impl<const Q: usize> Drive<Q> {
                 }
             }
         }
-        let out = law::step(&mut self.law, &Gains::new(&self.cfg, &a), r_own, q, ff);
+        let mut out = law::step(&mut self.law, &Gains::new(&self.cfg, &a), r_own, q, ff);
         if let Some(code) = self.motion_fault(out.error, q, r_own) {
             self.on_motion_fault(code, now_us);
+        }
+        // The enable check and the Fault state: rare, out of line.
+        if self.check.is_some() || self.state == State::Fault {
+            out.torque = self.check_and_fault(out.torque, out.error, q, a.dt, now_us);
         }
         motor.set_torque(out.torque * self.cfg.direction);
 
@@ -518,6 +604,47 @@ impl<const Q: usize> Drive<Q> {
         self.stats.q = q;
         self.stats.v = self.vel;
         self.stats.reference = reference;
+        self.periodic(now_us);
+    }
+
+    /// The power stage off (torque off by the fault reaction: the tick is
+    /// done, true) or coming on (the brake releases: the loop starts afresh
+    /// and the enable check begins).
+    #[cold]
+    #[inline(never)]
+    fn power_stage<E: Encoder, M: MotorOutput>(
+        &mut self,
+        enc: &mut E,
+        motor: &mut M,
+        now_us: u64,
+    ) -> bool {
+        if self.torque_off {
+            self.power_off(enc, motor, now_us);
+            return true;
+        }
+        motor.enable(true);
+        self.enabled = true;
+        self.law.integral = 0.0;
+        self.last_q = None;
+        self.verified = false;
+        self.measured_load = None;
+        self.check = self.active.map(|a| EnableCheck::new(a.dt));
+        false
+    }
+
+    /// A tick with the torque off by the fault reaction: power stage off,
+    /// the position still measured and reported.
+    fn power_off<E: Encoder, M: MotorOutput>(&mut self, enc: &mut E, motor: &mut M, now_us: u64) {
+        motor.enable(false);
+        motor.set_torque(0.0);
+        self.enabled = false;
+        let Some(a) = self.active else {
+            return;
+        };
+        let q = self.measure(&a, enc);
+        self.stats.torque = 0.0;
+        self.stats.q = q;
+        self.stats.v = self.vel;
         self.periodic(now_us);
     }
 

@@ -150,7 +150,7 @@ mod tests {
     extern crate std;
     use std::vec::Vec;
 
-    use triquint_shared::protocol::{Command, CommandCode, Emergency, FaultCode, Frame, State};
+    use triquint_shared::protocol::{Command, CommandCode, Emergency, Frame};
 
     use super::*;
     use crate::inbox::{Inbox, Source, TickSnapshot};
@@ -194,16 +194,6 @@ mod tests {
         .to_frame(NODE)
     }
 
-    fn host_emergency() -> Frame {
-        Emergency {
-            code: FaultCode::HostEmergency as u8,
-            state: State::Fault as u8,
-            segment: 0,
-            plan_time_us: 0,
-        }
-        .to_frame(0)
-    }
-
     fn is_stop(item: &Item) -> bool {
         matches!(item, Item::Command { command, .. }
             if command.command() == Ok(CommandCode::Stop))
@@ -223,7 +213,7 @@ mod tests {
             v.push(command(CommandCode::Arm, 10 + k));
         }
         v.push(command(CommandCode::Stop, 20));
-        v.push(host_emergency());
+        v.push(Emergency::host_stop());
         v
     }
 
@@ -349,7 +339,7 @@ mod tests {
         h.accept(&mut inbox, item(command(CommandCode::QuickStop, 4)));
         // Full: the FeedHold gives way to the Emergency, then the
         // Override to the second Stop; a Resume finds only stops.
-        h.accept(&mut inbox, item(host_emergency()));
+        h.accept(&mut inbox, item(Emergency::host_stop()));
         h.accept(&mut inbox, item(command(CommandCode::Stop, 5)));
         h.accept(&mut inbox, item(command(CommandCode::Resume, 6)));
         // An ordinary item behind waiting ones is dropped.

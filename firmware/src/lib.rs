@@ -13,6 +13,7 @@
 
 pub mod derived_config;
 pub mod drive;
+pub mod enable_check;
 pub mod f32_cast;
 pub mod hal;
 pub mod handoff;
@@ -20,6 +21,7 @@ pub mod homing;
 pub mod inbox;
 pub mod law;
 pub mod node;
+pub mod reaction;
 pub mod receiver;
 pub mod scaling;
 pub mod segment;

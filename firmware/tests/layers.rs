@@ -20,6 +20,8 @@ const LAYERS: &[&str] = &[
     "hal",            // the hardware traits
     "handoff",        // the receive task's hand-off behind a full inbox
     "law",            // the control law, a pure step function
+    "reaction",       // the fault reaction table
+    "enable_check",   // does the axis move the way it is told
     "homing",         // the homing state machine, a pure step function
     "receiver",       // the CAN receive side
     "drive",          // the control side: state machine, queue, tick

@@ -34,6 +34,15 @@ pub struct SimConfig {
     /// The sign of each motor's torque on its slider (+1 lifts): the
     /// machine's wiring, which the drives' `direction` must match.
     pub motor_direction: [f64; 3],
+    /// Which axes have a holding brake (the drives are configured with the
+    /// same). A drive whose power stage is off holds the machine still
+    /// where its axis has a brake, and before it was first enabled (the
+    /// machine at rest from power-on); otherwise its axis is free under
+    /// gravity.
+    pub brake: [bool; 3],
+    /// An external torque on one axis's motor (a push, a collision):
+    /// (axis, from, until true time in ns, N·m lifting).
+    pub push: Option<(usize, u64, u64, f64)>,
     /// Communication service interval of the nodes (µs of local time).
     pub comm_interval_us: u64,
     /// Record a sample every this many control ticks of node 1 (0 = every tick).
@@ -53,6 +62,8 @@ impl Default for SimConfig {
             max_drift_ppm: 200.0,
             counts_per_metre: [131_072.0 / 0.010; 3],
             motor_direction: [1.0; 3],
+            brake: [false; 3],
+            push: None,
             comm_interval_us: 50,
             record_every: 1,
             tx_mailboxes: 3,
@@ -176,6 +187,8 @@ pub struct SimNode {
     next_comm_us: u64,
     pending_torque: f64,
     enabled: bool,
+    /// The power stage has been on since power-on (or the last reset).
+    ever_enabled: bool,
     motor: SimMotor,
     last_fault: FaultCode,
     /// True time of the first Running tick.
@@ -237,6 +250,7 @@ impl SimNode {
             next_comm_us: 0,
             pending_torque: 0.0,
             enabled: false,
+            ever_enabled: false,
             motor: SimMotor::default(),
             last_fault: FaultCode::None,
             started_ns: None,
@@ -281,6 +295,7 @@ impl SimNode {
         };
         self.pending_torque = motor.torque as f64;
         self.enabled = motor.enabled;
+        self.ever_enabled |= motor.enabled;
         self.peak_torque = self.peak_torque.max(motor.torque.abs());
         self.motor = motor;
         if self.node.state() == State::Stopping {
@@ -416,6 +431,7 @@ impl Sim {
         n.node = Node::new(i as u8 + 1);
         n.pending_torque = 0.0;
         n.enabled = false;
+        n.ever_enabled = false;
         n.motor = SimMotor::default();
     }
 
@@ -530,8 +546,18 @@ impl Sim {
         let cpm = self.cfg.counts_per_metre[i];
         let t_ns = self.t_ns;
         let tau = self.nodes[i].control_tick(local_us, self.plant.q()[i], cpm, t_ns);
-        self.plant.set_torque(i, self.cfg.motor_direction[i] * tau);
-        self.plant.set_braked(!self.nodes.iter().all(|n| n.enabled));
+        let push = match self.cfg.push {
+            Some((axis, from, until, t)) if axis == i && (from..until).contains(&t_ns) => t,
+            _ => 0.0,
+        };
+        self.plant
+            .set_torque(i, self.cfg.motor_direction[i] * tau + push);
+        let brake = self.cfg.brake;
+        let held = self
+            .nodes
+            .iter()
+            .any(|n| !n.enabled && (brake[n.axis] || !n.ever_enabled));
+        self.plant.set_braked(held);
         if i == 0 {
             self.tick_count += 1;
             let every = self.cfg.record_every.max(1) as u64;

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_host::inprocess::fault_run::{BadSegment, Scenario, run};
+use triquint_host::inprocess::fault_run::{BadSegment, Miswired, Scenario, run};
 use triquint_shared::plan::Plan;
 use triquint_sim::report::{Ending, RunReport};
 use triquint_sim::{Fault, FaultWindow, testplan};
@@ -19,7 +19,7 @@ use triquint_sim::{Fault, FaultWindow, testplan};
 const MS: u64 = 1_000_000;
 
 /// The fault kinds of the soak, with the range their parameter is drawn from.
-const KINDS: [(&str, &str); 15] = [
+const KINDS: [(&str, &str); 20] = [
     ("loss", "0.1-3 % of frames"),
     ("corrupt", "0.1-3 % of parts"),
     ("duplicate", "1-20 % of frames"),
@@ -35,6 +35,11 @@ const KINDS: [(&str, &str); 15] = [
     ("node reset", "at 0.5-4.5 s"),
     ("bad limits", "segment 1-8 ×10 jerk"),
     ("not C3", "segment 1-8 velocity step"),
+    ("brakes, host killed", "at 0.1-4.5 s; torque off at rest"),
+    ("push", "±3-8 N·m, 20-200 ms, 0.5-4.5 s"),
+    ("push, brakes", "as push; torque off at rest"),
+    ("miswired, brakes", "direction flipped or scale ×1/32"),
+    ("scale ×32", "file counts ×32: open-loop hold"),
 ];
 
 fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
@@ -118,7 +123,36 @@ fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
         11 => sc.host_killed_ns = Some(t(rng, 0.1, 4.5)),
         12 => sc.node_reset = Some((rng.random_range(0..3), t(rng, 0.5, 4.5))),
         13 => sc.bad_segment = Some(BadSegment::Limits(rng.random_range(1..9))),
-        _ => sc.bad_segment = Some(BadSegment::Kink(rng.random_range(1..9))),
+        14 => sc.bad_segment = Some(BadSegment::Kink(rng.random_range(1..9))),
+        15 => {
+            sc.brakes = true;
+            sc.host_killed_ns = Some(t(rng, 0.1, 4.5));
+        }
+        16 | 17 => {
+            let from = t(rng, 0.5, 4.5);
+            let sign = if rng.random_range(0..2) == 0 {
+                -1.0
+            } else {
+                1.0
+            };
+            sc.push = Some((
+                rng.random_range(0..3),
+                from,
+                from + rng.random_range(20 * MS..200 * MS),
+                sign * rng.random_range(3.0..8.0),
+            ));
+            sc.brakes = k == 17;
+        }
+        18 => {
+            sc.brakes = true;
+            let how = if rng.random_range(0..2) == 0 {
+                Miswired::Direction
+            } else {
+                Miswired::Scale(1.0 / 32.0)
+            };
+            sc.miswired = Some((rng.random_range(0..3), how));
+        }
+        _ => sc.miswired = Some((rng.random_range(0..3), Miswired::Scale(32.0))),
     }
     sc
 }

@@ -39,6 +39,8 @@ pub struct Axis {
     /// Lowest and highest joint position a motion may reach (m).
     pub travel_min: f64,
     pub travel_max: f64,
+    /// A holding brake applied whenever the power stage is off.
+    pub brake: bool,
 }
 
 /// What no plan may exceed on this machine, per joint (SI).
@@ -137,6 +139,7 @@ impl Default for Machine {
             switch_height: homing.switch_height[a],
             travel_min: travel.min[a],
             travel_max: travel.max[a],
+            brake: false,
         };
         let axes = core::array::from_fn(axis);
         Self {
@@ -230,6 +233,7 @@ impl Machine {
                 .each_ref()
                 .map(|a| [a.travel_min - m, a.travel_max + m]),
             node_ids: self.axes.each_ref().map(|a| a.node_id),
+            brake: self.axes.each_ref().map(|a| a.brake),
             homing: self.homing_settings(),
         }
     }

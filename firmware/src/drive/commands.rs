@@ -89,6 +89,14 @@ impl<const Q: usize> Drive<Q> {
                     self.state = State::Idle;
                     self.fault = FaultCode::None;
                     self.law.integral = 0.0;
+                    // The power stage comes back on at the next tick, with
+                    // a new enable check.
+                    self.torque_off = false;
+                    if self.open_loop.take().is_some() {
+                        // From the open-loop hold back to the loop: as at
+                        // a release, with a new enable check.
+                        self.enabled = false;
+                    }
                     FaultCode::None
                 } else {
                     FaultCode::WrongState

@@ -89,6 +89,7 @@ impl<const Q: usize> Drive<Q> {
                 if self.state == State::Stopping {
                     self.stop_reason = None;
                     self.state = State::Fault;
+                    self.react_at_rest(self.fault);
                 } else {
                     self.state = State::Idle;
                 }

@@ -84,6 +84,17 @@ impl<const Q: usize> Drive<Q> {
         Some(scale(&seg.eval(sc.s_ns), sc.sigma, sc.sigma_d, sc.sigma_dd))
     }
 
+    /// A stop for a fault came to rest: Fault, and the reaction at rest.
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
+    fn stopped_in_fault(&mut self, code: FaultCode) {
+        self.state = State::Fault;
+        self.fault = code;
+        self.queue.clear();
+        self.react_at_rest(code);
+    }
+
     /// Reference on the path (Running/Stopping); handles queue advance, the
     /// end of the plan, the end of a stop and underrun.
     pub(super) fn path_reference(
@@ -115,11 +126,7 @@ impl<const Q: usize> Drive<Q> {
         let last_queued = self.queue.back().map(|b| b.last).unwrap_or(false);
         if self.state == State::Stopping && at_rest {
             match self.stop_reason {
-                Some(StopReason::Fault(code)) => {
-                    self.state = State::Fault;
-                    self.fault = code;
-                    self.queue.clear();
-                }
+                Some(StopReason::Fault(code)) => self.stopped_in_fault(code),
                 _ => {
                     self.flush();
                     self.state = State::Idle;

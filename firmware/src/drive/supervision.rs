@@ -8,6 +8,8 @@ use triquint_shared::protocol::{FaultCode, Heartbeat, State};
 
 use super::{Drive, StopReason};
 use crate::derived_config::DerivedConfig;
+use crate::enable_check::{Expected, Verdict};
+use crate::reaction::{self, Reaction};
 use crate::scaling::Retarget;
 
 impl<const Q: usize> Drive<Q> {
@@ -127,13 +129,22 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
-    /// The reaction to a motion fault, the drive's existing ones: moving,
-    /// stop along the path (then Fault at rest); at rest, Fault holding the
-    /// reference.
+    /// The reaction to a motion fault, from the reaction table: moving,
+    /// stop along the path (then Fault at rest) or, where the loop may be
+    /// positive feedback, torque off at once; at rest, Fault with the
+    /// table's reaction at rest.
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
     pub(super) fn on_motion_fault(&mut self, code: FaultCode, now_us: u64) {
+        let moving = matches!(self.state, State::Running | State::Stopping);
+        if moving && reaction::reaction(code, true, self.reaction_axis()) == Reaction::TorqueOff {
+            self.queue.clear();
+            self.stop_reason = None;
+            self.fault_now(code);
+            self.torque_off = true;
+            return;
+        }
         match self.state {
             State::Running => self.begin_stop(StopReason::Fault(code), false, now_us),
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
@@ -143,6 +154,83 @@ impl<const Q: usize> Drive<Q> {
             }
             State::Idle | State::Loaded | State::Armed => self.fault_now(code),
             _ => {}
+        }
+    }
+
+    /// After the law, when the enable check runs or the drive is in Fault:
+    /// a tick of the check, the Fault state's supervision, and the torque
+    /// to command (the open-loop hold's in place of the loop's).
+    #[cold]
+    #[inline(never)]
+    pub(super) fn check_and_fault(
+        &mut self,
+        torque: f32,
+        error: f32,
+        q: f32,
+        dt: f32,
+        now_us: u64,
+    ) -> f32 {
+        if self.check.is_some() {
+            self.step_check(q, torque, dt, now_us);
+        }
+        if self.state == State::Fault && !self.torque_off {
+            self.supervise_fault(error);
+        }
+        self.open_loop.unwrap_or(torque)
+    }
+
+    /// Supervision of the Fault state: an axis held in Fault whose
+    /// following error exceeds its bound is not being held; the table's
+    /// reaction to a following error at rest then applies (torque off
+    /// where it allows, with an Emergency saying why).
+    #[cold]
+    #[inline(never)]
+    pub(super) fn supervise_fault(&mut self, error: f32) {
+        // Held open loop (a wrong encoder scale), the axis may sink slowly:
+        // torque off would let it sink faster. Rising beyond the bound, the
+        // open-loop torque exceeds the weight: torque off ends that.
+        let bound = self.cfg.following_error_max;
+        let beyond = match self.open_loop {
+            Some(_) => -error > bound,
+            None => error.abs() > bound,
+        };
+        if beyond
+            && reaction::reaction(FaultCode::FollowingError, false, self.reaction_axis())
+                == Reaction::TorqueOff
+        {
+            self.torque_off = true;
+            self.check = None;
+            self.emergency(FaultCode::FollowingError);
+        }
+    }
+
+    /// One tick of the enable check (at rest only: a move or homing before
+    /// its verdict leaves the axis unverified). Its verdict: passed, or a
+    /// fault naming what is wrong.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn step_check(&mut self, q: f32, torque: f32, dt: f32, now_us: u64) {
+        let at_rest = matches!(self.state, State::Idle | State::Loaded | State::Armed)
+            && self.homing.is_none();
+        let model = Expected::of(&self.model);
+        let verdict = match (at_rest, self.check.as_mut()) {
+            (true, Some(c)) => match c.step(q, torque, dt, &model) {
+                Some(v) => {
+                    self.stats.check_gain_ratio = c.gain() / model.gain;
+                    self.measured_load = c.load();
+                    self.stats.check_load_ratio = c.load().unwrap_or(0.0) / model.load;
+                    v
+                }
+                None => return,
+            },
+            _ => Verdict::Inconclusive,
+        };
+        self.check = None;
+        match verdict {
+            Verdict::Pass => self.verified = true,
+            Verdict::Inconclusive => {}
+            Verdict::WrongDirection => self.on_motion_fault(FaultCode::WrongDirection, now_us),
+            Verdict::WrongScale => self.on_motion_fault(FaultCode::WrongScale, now_us),
         }
     }
 }

@@ -86,6 +86,7 @@ struct DriveTable {
     /// Defaults for every axis.
     torque_constant: Option<f64>,
     current_limit: Option<f64>,
+    brake: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -99,6 +100,7 @@ struct AxisTable {
     switch_height: Option<f64>,
     travel_min: Option<f64>,
     travel_max: Option<f64>,
+    brake: Option<bool>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -157,6 +159,7 @@ pub fn parse_machine(text: &str) -> Result<Machine, MachineFileError> {
     set(&mut t.control_rate, d.control_rate);
     for a in &mut m.axes {
         set(&mut a.torque_constant, d.torque_constant);
+        set(&mut a.brake, d.brake);
         if d.current_limit.is_some() {
             a.current_limit = d.current_limit;
         }
@@ -186,6 +189,7 @@ pub fn parse_machine(text: &str) -> Result<Machine, MachineFileError> {
         set(&mut a.switch_height, ax.switch_height);
         set(&mut a.travel_min, ax.travel_min);
         set(&mut a.travel_max, ax.travel_max);
+        set(&mut a.brake, ax.brake);
     }
     let c = file.ceilings.unwrap_or_default();
     let cs: &mut Ceilings = &mut m.ceilings;
@@ -323,6 +327,16 @@ mod tests {
         assert_eq!(m.travel().max, [0.415, 0.40, 0.415]);
         assert_eq!(m.ceilings.jerk, 20.0);
         assert_eq!(parse_machine("").unwrap(), Machine::default());
+    }
+
+    #[test]
+    fn brakes_are_read_per_axis_over_the_drive_default_and_configured() {
+        let m = parse_machine("[drive]\nbrake = true\n[axis.2]\nbrake = false\n").unwrap();
+        assert_eq!(m.axes.each_ref().map(|a| a.brake), [true, false, true]);
+        assert_eq!(m.drive_settings().brake, [true, false, true]);
+        let e = err("[axis.1]\nbrake = 1\n");
+        assert!(e.contains("line 2") && e.contains("boolean"), "{e}");
+        assert!(!Machine::default().axes.iter().any(|a| a.brake));
     }
 
     #[test]

@@ -37,13 +37,7 @@ pub enum EstopError {
 
 /// The host's emergency frame (from node 0).
 pub fn emergency_frame() -> Frame {
-    Emergency {
-        code: FaultCode::HostEmergency as u8,
-        state: State::Fault as u8,
-        segment: 0,
-        plan_time_us: 0,
-    }
-    .to_frame(0)
+    Emergency::host_stop()
 }
 
 /// The answers of the drives on `ids` (axis i on `ids[i]`) to an emergency stop.

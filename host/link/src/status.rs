@@ -107,6 +107,12 @@ pub fn hint(code: FaultCode) -> &'static str {
         OverrideAboveCap => {
             "override above the plan's cap (see the cap printed); give a smaller percentage"
         }
+        WrongDirection => {
+            "the axis moved against its torque at enable: check the axis's direction (motor and encoder wiring) in the machine file, then clear"
+        }
+        WrongScale => {
+            "the axis moved too much or too little for its torque at enable: check counts_per_rev, lead and the masses in the machine file, then clear"
+        }
     }
 }
 

@@ -26,6 +26,16 @@ pub enum BadSegment {
     Kink(usize),
 }
 
+/// An axis its machine file describes wrongly (the drives are configured
+/// from the file, the virtual machine is the real one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Miswired {
+    /// Its `direction` flipped (motor and encoder sign both).
+    Direction,
+    /// Its encoder's counts per metre times this.
+    Scale(f64),
+}
+
 /// What goes wrong during one run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scenario {
@@ -41,6 +51,14 @@ pub struct Scenario {
     /// once, ignoring flow control (more than a node's queue holds).
     pub burst_ns: Option<u64>,
     pub bad_segment: Option<BadSegment>,
+    /// Every axis has a holding brake (configuration `brake`; the virtual
+    /// machine holds still where a drive's power stage is off).
+    pub brakes: bool,
+    /// An external torque on one axis: (axis, from, until true time in
+    /// ns, N·m).
+    pub push: Option<(usize, u64, u64, f64)>,
+    /// One axis (0–2) described wrongly.
+    pub miswired: Option<(usize, Miswired)>,
 }
 
 fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
@@ -77,7 +95,18 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         Some(b) => spoil(plan, b),
         None => plan.clone(),
     };
-    let settings = DriveSettings::default();
+    let mut settings = DriveSettings::default();
+    if sc.brakes {
+        settings.brake = [true; 3];
+    }
+    match sc.miswired {
+        Some((i, Miswired::Direction)) => {
+            settings.direction[i] = -settings.direction[i];
+            settings.counts_per_metre[i] = -settings.counts_per_metre[i];
+        }
+        Some((i, Miswired::Scale(k))) => settings.counts_per_metre[i] *= k,
+        None => {}
+    }
     let DriveConfigs {
         nodes: configs,
         stop_time_s: stop_ramp_s,
@@ -86,6 +115,8 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     let mut cfg = SimConfig {
         fd: sc.fd,
         record_every: 1,
+        brake: settings.brake,
+        push: sc.push,
         ..SimConfig::default()
     };
     cfg.bus.capture = true;
@@ -315,7 +346,25 @@ fn fault_figures(
     // The stop's jerk budget (docs/protocol.md, Stopping): the limit, or the
     // plan's own jerk plus half the limit when the plan already uses more.
     let stop_jerk_bound = lim.max(plan_jerk + 0.5 * lim) * 1.001;
-    let ending = if corrupted > 0 || running_left || max_stop_jerk > stop_jerk_bound {
+    // The fault reactions (docs/protocol.md): with brakes every Fault at
+    // rest is torque off; a miswired axis faults naming what is wrong.
+    let reaction_wrong = sc.brakes
+        && sim
+            .nodes
+            .iter()
+            .any(|n| n.node.state() == State::Fault && !n.node.drive.is_torque_off());
+    let miswire_missed = sc.miswired.is_some_and(|(i, _)| {
+        !matches!(
+            codes[i],
+            FaultCode::WrongDirection | FaultCode::WrongScale | FaultCode::FollowingError
+        )
+    });
+    let ending = if corrupted > 0
+        || running_left
+        || max_stop_jerk > stop_jerk_bound
+        || reaction_wrong
+        || miswire_missed
+    {
         Ending::Unsafe
     } else if whole && all_idle && !any_fault {
         Ending::Completed

@@ -137,6 +137,7 @@ pub fn simulate(plan: &Plan, opts: &SimulateOptions) -> Result<SimReport, Simula
     // motor directions are the settings'.
     sim_cfg.counts_per_metre = settings.counts_per_metre;
     sim_cfg.motor_direction = settings.direction;
+    sim_cfg.brake = settings.brake;
     // Record at most 1 kHz.
     sim_cfg.record_every = (opts.rate_hz / 1000.0).round().max(1.0) as u32;
     let q0 = plan

@@ -258,7 +258,7 @@ fn a_node_with_another_configuration_is_named() {
         let t = sim.now_ns() + 100_000;
         sim.run_until(t).unwrap();
     };
-    assert!(err.is_config());
+    assert!(err.is_config(), "{err}");
     match err {
         UploadError::ConfigMismatch { node, param, .. } => {
             assert_eq!(node, 3);

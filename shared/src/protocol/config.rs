@@ -153,10 +153,12 @@ config_params! {
     52 axis_node_3 [""],
     /// Largest feed override σ (1 = 100 %) at which the plan, and a hold begun there, stay within the limits; Override above it is refused.
     53 override_cap [""],
+    /// 1 = the axis has a holding brake, applied whenever the power stage is off; 0 = none (a fault reaction then removes torque only where the fault reaction table allows it).
+    54 brake [""],
 }
 
 /// Number of configuration parameters.
-pub const PARAM_COUNT: usize = 54;
+pub const PARAM_COUNT: usize = 55;
 
 /// ConfigWrite: host → node n, one parameter per frame.
 pub const CONFIG_WRITE: MessageDef = MessageDef {
@@ -271,6 +273,8 @@ pub struct DriveSettings {
     pub soft_limits: [[f64; 2]; 3],
     /// Node id of the drive of each axis (1–15, distinct).
     pub node_ids: [u8; 3],
+    /// Which axes have a holding brake (the fault reactions, firmware `reaction`).
+    pub brake: [bool; 3],
     pub homing: HomingSettings,
 }
 
@@ -399,6 +403,7 @@ impl DriveConfig {
             axis_node_2: s.node_ids[1] as f32,
             axis_node_3: s.node_ids[2] as f32,
             override_cap: 1.0,
+            brake: if s.brake[a] { 1.0 } else { 0.0 },
         }
     }
 
@@ -488,7 +493,13 @@ impl DriveConfig {
             |x: f32| (1.0..=super::wire::MAX_NODE_ID as f32).contains(&x) && (x as u8) as f32 == x;
         let nodes = self.axis_nodes();
         let own = nodes[(self.axis as usize).min(2)];
-        let rules: [(&'static str, f32, bool, &'static str); 18] = [
+        let rules: [(&'static str, f32, bool, &'static str); 19] = [
+            (
+                "brake",
+                self.brake,
+                self.brake == 0.0 || self.brake == 1.0,
+                "0 or 1",
+            ),
             ("node_id", self.node_id, id_ok(self.node_id), "1 to 15"),
             (
                 "axis_node_1",

@@ -4,6 +4,7 @@
 //! Multiplexed messages (segment parts, configuration) are declared in
 //! [`super::segment`] and [`super::config`].
 
+use super::Frame;
 use super::wire::{Addr, code_enum, messages};
 
 code_enum! {
@@ -76,6 +77,10 @@ code_enum! {
         HomeSwitchNeverTriggered = 21,
         /// Override refused: above the configuration's `override_cap` (the acknowledgement's value is the cap in per mille), or 0.
         OverrideAboveCap = 22,
+        /// The enable check: after the power stage came on, the axis accelerated against its torque (motor or encoder direction reversed): torque off.
+        WrongDirection = 23,
+        /// The enable check: the axis's acceleration per torque was outside ¼–4× the model's (encoder scale, lead or inertia wrong).
+        WrongScale = 24,
     }
 }
 
@@ -268,6 +273,20 @@ messages! {
         torque: f32 @ 0 ["N.m", 1.0],
         /// Position reference − measured position.
         following_error: f32 @ 4 ["m", 1.0],
+    }
+}
+
+impl Emergency {
+    /// The host's emergency stop (from node 0, state Fault): what every
+    /// drive faults or stops on.
+    pub fn host_stop() -> Frame {
+        Self {
+            code: FaultCode::HostEmergency as u8,
+            state: State::Fault as u8,
+            segment: 0,
+            plan_time_us: 0,
+        }
+        .to_frame(0)
     }
 }
 
