@@ -19,7 +19,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 use triquint_cli_common::machine_file::load_machine;
 use triquint_cli_common::parse::{check_rate, parse_nodes, parse_triple};
-use triquint_cli_common::{CliError, CliResult, main_exit, write_atomic};
+use triquint_cli_common::{CliError, CliResult, main_exit};
 use triquint_shared::kinematics::Pose;
 use triquint_sim::plant_model::PlantKind;
 use triquint_sim::realtime::{self, RealtimeConfig, RealtimeError, RealtimeReport};
@@ -84,7 +84,7 @@ struct Args {
     /// current-loop lag, an accelerometer on the platform; `docs/vibration.md`).
     #[arg(long, value_enum, default_value_t = PlantKind::Rigid)]
     plant: PlantKind,
-    /// Write the report (JSON) here on exit.
+    /// Write the report (JSON) here on exit; `-` for standard output.
     #[arg(long, value_name = "FILE.json")]
     report: Option<PathBuf>,
     /// Platform position at power-on (mm), default the start of paper Case I.
@@ -201,7 +201,11 @@ fn run(args: &Args) -> CliResult {
         r.frames
     );
     if let Some(path) = &args.report {
-        write_atomic(path, report_json(args, iface, &r).as_bytes())?;
+        cli::write_report(
+            path,
+            &report_json(args, iface, &r),
+            &mut std::io::stdout().lock(),
+        )?;
     }
     match failure {
         Some(f) => Err(f),

@@ -10,7 +10,7 @@ use clap::{Args, ValueEnum};
 use triquint_sim::faults::{Fault, FaultWindow};
 use triquint_sim::proxy::{self, A, B, Bridge};
 
-use triquint_cli_common::{CliError, CliResult, write_atomic};
+use triquint_cli_common::{CliError, CliResult};
 
 use crate::stop_on_signals;
 
@@ -187,7 +187,7 @@ pub fn run(args: &ProxyArgs) -> CliResult {
     );
     if let Some(path) = &args.report {
         let text = serde_json::to_string_pretty(r).unwrap_or_default();
-        write_atomic(path, text.as_bytes())?;
+        super::write_report(path, &text, &mut std::io::stdout().lock())?;
     }
     result.map_err(CliError::device)
 }
