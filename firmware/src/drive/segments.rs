@@ -56,6 +56,9 @@ impl<const Q: usize> Drive<Q> {
     /// Files a checked segment: the cheap, state-dependent checks (state,
     /// sequence, queue room, C3 continuity with the previous segment) and
     /// its place in plan time. The receive side did the expensive ones.
+    // Out of line: once a segment, and the tick's own code must fit the
+    // ESC1's CCM SRAM.
+    #[inline(never)]
     pub(super) fn accept(&mut self, c: &CheckedSegment) -> Result<(), Reject> {
         if !self.homed {
             return Err(Reject::NotHomed);
