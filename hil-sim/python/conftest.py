@@ -5,6 +5,7 @@ Paths come from the environment set by scripts/hil.sh (the VM sees the host's
 file system read-only; only HIL_OUT is written back)."""
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -25,6 +26,9 @@ TRIQUINT_SIM = os.environ.get("TRIQUINT_SIM", os.path.join(ROOT, "target", "rele
 # The emulated guest computes much slower than the host: 1 kHz control
 # fits it (docs/measured-margins.md).
 RATE = os.environ.get("HIL_RATE", "1000")
+# The protocol version the drives report, read from its one declaration.
+with open(os.path.join(ROOT, "shared", "src", "protocol", "messages.rs")) as _f:
+    PROTOCOL_VERSION = int(re.search(r"pub const PROTOCOL_VERSION: u8 = (\d+);", _f.read()).group(1))
 
 
 @pytest.fixture(scope="session")

@@ -4,7 +4,7 @@ stuck and dead switches, drives on node ids 4, 5, 6."""
 import json
 import re
 
-from conftest import IFACE, TRIQUINT, plan_path, plan_start_mm, run
+from conftest import IFACE, PROTOCOL_VERSION, TRIQUINT, plan_path, plan_start_mm, run
 
 REFUSED = 8
 
@@ -23,7 +23,7 @@ def test_unhomed_machine_refuses_then_homes_and_runs(make_sim, bus):
     assert all(n["homed"] is False and n["homing"] == "not homed" for n in s["nodes"])
     assert all(n["joint_position_mm"] is None for n in s["nodes"])
     assert s["platform_mm"] is None
-    assert all(n["protocol_version"] == 3 for n in s["nodes"])
+    assert all(n["protocol_version"] == PROTOCOL_VERSION for n in s["nodes"])
     # Upload refused before anything moves; the nodes stay Idle, no fault.
     code, out, err = run([TRIQUINT, "upload", plan_path(1), "--iface", IFACE])
     assert code == REFUSED, err

@@ -5,6 +5,8 @@ import time
 
 import can
 
+from conftest import PROTOCOL_VERSION
+
 STATES = {0: "Idle", 1: "Loaded", 2: "Armed", 3: "Running", 4: "Stopping", 5: "Fault", 6: "Homing"}
 # HeartbeatExt flags bits (protocol v2).
 SYNCED, HOMED, CONFIGURED = 1, 2, 32
@@ -62,7 +64,7 @@ def test_heartbeat_rate_and_contents(make_sim, bus, db):
         for m in hb:
             d = decode(db, m)
             assert m.dlc == 8
-            assert d["protocol_version"] == 3
+            assert d["protocol_version"] == PROTOCOL_VERSION
             assert STATES[d["state"]] == "Idle" and d["fault"] == 0
             assert d["config_crc"] == 0, "unconfigured at power-on"
             assert d["queue_depth"] == 0
