@@ -150,6 +150,23 @@ pub enum PlanError {
         joint_m: f64,
         limit_m: f64,
     },
+    /// The torque limit is below the torque that holds the platform still
+    /// at via-point `index` (0-based; the first or the last, where every
+    /// plan is at rest): motor `axis` (0-based) needs `holding_nm` there
+    /// against gravity alone, whatever the timing.
+    #[error(
+        "infeasible: the torque limit {} N·m is below the {} N·m that motor {} needs to hold the platform still at point {}; limits.torque must be at least that",
+        readable(*limit_nm),
+        readable(*holding_nm),
+        axis + 1,
+        index + 1
+    )]
+    BelowHoldingTorque {
+        index: usize,
+        axis: usize,
+        holding_nm: f64,
+        limit_nm: f64,
+    },
     /// A valid job that no plan satisfies: `limit` binds. `reached` is the
     /// binding quantity's value (above `limit_value`) in the planner's
     /// closest plan: when the total time is shorter than

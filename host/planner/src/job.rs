@@ -19,6 +19,7 @@ use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::{Limits, Model, Robot, Travel};
 
 use crate::error::{PlanError, PointKind};
+use crate::holding::check_holding;
 use triquint_shared::readable::readable;
 
 /// Most via-points a job may have: the search's time grows about linearly
@@ -212,6 +213,7 @@ impl JobBuilder {
                 ));
             }
         }
+        check_holding(&model, pts, l.torque)?;
         if self.knots == KnotPlacement::Free
             && (self.objective != Objective::MinTime || pts.len() != 2)
         {

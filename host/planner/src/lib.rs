@@ -54,6 +54,7 @@ mod error;
 pub mod evolution;
 mod extrema;
 mod free_knots;
+mod holding;
 mod inner;
 mod jerk_only;
 mod job;

@@ -22,6 +22,7 @@ const LAYERS: &[&str] = &[
     "banded",       // banded least-change projection
     "spline",       // the quintic spline as affine forms of the knot derivatives
     "lp",           // the conic program and its solver
+    "holding",      // the torque that holds the platform still
     "job",          // the job model
     "bounded_read", // size-limited reads of input files
     "points_file",  // points files

@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 use triquint_planner::files::LoadError;
-use triquint_planner::{CancelReason, PlanError, PointKind};
+use triquint_planner::{CancelReason, Limit, PlanError, PointKind};
 
 use crate::units::Units;
 
@@ -205,6 +205,20 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             inst.setattr("limit_value", *limit_value)?;
             inst.setattr("reached", *reached)?;
             inst.setattr("shortest_total_time", *shortest_total_time)?;
+            inst
+        }
+        PlanError::BelowHoldingTorque {
+            holding_nm,
+            limit_nm,
+            ..
+        } => {
+            // Infeasible at any total time: the torque limit binds at rest.
+            let inst = new_error(py, &errs.infeasible, &msg)?;
+            inst.setattr("limit", Limit::Torque.name())?;
+            inst.setattr("unit", Limit::Torque.unit())?;
+            inst.setattr("limit_value", *limit_nm)?;
+            inst.setattr("reached", *holding_nm)?;
+            inst.setattr("shortest_total_time", None::<f64>)?;
             inst
         }
         PlanError::Cancelled { reason } => {

@@ -80,6 +80,20 @@ def test_infeasible_has_limit_reached_and_shortest_time():
         triquint.plan(pts, total_time=err.shortest_total_time * 0.99)
 
 
+def test_a_torque_limit_below_the_holding_torque_names_it():
+    with pytest.raises(triquint.InfeasibleError) as e:
+        triquint.plan([[-90, 90, 680], [60, -40, 560]], torque=0.01)
+    err = e.value
+    assert err.limit == "torque" and err.limit_value == 0.01
+    assert err.reached > 0.01 and err.shortest_total_time is None
+    assert "hold the platform still at point 1" in str(err)
+    # Just above the holding torque it names, the job is not refused for it.
+    try:
+        triquint.plan([[-90, 90, 680], [60, -40, 560]], torque=err.reached * 1.01)
+    except triquint.InfeasibleError as other:
+        assert "hold the platform still at point 1" not in str(other)
+
+
 def test_job_file_errors(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [10, 0, 600]]\nspeed = 3\n")
