@@ -14,9 +14,7 @@ use crate::error::PlanError;
 /// `p` (m), and that torque (N·m, magnitude). `None` where `p` has no
 /// pose (refused elsewhere, with the reason).
 pub(crate) fn holding_torque(model: &Model<f64>, p: [f64; 3]) -> Option<(usize, f64)> {
-    let q = Pose::from_cartesian(model, Vector3::from(p))
-        .ok()?
-        .q;
+    let q = Pose::from_cartesian(model, Vector3::from(p)).ok()?.q;
     let tau = torque(model, &q, &Vector3::zeros(), &Vector3::zeros()).ok()?;
     (0..3)
         .map(|i| (i, tau[i].abs()))

@@ -5,8 +5,10 @@ use triquint_planner::{Job, Objective, Options, PlanError, plan};
 use triquint_shared::dynamics::state_torque;
 
 fn job(torque: f64) -> Result<Job, PlanError> {
-    let mut limits = triquint_planner::Limits::default();
-    limits.torque = torque;
+    let limits = triquint_planner::Limits {
+        torque,
+        ..Default::default()
+    };
     Job::builder()
         .objective(Objective::MinTime)
         .limits(limits)
@@ -49,7 +51,10 @@ fn a_limit_below_the_holding_torque_names_it() {
             };
             assert_eq!(index, end, "the first end that needs more");
             assert_eq!(a, axis);
-            assert!((holding_nm - holding).abs() <= 1e-9 * holding, "{holding_nm} vs {holding}");
+            assert!(
+                (holding_nm - holding).abs() <= 1e-9 * holding,
+                "{holding_nm} vs {holding}"
+            );
             assert_eq!(limit_nm, limit);
             let msg = e.to_string();
             assert!(msg.contains("hold the platform still"), "{msg}");

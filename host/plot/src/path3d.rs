@@ -111,26 +111,26 @@ impl Path3d {
         chart
     }
 
-    /// The 3-D view stays at whole pixels (plotters projects it); the two
-    /// views are charts, drawn exactly.
+    /// Every view's lines at exact (sub-pixel) positions: the 3-D view's
+    /// projection is affine, so its exact points follow from plotters'
+    /// matrix; the two views are charts.
     pub(crate) fn draw(&self, area: &Area) -> Result<Vec<ExactLine>, PlotError> {
         if !self.projections {
-            self.draw_iso(area)?;
-            return Ok(Vec::new());
+            return self.draw_iso(area);
         }
         let (w, _) = area.dim_in_pixel();
         let (left, right) = area.split_horizontally((w as f64 * 0.56) as u32);
-        self.draw_iso(&left)?;
+        let mut exact = self.draw_iso(&left)?;
         let (top, front) = {
             let (_, h) = right.dim_in_pixel();
             right.split_vertically(h / 2)
         };
-        let mut exact = self.projection("Top view (x–y)", 0, 1).draw(&top)?;
+        exact.extend(self.projection("Top view (x–y)", 0, 1).draw(&top)?);
         exact.extend(self.projection("Front view (x–z)", 0, 2).draw(&front)?);
         Ok(exact)
     }
 
-    fn draw_iso(&self, area: &Area) -> Result<(), PlotError> {
+    fn draw_iso(&self, area: &Area) -> Result<Vec<ExactLine>, PlotError> {
         let mut legend: Vec<LegendEntry> = self
             .paths
             .iter()
@@ -246,12 +246,49 @@ impl Path3d {
                 )))
                 .map_err(err)?;
         }
+        // plotters rounds each axis to a whole pixel and then projects
+        // (an affine map, `translate`), truncating: the same map unrounded.
+        let (size, m) = {
+            let spec = chart.as_coord_spec();
+            (
+                spec.map_3d(&ax.hi, &az.hi, &ay.hi),
+                *spec.projection().as_ref(),
+            )
+        };
+        let exact_px = |(x, z, y): (f64, f64, f64)| {
+            let v = [
+                (x - ax.lo) / (ax.hi - ax.lo) * f64::from(size.0),
+                (z - az.lo) / (az.hi - az.lo) * f64::from(size.1),
+                (y - ay.lo) / (ay.hi - ay.lo) * f64::from(size.2),
+            ];
+            let row = |r: &[f64; 4]| r[0] * v[0] + r[1] * v[1] + r[2] * v[2] + r[3];
+            (row(&m[0]), row(&m[1]))
+        };
+        let mut exact = Vec::new();
+        let mut exact_line = |pts: Vec<(f64, f64, f64)>, colour: RGBColor| {
+            // A mark just under the real opacity finds the polyline again.
+            let mark = 1.0 - 1e-9;
+            exact.push(ExactLine {
+                mark: format!("{mark}"),
+                opacity: "1".into(),
+                points: pts
+                    .iter()
+                    .map(|p| {
+                        let q = exact_px(*p);
+                        format!("{:.2},{:.2}", q.0, q.1)
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            });
+            (pts, colour.mix(mark).stroke_width(2))
+        };
         for (_, pts) in &self.paths {
+            let (pts, style) = exact_line(
+                Self::finite(pts).map(|p| (p[0], az.lo, p[1])).collect(),
+                SHADOW,
+            );
             chart
-                .draw_series(LineSeries::new(
-                    Self::finite(pts).map(|p| (p[0], az.lo, p[1])),
-                    SHADOW.stroke_width(2),
-                ))
+                .draw_series(LineSeries::new(pts, style))
                 .map_err(err)?;
         }
         for (_, pts, _) in &self.markers {
@@ -267,11 +304,12 @@ impl Path3d {
             }
         }
         for (_, pts) in &self.paths {
+            let (pts, style) = exact_line(
+                Self::finite(pts).map(|p| (p[0], p[2], p[1])).collect(),
+                PATH_COLOUR,
+            );
             chart
-                .draw_series(LineSeries::new(
-                    Self::finite(pts).map(|p| (p[0], p[2], p[1])),
-                    PATH_COLOUR.stroke_width(2),
-                ))
+                .draw_series(LineSeries::new(pts, style))
                 .map_err(err)?;
         }
         for (_, pts, labels) in &self.markers {
@@ -289,7 +327,7 @@ impl Path3d {
                     .map_err(err)?;
             }
         }
-        Ok(())
+        Ok(exact)
     }
 }
 
@@ -328,6 +366,80 @@ mod tests {
         // Top view: P1 and P3 are one point.
         assert_eq!(merge_labels(&pts, &labels, 0, 1), ["P1, P3", "P2", ""]);
         assert_eq!(merge_labels(&pts, &labels, 0, 2), ["P1", "P2", "P3"]);
+    }
+
+    #[test]
+    fn the_3d_path_is_drawn_at_exact_pixels_where_plotters_puts_it() {
+        let pts: Vec<[f64; 3]> = (0..=300)
+            .map(|k| {
+                let a = k as f64 * 0.05;
+                [80.0 * a.cos(), 80.0 * a.sin(), 560.0 + 8.0 * a]
+            })
+            .collect();
+        let ends = [pts[0], pts[300]];
+        let svg = Path3d::new("helix")
+            .path("platform path", &pts)
+            .markers("via points", &ends, &["P1".into(), "P2".into()])
+            .to_svg()
+            .unwrap();
+        // The data lines, not the legend's samples: the shadow, then the path.
+        let lines: Vec<Vec<(f64, f64)>> = svg
+            .split("<polyline")
+            .skip(1)
+            .filter(|p| p.contains("stroke=\"#6A3D9A\"") || p.contains("stroke=\"#BBBBBB\""))
+            .map(|p| -> Vec<(f64, f64)> {
+                let pts = p
+                    .split("points=\"")
+                    .nth(1)
+                    .unwrap()
+                    .split('"')
+                    .next()
+                    .unwrap();
+                pts.split_whitespace()
+                    .map(|xy| {
+                        let (x, y) = xy.split_once(',').unwrap();
+                        (x.parse().unwrap(), y.parse().unwrap())
+                    })
+                    .collect()
+            })
+            .filter(|l| l.len() > 200)
+            .collect();
+        assert_eq!(lines.len(), 2, "the path and its shadow");
+        for l in &lines {
+            let fractional = l
+                .iter()
+                .filter(|(x, y)| x.fract() != 0.0 || y.fract() != 0.0);
+            assert!(fractional.count() > 200, "{l:?}");
+        }
+        assert!(!svg.contains("0.999999999"), "a mark was left");
+        // The path starts and ends at the markers plotters placed (whole
+        // pixels, truncated): within a pixel of them.
+        let circles: Vec<(f64, f64)> = svg
+            .split("<circle")
+            .skip(1)
+            .map(|c| {
+                let attr = |n: &str| -> f64 {
+                    c.split(&format!("{n}=\""))
+                        .nth(1)
+                        .unwrap()
+                        .split('"')
+                        .next()
+                        .unwrap()
+                        .parse()
+                        .unwrap()
+                };
+                (attr("cx"), attr("cy"))
+            })
+            .collect();
+        let path = &lines[1];
+        // The markers are drawn last (after the legend's dot).
+        let markers = &circles[circles.len() - 2..];
+        for (end, c) in [path[0], *path.last().unwrap()].iter().zip(markers) {
+            assert!(
+                (end.0 - c.0).abs() <= 1.0 && (end.1 - c.1).abs() <= 1.0,
+                "{end:?} vs marker {c:?}"
+            );
+        }
     }
 
     #[test]
