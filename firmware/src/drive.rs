@@ -43,7 +43,7 @@ const FF_LOOKAHEAD_NS_PER_S: f32 = FF_LOOKAHEAD_TICKS * 1e9;
 pub const UNCONFIGURED_M_PER_COUNT: f32 = 1e-9;
 
 /// Segment queue capacity of a node (segments).
-pub const QUEUE_CAPACITY: usize = 8;
+pub const QUEUE_CAPACITY: usize = 16;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 64;
 

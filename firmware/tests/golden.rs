@@ -335,7 +335,7 @@ impl Recorder {
         });
         let room = self.node.queue_depth() < QUEUE_CAPACITY;
         if (self.node.queue_depth() < 3 || switch && room) && *next < segs.len() {
-            let out = self.chain.next(&segs[*next]);
+            let out = self.chain.next(&segs[*next], segs.get(*next + 1));
             self.compact += out.is_compact() as usize;
             for f in out.frames(true) {
                 self.rx(f);
@@ -393,8 +393,8 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     assert_eq!(r.node.config_crc(), cfg.crc(), "configuration committed");
     r.run_us(20_000);
     let mut next = 0;
-    for w in segs.iter().take(3) {
-        let out = r.chain.next(w);
+    for (i, w) in segs.iter().enumerate().take(3) {
+        let out = r.chain.next(w, segs.get(i + 1));
         r.compact += out.is_compact() as usize;
         for f in out.frames(false) {
             r.rx(f);

@@ -5,7 +5,7 @@ import time
 
 import can
 
-from conftest import PROTOCOL_VERSION
+from conftest import PROTOCOL_VERSION, QUEUE_CAPACITY
 
 STATES = {0: "Idle", 1: "Loaded", 2: "Armed", 3: "Running", 4: "Stopping", 5: "Fault", 6: "Homing"}
 # HeartbeatExt flags bits (protocol v2).
@@ -122,7 +122,7 @@ def test_each_message_is_answered(make_sim, bus, db):
         bus.send(can.Message(arbitration_id=0x100, data=data, is_extended_id=False))
     for n in (1, 2, 3):
         d = wait_for(bus, db, f"SegmentAck_{n}")
-        assert d["result"] == 6 and d["capacity"] == 8
+        assert d["result"] == 6 and d["capacity"] == QUEUE_CAPACITY
     # Emergency from the host: every node faults (HostEmergency, 5) and says so.
     send(bus, db, "Emergency_Host", code=5, state=0, segment=0, plan_time_us=0)
     for n in (1, 2, 3):

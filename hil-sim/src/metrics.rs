@@ -4,7 +4,6 @@
 use triquint_firmware::segment::Seg;
 use triquint_shared::plan::{Plan, Segment, eval};
 use triquint_shared::protocol::WireSegment;
-use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
 
 use crate::sim::Sample;
 
@@ -95,22 +94,14 @@ pub fn segment_from_wire(w: &WireSegment, t0_s: f64) -> Segment {
 /// `per_segment` times, against the plan's f64 coefficients.
 pub fn f32_eval_error(plan: &Plan, per_segment: usize) -> f64 {
     let mut worst: f64 = 0.0;
-    let n = plan.segments.len();
     let mut start_ns = 0i64;
     let mut chain = triquint_shared::protocol::compact::Chain::default();
-    for (i, s) in plan.segments.iter().enumerate() {
-        let mut flags = 0;
-        if i == 0 {
-            flags |= FLAG_FIRST;
-        }
-        if i + 1 == n {
-            flags |= FLAG_LAST;
-        }
-        let Ok(w) = WireSegment::from_quintic(i as u16, &s.quintic(), flags) else {
-            return f64::INFINITY;
-        };
+    let Ok(wire) = plan.wire_segments() else {
+        return f64::INFINITY;
+    };
+    for (i, (w, s)) in wire.iter().zip(&plan.segments).enumerate() {
         // As the drive holds it: compact segments rebuilt from the one before.
-        let seg = Seg::from_wire(chain.next(&w).held(), start_ns);
+        let seg = Seg::from_wire(chain.next(w, wire.get(i + 1)).held(), start_ns);
         let q = s.quintic();
         for k in 0..=per_segment {
             let d_ns = seg.duration_ns() * k as i64 / per_segment as i64;

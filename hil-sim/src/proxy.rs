@@ -370,7 +370,7 @@ mod tests {
         let mut want: Vec<(u16, u32)> = Vec::new();
         // Every segment twice (a retransmission): each version listed once.
         for s in wire.iter().chain(&wire[1..]) {
-            let sent = chain.next(s);
+            let sent = chain.next(s, wire.get(s.seq as usize + 1));
             let v = (s.seq, sent.held().body_crc());
             if !want.contains(&v) {
                 want.push(v);
@@ -393,6 +393,10 @@ mod tests {
         assert!(want.len() > n, "{} versions of {n} segments", want.len());
         assert_eq!(br.report.segments_from_a, want);
         // What crossed the faulty wire did get corrupted.
-        assert!(br.report.faults.corrupted > 20 && through < 2 * n - 1);
+        let corrupted = br.report.faults.corrupted;
+        assert!(
+            corrupted > 10 && through < 2 * n - 1,
+            "{corrupted} corrupted, {through} through"
+        );
     }
 }

@@ -522,11 +522,18 @@ mod tests {
                 // The second round repeats every segment (retransmissions).
                 let _ = round;
                 let mut chain = triquint_shared::protocol::compact::Chain::default();
-                for (i, s) in plan.segments.iter().enumerate() {
-                    let flags = if i == 0 { FLAG_FIRST } else { 0 }
-                        | if i + 1 == n { FLAG_LAST } else { 0 };
-                    let ws = WireSegment::from_quintic(i as u16, &s.quintic(), flags).unwrap();
-                    for f in chain.next(&ws).frames(fd) {
+                let wire: Vec<WireSegment> = plan
+                    .segments
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let flags = if i == 0 { FLAG_FIRST } else { 0 }
+                            | if i + 1 == n { FLAG_LAST } else { 0 };
+                        WireSegment::from_quintic(i as u16, &s.quintic(), flags).unwrap()
+                    })
+                    .collect();
+                for (i, ws) in wire.iter().enumerate() {
+                    for f in chain.next(ws, wire.get(i + 1)).frames(fd) {
                         w.on_frame(&f, 1000, &cfg);
                         frames += 1;
                     }

@@ -33,7 +33,7 @@ const KINDS: [(&str, &str); 20] = [
     ("burst", "12 segments, 0.3-4 s"),
     ("host killed", "at 0.1-4.5 s"),
     ("node reset", "at 0.5-4.5 s"),
-    ("bad limits", "segment 1-8 ×10 jerk"),
+    ("bad limits", "segment 1-8, jerk 2× the limit"),
     ("not C3", "segment 1-8 velocity step"),
     ("brakes, host killed", "at 0.1-4.5 s; torque off at rest"),
     ("push", "±3-8 N·m, 20-200 ms, 0.5-4.5 s"),

@@ -2,7 +2,8 @@
 //! the expected outcome and checking it. These are the evidence for the
 //! "Guarantees" section of docs/protocol.md. Seeded: every run is reproducible.
 
-use triquint_host::inprocess::fault_run::{self, BadSegment, Scenario};
+use triquint_firmware::QUEUE_CAPACITY;
+use triquint_host::inprocess::fault_run::{self, BURST_SEGMENTS, BadSegment, Scenario};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::{FaultCode, Reject};
 use triquint_sim::report::{Ending, FaultRunFigures, RunReport};
@@ -29,6 +30,20 @@ fn spiral() -> Plan {
         testplan::SPIRAL_TIME,
     )
     .unwrap()
+}
+
+/// A plan that streams: three queues' worth of segments shaped as the
+/// spiral's (the spiral itself when the queue holds 32), so a fault placed
+/// after the first queue-full happens while the drives run and the host
+/// streams.
+fn beyond_the_queue() -> Plan {
+    let n = 3 * QUEUE_CAPACITY;
+    let per = |k: usize| k as f64 / (testplan::SPIRAL_POINTS - 1) as f64;
+    // The spiral's intervals are 1, with 3 at each end (`testplan::spiral`).
+    let time = testplan::SPIRAL_TIME * (n + 4) as f64 / (testplan::SPIRAL_POINTS + 3) as f64;
+    let plan = testplan::spiral(n + 1, testplan::SPIRAL_TURNS * per(n), time).unwrap();
+    assert_eq!(plan.segments.len(), n);
+    plan
 }
 
 /// A fault run: its report, and the fault run's own figures in it.
@@ -247,12 +262,14 @@ fn delay_and_jitter_change_nothing() {
 
 #[test]
 fn a_burst_beyond_the_queue_is_refused_and_nothing_runs_twice() {
+    // While the spiral streams, more segments at once than a queue holds.
+    let plan = beyond_the_queue();
     let sc = Scenario {
         burst_ns: Some(1500 * MS),
         ..Scenario::default()
     };
-    let r = run(&case2(), &sc);
-    assert_recovered("burst of 12 segments", &r);
+    let r = run(&plan, &sc);
+    assert_recovered(&format!("burst of {BURST_SEGMENTS} segments"), &r);
     let refused = r.rejects[Reject::QueueFull as usize] + r.rejects[Reject::Duplicate as usize];
     assert!(refused > 0, "{r:?}");
 }
@@ -410,13 +427,16 @@ fn a_late_time_sync_is_discarded() {
 /// underrun, whichever comes first) and the bad segment never runs.
 #[test]
 fn a_segment_beyond_the_limits_is_never_executed() {
+    // After the first queue-full: the drives run when it arrives.
+    let k = QUEUE_CAPACITY + 2;
     let sc = Scenario {
-        bad_segment: Some(BadSegment::Limits(8)),
+        bad_segment: Some(BadSegment::Limits(k)),
         ..Scenario::default()
     };
-    let r = run(&case1(), &sc);
+    let r = run(&beyond_the_queue(), &sc);
+    assert!(r.start_ns.is_some(), "{r:?}");
     assert_stopped(
-        "segment 8 beyond the jerk limit",
+        &format!("segment {k} beyond the jerk limit"),
         &r,
         &[FaultCode::LostSync, FaultCode::Underrun],
         &[
@@ -431,13 +451,16 @@ fn a_segment_beyond_the_limits_is_never_executed() {
 
 #[test]
 fn a_segment_not_c3_continuous_is_never_executed() {
+    // After the first queue-full: the drives run when it arrives.
+    let k = QUEUE_CAPACITY + 2;
     let sc = Scenario {
-        bad_segment: Some(BadSegment::Kink(8)),
+        bad_segment: Some(BadSegment::Kink(k)),
         ..Scenario::default()
     };
-    let r = run(&case1(), &sc);
+    let r = run(&beyond_the_queue(), &sc);
+    assert!(r.start_ns.is_some(), "{r:?}");
     assert_stopped(
-        "segment 8 with a velocity step",
+        &format!("segment {k} with a velocity step"),
         &r,
         &[FaultCode::LostSync, FaultCode::Underrun],
         &[

@@ -6,6 +6,7 @@
 //! as every simulated run is, a [`RunReport`], with the fault run's own
 //! figures in its `fault_run`.
 
+use triquint_firmware::QUEUE_CAPACITY;
 use triquint_link::{DriveConfigs, Session, SessionOptions};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
@@ -20,7 +21,8 @@ use super::measure::run_report;
 /// A segment made bad on purpose before the upload.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BadSegment {
-    /// Segment k's jerk-carrying coefficients ×10: beyond the limits.
+    /// Segment k with a t⁵ term of twice the plan's jerk limit at its end:
+    /// beyond the limits, still C3.
     Limits(usize),
     /// Segment k starts with a velocity 0.02 m/s off its predecessor's end (not C3).
     Kink(usize),
@@ -47,8 +49,8 @@ pub struct Scenario {
     pub host_killed_ns: Option<u64>,
     /// Node index (0–2) power-cycled at a true time (ns).
     pub node_reset: Option<(usize, u64)>,
-    /// At this time a rogue copy of the host sends the next 12 segments at
-    /// once, ignoring flow control (more than a node's queue holds).
+    /// At this time a rogue copy of the host sends the next
+    /// [`BURST_SEGMENTS`] segments at once, ignoring flow control.
     pub burst_ns: Option<u64>,
     pub bad_segment: Option<BadSegment>,
     /// Every axis has a holding brake (configuration `brake`; the virtual
@@ -65,11 +67,14 @@ fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
     let mut p = plan.clone();
     match bad {
         BadSegment::Limits(k) => {
+            let jerk = plan.limits.jerk;
             if let Some(s) = p.segments.get_mut(k) {
+                // A t⁵ term: jerk 60 c t², twice the limit at the end; it
+                // still starts where its predecessor ends (C3), so the
+                // drives refuse it for its limits.
+                let h = s.duration_s;
                 for row in s.coeffs.iter_mut() {
-                    for c in &mut row[3..] {
-                        *c *= 10.0;
-                    }
+                    row[5] += 2.0 * jerk / (60.0 * h * h);
                 }
             }
         }
@@ -86,6 +91,9 @@ fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
     }
     p
 }
+
+/// Segments a burst sends at once: more than a node's queue holds.
+pub const BURST_SEGMENTS: usize = QUEUE_CAPACITY + 4;
 
 const EMERGENCY_IDS: core::ops::RangeInclusive<u16> = 0x010..=0x013;
 
@@ -165,7 +173,7 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         {
             burst_done = true;
             let next = sim.nodes[0].node.next_seq() as usize;
-            for s in wire.iter().skip(next).take(12) {
+            for s in wire.iter().skip(next).take(BURST_SEGMENTS) {
                 for f in s.frames(sc.fd) {
                     sim.host_send(f);
                 }

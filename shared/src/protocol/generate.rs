@@ -596,7 +596,7 @@ pub fn golden_continuation() -> (Compact, WireSegment) {
         duration: 0.2,
     };
     let next = WireSegment::from_quintic(seg.seq.wrapping_add(1), &q, FLAG_LAST).unwrap_or(seg);
-    Compact::continuing(&seg, &next, &DeviationBound::DEFAULT).unwrap_or((
+    Compact::continuing(&seg, &next, None, &DeviationBound::DEFAULT).unwrap_or((
         Compact {
             seq: 0,
             duration_us: 0,

@@ -145,8 +145,8 @@ mod tests {
     fn continuations_need_the_predecessor_they_were_built_on() {
         let [a, b, c] = segs();
         let bound = DeviationBound::DEFAULT;
-        let (cb, rb) = Compact::continuing(&a, &b, &bound).unwrap();
-        let (cc, _) = Compact::continuing(&rb, &c, &bound).unwrap();
+        let (cb, rb) = Compact::continuing(&a, &b, Some(&c), &bound).unwrap();
+        let (cc, _) = Compact::continuing(&rb, &c, None, &bound).unwrap();
         let mut rx = SegmentRx::default();
         // Without a predecessor.
         assert_eq!(

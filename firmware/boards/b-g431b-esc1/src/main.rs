@@ -160,7 +160,9 @@ async fn main(spawner: Spawner) {
     let (inbox_prod, inbox_cons) = INBOX.init(Queue::new()).split();
     let (tx_prod, tx_cons) = TX_QUEUE.init(Queue::new()).split();
 
-    let tick = control::Tick {
+    // Built in place: the state (its segment queue and outbox) is larger
+    // than the stack.
+    let tick = TICK_STATE.init_with(|| control::Tick {
         // Position unknown at power-on: the host homes it (Home command).
         drive: Drive::new_unhomed(node_id),
         encoder,
@@ -172,8 +174,7 @@ async fn main(spawner: Spawner) {
         inbox: inbox_cons,
         tx: tx_prod,
         can: can_props,
-    };
-    let tick = TICK_STATE.init(tick);
+    });
     control::TICK.store(tick, core::sync::atomic::Ordering::Release);
 
     // Control tick: TIM6 at 10 kHz, below the current loop, above everything else.

@@ -140,7 +140,7 @@ impl Stream {
     fn queue(&mut self, seq: usize, resend: bool, out: &mut Outbox) {
         if let Some(s) = self.segments.get(seq) {
             let sent = if self.compact && !resend {
-                self.chain.next(s)
+                self.chain.next(s, self.segments.get(seq + 1))
             } else {
                 self.chain.full(s)
             };
