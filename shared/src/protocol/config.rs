@@ -5,7 +5,7 @@
 //! CRC-32 of the whole set, which every heartbeat then reports.
 
 use super::crc::Crc32;
-use super::wire::{Addr, FieldDef, MessageDef, WireType};
+use super::wire::{Addr, FieldDef, MessageDef, WireType, spec_text};
 use crate::params::RobotParams;
 use crate::{Limits, Robot};
 
@@ -26,7 +26,7 @@ macro_rules! config_params {
 
         /// Every parameter, in index order.
         pub const PARAMS: &[ParamDef] = &[ $( ParamDef {
-            index: $idx, name: stringify!($name), unit: $unit, doc: concat!($($doc),*)
+            index: $idx, name: stringify!($name), unit: $unit, doc: spec_text!($($doc),*)
         } ),* ];
 
         impl DriveConfig {
@@ -167,7 +167,7 @@ pub const CONFIG_WRITE: MessageDef = MessageDef {
     len: 5,
     sender: "host",
     period: "on upload",
-    doc: " One configuration parameter (byte 0 = index, a multiplexor).",
+    doc: spec_text!(" One configuration parameter (byte 0 = index, a multiplexor)."),
     mux: Some("index"),
     fd: false,
     fields: &CONFIG_FIELDS,
@@ -180,7 +180,7 @@ pub const CONFIG_VALUE: MessageDef = MessageDef {
     len: 5,
     sender: "node",
     period: "on ReadConfig",
-    doc: " One parameter of the written configuration (byte 0 = index, a multiplexor).",
+    doc: spec_text!(" One parameter of the written configuration (byte 0 = index, a multiplexor)."),
     mux: Some("index"),
     fd: false,
     fields: &CONFIG_FIELDS,
@@ -193,7 +193,7 @@ const CONFIG_FIELDS: [FieldDef; 2] = [
         ty: WireType::U8,
         scale: 1.0,
         unit: "",
-        doc: " Parameter index (multiplexor).",
+        doc: spec_text!(" Parameter index (multiplexor)."),
         values: None,
     },
     FieldDef {
@@ -202,7 +202,7 @@ const CONFIG_FIELDS: [FieldDef; 2] = [
         ty: WireType::F32,
         scale: 1.0,
         unit: "",
-        doc: " Value in the parameter's unit.",
+        doc: spec_text!(" Value in the parameter's unit."),
         values: None,
     },
 ];
