@@ -66,7 +66,7 @@ pub const BOUNDS: &[Bound] = &[
         value: RELATIVE_LIMIT_MARGIN as f64 * 100.0,
         unit: "%",
         doc: spec_text!(
-            "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond)."
+            "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond), and their exact maxima the ceilings (`Above…Ceiling`, `OverrideAboveCeiling`, `StopAboveCeiling` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond)."
         ),
     },
     Bound {
