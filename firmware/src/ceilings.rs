@@ -27,32 +27,44 @@ fn poly(c: &[f32], u: f32) -> f32 {
     c.iter().rev().fold(0.0, |acc, x| acc * u + x)
 }
 
-/// Roots in (0, 1) of `c`, given the points (sorted, 0 and 1 included)
-/// between which it is monotone: at most one in each piece, found by
-/// bisection. Returns them sorted, with 0 and 1, as the pieces of the
-/// next lower derivative's antiderivative.
-fn roots(c: &[f32], pieces: &[f32], out: &mut [f32; 6]) -> usize {
-    out[0] = 0.0;
-    let mut n = 1;
-    for w in pieces.windows(2) {
-        let (mut lo, mut hi) = (w[0], w[1]);
-        let (flo, fhi) = (poly(c, lo), poly(c, hi));
-        if flo == 0.0 || fhi == 0.0 || (flo < 0.0) == (fhi < 0.0) {
-            continue;
-        }
-        for _ in 0..BISECT_STEPS {
-            let mid = 0.5 * (lo + hi);
-            if (poly(c, mid) < 0.0) == (flo < 0.0) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        out[n] = 0.5 * (lo + hi);
-        n += 1;
+/// The root of `c` in (lo, hi) where it changes sign there (monotone on
+/// it: at most one), by bisection.
+fn root_in(c: &[f32], lo: f32, hi: f32) -> Option<f32> {
+    let (mut lo, mut hi) = (lo, hi);
+    let (flo, fhi) = (poly(c, lo), poly(c, hi));
+    if flo == 0.0 || fhi == 0.0 || (flo < 0.0) == (fhi < 0.0) {
+        return None;
     }
-    out[n] = 1.0;
-    n + 1
+    for _ in 0..BISECT_STEPS {
+        let mid = 0.5 * (lo + hi);
+        if (poly(c, mid) < 0.0) == (flo < 0.0) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// The roots in (0, 1) of `c`, given the points (sorted, 0 and 1
+/// included) between which it is monotone, sorted and with 0 and 1: the
+/// points between which its antiderivative is monotone. Returns how many.
+fn roots(c: &[f32], pieces: &[f32], out: &mut [f32; 6]) -> usize {
+    let inner = pieces.windows(2).filter_map(|w| match *w {
+        [lo, hi] => root_in(c, lo, hi),
+        _ => None,
+    });
+    let mut n = 0;
+    for x in core::iter::once(0.0)
+        .chain(inner)
+        .chain(core::iter::once(1.0))
+    {
+        if let Some(slot) = out.get_mut(n) {
+            *slot = x;
+            n += 1;
+        }
+    }
+    n
 }
 
 /// Largest |c(u)| over the points.
@@ -73,12 +85,16 @@ impl Maxima {
             let d3 = [6.0 * b[3], 24.0 * b[4], 60.0 * b[5]];
             let d4 = [24.0 * b[4], 120.0 * b[5]];
             let (mut p4, mut p3, mut p2) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+            // `get` rather than slicing: no panic path on the receive side.
             let n4 = roots(&d4, &[0.0, 1.0], &mut p4);
-            let n3 = roots(&d3, &p4[..n4], &mut p3);
-            let n2 = roots(&d2, &p3[..n3], &mut p2);
-            m[0] = m[0].max(largest(&d1, &p2[..n2]));
-            m[1] = m[1].max(largest(&d2, &p3[..n3]));
-            m[2] = m[2].max(largest(&d3, &p4[..n4]));
+            let p4 = p4.get(..n4).unwrap_or(&[]);
+            let n3 = roots(&d3, p4, &mut p3);
+            let p3 = p3.get(..n3).unwrap_or(&[]);
+            let n2 = roots(&d2, p3, &mut p2);
+            let p2 = p2.get(..n2).unwrap_or(&[]);
+            m[0] = m[0].max(largest(&d1, p2));
+            m[1] = m[1].max(largest(&d2, p3));
+            m[2] = m[2].max(largest(&d3, p4));
         }
         Self {
             v: m[0] * ih,
