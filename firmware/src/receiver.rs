@@ -13,6 +13,7 @@ use triquint_shared::protocol::contract::{
     LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, RELATIVE_LIMIT_MARGIN,
 };
 
+use crate::ceilings::Maxima;
 use crate::derived_config::DerivedConfig;
 use crate::hal::RxFrame;
 use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, TickSnapshot};
@@ -216,7 +217,8 @@ impl Receiver {
     }
 
     /// The expensive part of accepting a segment, done here so the tick does
-    /// not: conversion, limit checks at 65 points, start and end motion.
+    /// not: conversion, limit checks at 65 points, the ceilings on its
+    /// exact maxima, start and end motion.
     fn check(&self, w: &WireSegment, pred_crc: Option<u32>, active_crc: u32) -> CheckedSegment {
         let seg = Seg::from_wire(w, 0);
         let cfg = self
@@ -231,7 +233,12 @@ impl Receiver {
             Some(_) if w.duration_us < MIN_DURATION_US || w.duration_us > MAX_DURATION_US => {
                 Err(Reject::Invalid)
             }
-            Some((_, cfg)) => within_limits(&seg, cfg),
+            Some((_, cfg)) => {
+                // The ceilings first: a refusal names which was exceeded.
+                Maxima::of(&seg)
+                    .check(cfg)
+                    .and_then(|()| within_limits(&seg, cfg))
+            }
         };
         CheckedSegment {
             begin: seg.eval(seg.start_ns),

@@ -13,6 +13,7 @@ const LAYERS: &[&str] = &[
     "f32_cast",       // integer ↔ f32 conversions of the tick
     "watchdog",       // when a board feeds its hardware watchdog
     "segment",        // a queued segment and its evaluation
+    "ceilings",       // the machine ceilings a segment is held to
     "scaling",        // the jerk-limited time-scaling of stops and resumes
     "sync",           // host time from TimeSync frames
     "derived_config", // what a configuration derives once

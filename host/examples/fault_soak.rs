@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use triquint_host::inprocess::fault_run::{BadSegment, Miswired, Scenario, run};
+use triquint_host::inprocess::fault_run::{AboveCeiling, BadSegment, Miswired, Scenario, run};
 use triquint_shared::plan::Plan;
 use triquint_sim::report::{Ending, RunReport};
 use triquint_sim::{Fault, FaultWindow, testplan};
@@ -19,7 +19,7 @@ use triquint_sim::{Fault, FaultWindow, testplan};
 const MS: u64 = 1_000_000;
 
 /// The fault kinds of the soak, with the range their parameter is drawn from.
-const KINDS: [(&str, &str); 20] = [
+const KINDS: [(&str, &str); 23] = [
     ("loss", "0.1-3 % of frames"),
     ("corrupt", "0.1-3 % of parts"),
     ("duplicate", "1-20 % of frames"),
@@ -40,6 +40,12 @@ const KINDS: [(&str, &str); 20] = [
     ("push, brakes", "as push; torque off at rest"),
     ("miswired, brakes", "direction flipped or scale ×1/32"),
     ("scale ×32", "file counts ×32: open-loop hold"),
+    ("above a ceiling", "v, a or j ceiling 0.5-0.98 × the plan's"),
+    (
+        "override above ceilings",
+        "ceilings 1.0-1.1 × the plan's maxima",
+    ),
+    ("stop ramp short", "ceilings at the limits, ramps ×0.01-0.3"),
 ];
 
 fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
@@ -152,7 +158,15 @@ fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
             };
             sc.miswired = Some((rng.random_range(0..3), how));
         }
-        _ => sc.miswired = Some((rng.random_range(0..3), Miswired::Scale(32.0))),
+        19 => sc.miswired = Some((rng.random_range(0..3), Miswired::Scale(32.0))),
+        20 => {
+            sc.above_ceiling = Some(AboveCeiling::Segment(
+                rng.random_range(0..3),
+                rng.random_range(0.5..0.98),
+            ))
+        }
+        21 => sc.above_ceiling = Some(AboveCeiling::OverrideCap(rng.random_range(1.0..1.1))),
+        _ => sc.above_ceiling = Some(AboveCeiling::StopRamp(rng.random_range(0.01..0.3))),
     }
     sc
 }

@@ -235,6 +235,7 @@ impl Machine {
             node_ids: self.axes.each_ref().map(|a| a.node_id),
             brake: self.axes.each_ref().map(|a| a.brake),
             homing: self.homing_settings(),
+            ceilings: self.effective_ceilings(),
         }
     }
 

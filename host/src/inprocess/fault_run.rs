@@ -8,6 +8,7 @@
 
 use triquint_firmware::QUEUE_CAPACITY;
 use triquint_link::{DriveConfigs, Session, SessionOptions};
+use triquint_shared::machine::Ceilings;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{FaultCode, Msg, State, WireSegment, decode};
@@ -38,6 +39,21 @@ pub enum Miswired {
     Scale(f64),
 }
 
+/// The drives' ceilings set against the plan (a host that skips its own
+/// check): every case must be refused by the drives, never run whole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AboveCeiling {
+    /// One ceiling (0 velocity, 1 acceleration, 2 jerk) at this fraction
+    /// (< 1) of the plan's own exact maximum.
+    Segment(usize, f64),
+    /// Every ceiling at this factor (≥ 1) of the plan's maxima, below them
+    /// at the override cap the host sized from the plan's limits.
+    OverrideCap(f64),
+    /// Ceilings at the plan's limits, the stop ramps sent this fraction
+    /// of their size.
+    StopRamp(f64),
+}
+
 /// What goes wrong during one run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Scenario {
@@ -61,6 +77,35 @@ pub struct Scenario {
     pub push: Option<(usize, u64, u64, f64)>,
     /// One axis (0–2) described wrongly.
     pub miswired: Option<(usize, Miswired)>,
+    pub above_ceiling: Option<AboveCeiling>,
+}
+
+/// The ceilings and ramp factor of `case` for `plan`.
+fn ceilings_for(plan: &Plan, case: AboveCeiling) -> (Ceilings, f64) {
+    let m = triquint_shared::plan::figures::kinematics(&plan.segments);
+    let top = |x: [f64; 3]| x.into_iter().fold(0.0, f64::max);
+    let peaks = [top(m.velocity), top(m.acceleration), top(m.jerk)];
+    let mut c = Ceilings::default();
+    let set = |c: &mut Ceilings, v: [f64; 3]| {
+        (c.velocity, c.acceleration, c.jerk) = (v[0], v[1], v[2]);
+    };
+    match case {
+        AboveCeiling::Segment(which, f) => {
+            let mut v = [c.velocity, c.acceleration, c.jerk];
+            v[which.min(2)] = f * peaks[which.min(2)];
+            set(&mut c, v);
+            (c, 1.0)
+        }
+        AboveCeiling::OverrideCap(f) => {
+            set(&mut c, peaks.map(|x| f * x));
+            (c, 1.0)
+        }
+        AboveCeiling::StopRamp(f) => {
+            let l = &plan.limits;
+            set(&mut c, [l.velocity, l.acceleration, l.jerk]);
+            (c, f)
+        }
+    }
 }
 
 fn spoil(plan: &Plan, bad: BadSegment) -> Plan {
@@ -115,11 +160,23 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         Some((i, Miswired::Scale(k))) => settings.counts_per_metre[i] *= k,
         None => {}
     }
+    let ramp_factor = match sc.above_ceiling {
+        Some(case) => {
+            let (c, f) = ceilings_for(&plan, case);
+            settings.ceilings = c;
+            f
+        }
+        None => 1.0,
+    };
     let DriveConfigs {
-        nodes: configs,
+        nodes: mut configs,
         stop_time_s: stop_ramp_s,
         ..
     } = DriveConfigs::for_plan(&plan, &settings).expect("plan maxima");
+    for c in &mut configs {
+        c.stop_time *= ramp_factor as f32;
+        c.quick_stop_time *= ramp_factor as f32;
+    }
     let mut cfg = SimConfig {
         fd: sc.fd,
         record_every: 1,
@@ -367,7 +424,10 @@ fn fault_figures(
             FaultCode::WrongDirection | FaultCode::WrongScale | FaultCode::FollowingError
         )
     });
+    // A plan above the drives' ceilings must never run whole.
+    let ceiling_missed = sc.above_ceiling.is_some() && whole;
     let ending = if corrupted > 0
+        || ceiling_missed
         || running_left
         || max_stop_jerk > stop_jerk_bound
         || reaction_wrong

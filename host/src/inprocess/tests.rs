@@ -291,3 +291,134 @@ fn start_skew_is_none_unless_every_drive_started() {
         Some(u64::MAX)
     );
 }
+
+/// Largest |q′|, |q″|, |q‴| of `plan`'s segments over the three joints.
+fn exact_maxima(plan: &Plan) -> [f64; 3] {
+    let m = triquint_shared::plan::figures::kinematics(&plan.segments);
+    let top = |x: [f64; 3]| x.into_iter().fold(0.0, f64::max);
+    [top(m.velocity), top(m.acceleration), top(m.jerk)]
+}
+
+/// A host that skips its own check (`simulate` here does not run `check`):
+/// a plan above the machine's ceilings is refused by the drives, naming
+/// the ceiling, before anything starts.
+#[test]
+fn the_drives_refuse_a_plan_above_their_ceilings_whatever_the_host_sends() {
+    use triquint_shared::machine::Ceilings;
+    use triquint_shared::protocol::Reject;
+    let mut plan = testplan::paper_case1().unwrap();
+    let [v, a, j] = exact_maxima(&plan);
+    // Limits at the plan's own maxima: override cap 1, so the first
+    // segment refused is refused for its own maxima.
+    let tight = plan.clone();
+    plan.limits.velocity = v * 1.001;
+    plan.limits.acceleration = a * 1.001;
+    plan.limits.jerk = j * 1.001;
+    let free = Ceilings::default();
+    let cases = [
+        (
+            Ceilings {
+                velocity: 0.9 * v,
+                ..free.clone()
+            },
+            Reject::AboveVelocityCeiling,
+        ),
+        (
+            Ceilings {
+                acceleration: 0.9 * a,
+                ..free.clone()
+            },
+            Reject::AboveAccelerationCeiling,
+        ),
+        (
+            Ceilings {
+                jerk: 0.9 * j,
+                ..free.clone()
+            },
+            Reject::AboveJerkCeiling,
+        ),
+        // Above the segments' maxima, below them at the cap the host
+        // sized from the plan's own limits.
+        (
+            Ceilings {
+                velocity: 1.05 * v,
+                acceleration: 1.05 * a,
+                jerk: 1.05 * j,
+                ..free.clone()
+            },
+            Reject::OverrideAboveCeiling,
+        ),
+    ];
+    for (ceilings, want) in cases {
+        let plan = if want == Reject::OverrideAboveCeiling {
+            &tight
+        } else {
+            &plan
+        };
+        let r = run(plan, |o| o.settings.ceilings = ceilings.clone());
+        match r {
+            Err(SimulateError::Upload(UploadError::Rejected { reason, .. })) => {
+                assert_eq!(reason, Some(want), "{ceilings:?}")
+            }
+            Err(e) => panic!("{want:?}: {e}"),
+            Ok(r) => panic!("{want:?}: ran, completed {}", r.run.completed),
+        }
+    }
+}
+
+/// The project's own plans pass the drives' ceiling checks on a machine
+/// whose ceilings are the plans' limits (the tightest a planner allows),
+/// and on the B-G431B-ESC1 example's; Case I runs clean on the former.
+#[test]
+fn the_projects_plans_pass_the_ceilings_they_were_made_within() {
+    use triquint_firmware::ceilings::Maxima;
+    use triquint_firmware::segment::Seg;
+    use triquint_shared::machine::Ceilings;
+    let esc1 = Ceilings {
+        velocity: 0.5,
+        acceleration: 2.0,
+        jerk: 10.0,
+        torque: 0.75,
+    };
+    for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+        let text = std::fs::read_to_string(format!(
+            "{}/../testdata/protocol/plans/{name}.json",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .expect("a test plan");
+        let plan: Plan = serde_json::from_str(&text).expect("a plan");
+        let l = &plan.limits;
+        let tight = Ceilings {
+            velocity: l.velocity,
+            acceleration: l.acceleration,
+            jerk: l.jerk,
+            torque: l.torque,
+        };
+        for ceilings in [tight, esc1.clone()] {
+            let settings = DriveSettings {
+                ceilings: ceilings.clone(),
+                ..DriveSettings::default()
+            };
+            let configs = DriveConfigs::for_plan(&plan, &settings).unwrap();
+            for cfg in &configs.nodes {
+                cfg.validate().unwrap();
+                for (k, w) in plan.wire_segments().unwrap().iter().enumerate() {
+                    let got = Maxima::of(&Seg::from_wire(w, 0)).check(cfg);
+                    assert_eq!(got, Ok(()), "{name} segment {k} {ceilings:?}");
+                }
+            }
+        }
+    }
+    let plan = testplan::paper_case1().unwrap();
+    let l = plan.limits.clone();
+    let r = run(&plan, |o| {
+        o.settings.ceilings = Ceilings {
+            velocity: l.velocity,
+            acceleration: l.acceleration,
+            jerk: l.jerk,
+            torque: l.torque,
+        }
+    })
+    .unwrap();
+    assert_clean(&r, "case I within tight ceilings");
+}

@@ -5,7 +5,8 @@
 //! CRC-32 of the whole set, which every heartbeat then reports.
 
 use super::crc::Crc32;
-use super::wire::{Addr, FieldDef, MessageDef, WireType};
+use super::wire::{Addr, FieldDef, MessageDef, WireType, spec_text};
+use crate::machine::Ceilings;
 use crate::params::RobotParams;
 use crate::{Limits, Robot};
 
@@ -26,7 +27,7 @@ macro_rules! config_params {
 
         /// Every parameter, in index order.
         pub const PARAMS: &[ParamDef] = &[ $( ParamDef {
-            index: $idx, name: stringify!($name), unit: $unit, doc: concat!($($doc),*)
+            index: $idx, name: stringify!($name), unit: $unit, doc: spec_text!($($doc),*)
         } ),* ];
 
         impl DriveConfig {
@@ -155,10 +156,18 @@ config_params! {
     53 override_cap [""],
     /// 1 = the axis has a holding brake, applied whenever the power stage is off; 0 = none (a fault reaction then removes torque only where the fault reaction table allows it).
     54 brake [""],
+    /// The machine's velocity ceiling for every joint (its `[ceilings]`, not the plan's): the drive refuses a segment, an override cap or a stop ramp that would exceed it, and a `max_velocity` above it.
+    55 ceiling_velocity ["m/s"],
+    /// The machine's acceleration ceiling for every joint.
+    56 ceiling_acceleration ["m/s2"],
+    /// The machine's jerk ceiling for every joint; a stop ramp is held to a multiple of it (docs/protocol.md, "Ceilings").
+    57 ceiling_jerk ["m/s3"],
+    /// The machine's torque ceiling (the lowest of `[ceilings] torque` and Kt × current limit): `max_torque`, the command's clamp, may not exceed it.
+    58 ceiling_torque ["N.m"],
 }
 
 /// Number of configuration parameters.
-pub const PARAM_COUNT: usize = 55;
+pub const PARAM_COUNT: usize = 59;
 
 /// ConfigWrite: host → node n, one parameter per frame.
 pub const CONFIG_WRITE: MessageDef = MessageDef {
@@ -167,7 +176,7 @@ pub const CONFIG_WRITE: MessageDef = MessageDef {
     len: 5,
     sender: "host",
     period: "on upload",
-    doc: " One configuration parameter (byte 0 = index, a multiplexor).",
+    doc: spec_text!(" One configuration parameter (byte 0 = index, a multiplexor)."),
     mux: Some("index"),
     fd: false,
     fields: &CONFIG_FIELDS,
@@ -180,7 +189,7 @@ pub const CONFIG_VALUE: MessageDef = MessageDef {
     len: 5,
     sender: "node",
     period: "on ReadConfig",
-    doc: " One parameter of the written configuration (byte 0 = index, a multiplexor).",
+    doc: spec_text!(" One parameter of the written configuration (byte 0 = index, a multiplexor)."),
     mux: Some("index"),
     fd: false,
     fields: &CONFIG_FIELDS,
@@ -193,7 +202,7 @@ const CONFIG_FIELDS: [FieldDef; 2] = [
         ty: WireType::U8,
         scale: 1.0,
         unit: "",
-        doc: " Parameter index (multiplexor).",
+        doc: spec_text!(" Parameter index (multiplexor)."),
         values: None,
     },
     FieldDef {
@@ -202,7 +211,7 @@ const CONFIG_FIELDS: [FieldDef; 2] = [
         ty: WireType::F32,
         scale: 1.0,
         unit: "",
-        doc: " Value in the parameter's unit.",
+        doc: spec_text!(" Value in the parameter's unit."),
         values: None,
     },
 ];
@@ -276,6 +285,9 @@ pub struct DriveSettings {
     /// Which axes have a holding brake (the fault reactions, firmware `reaction`).
     pub brake: [bool; 3],
     pub homing: HomingSettings,
+    /// The machine's ceilings (torque already lowered to the weakest
+    /// axis's Kt × current limit): the drives hold them whatever a plan says.
+    pub ceilings: Ceilings,
 }
 
 /// How the drives home (the robot file's `[homing]` table).
@@ -348,6 +360,7 @@ impl DriveConfig {
         let ratio = 2.0 * core::f64::consts::PI / robot.lead;
         let j = axis_inertia(robot) * ratio;
         let f = |x: f64| x as f32;
+        let c = &s.ceilings;
         Self {
             axis: a as f32,
             platform_radius: f(robot.platform_radius),
@@ -363,10 +376,11 @@ impl DriveConfig {
             leadscrew_inertia: f(robot.leadscrew_inertia),
             lead: f(robot.lead),
             gravity: f(robot.gravity),
-            max_velocity: f(limits.velocity),
-            max_acceleration: f(limits.acceleration),
-            max_jerk: f(limits.jerk),
-            max_torque: f(limits.torque),
+            // The run's limits, never above the machine's ceilings.
+            max_velocity: f(limits.velocity.min(c.velocity)),
+            max_acceleration: f(limits.acceleration.min(c.acceleration)),
+            max_jerk: f(limits.jerk.min(c.jerk)),
+            max_torque: f(limits.torque.min(c.torque)),
             kp: f(3.0 * j * w * w),
             ki: f(j * w * w * w),
             kd: f(3.0 * j * w),
@@ -404,6 +418,10 @@ impl DriveConfig {
             axis_node_3: s.node_ids[2] as f32,
             override_cap: 1.0,
             brake: if s.brake[a] { 1.0 } else { 0.0 },
+            ceiling_velocity: f(c.velocity),
+            ceiling_acceleration: f(c.acceleration),
+            ceiling_jerk: f(c.jerk),
+            ceiling_torque: f(c.torque),
         }
     }
 
@@ -455,7 +473,11 @@ impl DriveConfig {
                 rule: "1 to 32",
             });
         }
-        let positive: [(&'static str, f32); 20] = [
+        let positive: [(&'static str, f32); 24] = [
+            ("ceiling_velocity", self.ceiling_velocity),
+            ("ceiling_acceleration", self.ceiling_acceleration),
+            ("ceiling_jerk", self.ceiling_jerk),
+            ("ceiling_torque", self.ceiling_torque),
             ("homing_velocity", self.homing_velocity),
             ("homing_acceleration", self.homing_acceleration),
             ("homing_jerk", self.homing_jerk),
@@ -493,7 +515,31 @@ impl DriveConfig {
             |x: f32| (1.0..=super::wire::MAX_NODE_ID as f32).contains(&x) && (x as u8) as f32 == x;
         let nodes = self.axis_nodes();
         let own = nodes[(self.axis as usize).min(2)];
-        let rules: [(&'static str, f32, bool, &'static str); 19] = [
+        let rules: [(&'static str, f32, bool, &'static str); 23] = [
+            (
+                "max_velocity",
+                self.max_velocity,
+                self.max_velocity <= self.ceiling_velocity,
+                "<= ceiling_velocity",
+            ),
+            (
+                "max_acceleration",
+                self.max_acceleration,
+                self.max_acceleration <= self.ceiling_acceleration,
+                "<= ceiling_acceleration",
+            ),
+            (
+                "max_jerk",
+                self.max_jerk,
+                self.max_jerk <= self.ceiling_jerk,
+                "<= ceiling_jerk",
+            ),
+            (
+                "max_torque",
+                self.max_torque,
+                self.max_torque <= self.ceiling_torque,
+                "<= ceiling_torque",
+            ),
             (
                 "brake",
                 self.brake,
@@ -692,6 +738,20 @@ mod tests {
                 "axis_node_2",
             ),
             (DriveConfig { node_id: 0.0, ..c }, "node_id"),
+            (
+                DriveConfig {
+                    max_velocity: 2.0 * c.ceiling_velocity,
+                    ..c
+                },
+                "max_velocity",
+            ),
+            (
+                DriveConfig {
+                    max_torque: 2.0 * c.ceiling_torque,
+                    ..c
+                },
+                "max_torque",
+            ),
             (
                 DriveConfig {
                     torque_constant: 0.0,

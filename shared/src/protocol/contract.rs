@@ -4,6 +4,7 @@
 //! [`BOUNDS`], so the spec cannot promise one number while the drives use another.
 
 pub use super::segment::MAX_DURATION_US;
+use super::wire::spec_text;
 
 /// Shortest segment accepted (µs).
 pub const MIN_DURATION_US: u32 = 1;
@@ -52,60 +53,74 @@ pub const BOUNDS: &[Bound] = &[
         name: "segment duration",
         value: MIN_DURATION_US as f64,
         unit: "µs (min)",
-        doc: "Shorter: `Invalid`.",
+        doc: spec_text!("Shorter: `Invalid`."),
     },
     Bound {
         name: "segment duration",
         value: MAX_DURATION_US as f64,
         unit: "µs (max)",
-        doc: "Longer: `Invalid`.",
+        doc: spec_text!("Longer: `Invalid`."),
     },
     Bound {
         name: "limit tolerance",
         value: RELATIVE_LIMIT_MARGIN as f64 * 100.0,
         unit: "%",
-        doc: "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond).",
+        doc: spec_text!(
+            "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond), and their exact maxima the ceilings (`Above…Ceiling`, `OverrideAboveCeiling`, `StopAboveCeiling` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond)."
+        ),
     },
     Bound {
         name: "check points",
         value: (LIMIT_CHECK_INTERVALS + 1) as f64,
         unit: "per segment",
-        doc: "Evenly spaced points (both ends included) at which limits and soft limits are checked.",
+        doc: spec_text!(
+            "Evenly spaced points (both ends included) at which limits and soft limits are checked."
+        ),
     },
     Bound {
         name: "position continuity",
         value: MAX_POSITION_JUMP_M as f64 * 1e6,
         unit: "µm",
-        doc: "Largest jump between a segment's start and the previous end, every axis (`Discontinuous` beyond).",
+        doc: spec_text!(
+            "Largest jump between a segment's start and the previous end, every axis (`Discontinuous` beyond)."
+        ),
     },
     Bound {
         name: "command repeat window",
         value: REPEAT_WINDOW_US as f64 / 1000.0,
         unit: "ms",
-        doc: "The same command, token and argument again within this time is answered again, not executed again.",
+        doc: spec_text!(
+            "The same command, token and argument again within this time is answered again, not executed again."
+        ),
     },
     Bound {
         name: "unconfigured sync timeout",
         value: UNCONFIGURED_SYNC_TIMEOUT_US as f64 / 1000.0,
         unit: "ms",
-        doc: "`flags` bit synced of a node without a configuration (configured: `sync_timeout`).",
+        doc: spec_text!(
+            "`flags` bit synced of a node without a configuration (configured: `sync_timeout`)."
+        ),
     },
     Bound {
         name: "unconfigured heartbeat period",
         value: UNCONFIGURED_HEARTBEAT_US as f64 / 1000.0,
         unit: "ms",
-        doc: "Heartbeat period of a node without a configuration (configured: `heartbeat_period`).",
+        doc: spec_text!(
+            "Heartbeat period of a node without a configuration (configured: `heartbeat_period`)."
+        ),
     },
     Bound {
         name: "shortest heartbeat period",
         value: MIN_HEARTBEAT_US as f64 / 1000.0,
         unit: "ms",
-        doc: "A shorter configured `heartbeat_period` is raised to this.",
+        doc: spec_text!("A shorter configured `heartbeat_period` is raised to this."),
     },
     Bound {
         name: "peer skew margin",
         value: PEER_SKEW_MARGIN_US as f64 / 1000.0,
         unit: "ms",
-        doc: "A peer still Loaded/Armed this long after the start, or Idle this long before the plan's end, stops a running node (`PeerLost`).",
+        doc: spec_text!(
+            "A peer still Loaded/Armed this long after the start, or Idle this long before the plan's end, stops a running node (`PeerLost`)."
+        ),
     },
 ];

@@ -111,6 +111,16 @@ code_enum! {
         NotHomed = 10,
         /// A compact segment whose predecessor this node does not hold as the host built on it (lost, refused or resent): the host sends it in full.
         NoPredecessor = 11,
+        /// The segment's exact largest joint velocity is above the configured `ceiling_velocity` (with the relative margin).
+        AboveVelocityCeiling = 12,
+        /// The segment's exact largest joint acceleration is above `ceiling_acceleration`.
+        AboveAccelerationCeiling = 13,
+        /// The segment's exact largest joint jerk is above `ceiling_jerk`.
+        AboveJerkCeiling = 14,
+        /// At the configured `override_cap` the segment's scaled maxima (σv, σ²a, σ³j) would exceed a ceiling.
+        OverrideAboveCeiling = 15,
+        /// A stop or hold ramp (`stop_time`, `quick_stop_time`) on this segment would exceed the stop budget the jerk ceiling allows (docs/protocol.md, "Ceilings").
+        StopAboveCeiling = 16,
     }
 }
 
@@ -146,7 +156,7 @@ code_enum! {
 
 /// Protocol version carried in every heartbeat: a host refuses nodes of
 /// another version. What each version changed: the top of `docs/protocol.md`.
-pub const PROTOCOL_VERSION: u8 = 4;
+pub const PROTOCOL_VERSION: u8 = 5;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {

@@ -19,7 +19,7 @@
 use super::Frame;
 use super::crc::crc32;
 use super::messages::Reject;
-use super::wire::{Addr, FieldDef, I48_MAX, MessageDef, WireType, get_i48, put_i48};
+use super::wire::{Addr, FieldDef, I48_MAX, MessageDef, WireType, get_i48, put_i48, spec_text};
 use crate::quintic::Quintic;
 
 pub const WORD_LEN: usize = 6;
@@ -56,7 +56,7 @@ pub const SEGMENT_PART: MessageDef = MessageDef {
     len: 8,
     sender: "host",
     period: "streamed",
-    doc: " One word of a segment body; 20 parts per segment.",
+    doc: spec_text!(" One word of a segment body; 20 parts per segment."),
     mux: Some("part"),
     fd: false,
     fields: &PART_FIELDS,
@@ -69,7 +69,7 @@ pub const SEGMENT_PART_FD: MessageDef = MessageDef {
     len: 64,
     sender: "host",
     period: "streamed",
-    doc: " Ten words of a segment body; 2 parts per segment (CAN-FD, BRS).",
+    doc: spec_text!(" Ten words of a segment body; 2 parts per segment (CAN-FD, BRS)."),
     mux: Some("part"),
     fd: true,
     fields: &PART_FIELDS,
@@ -82,7 +82,7 @@ const PART_FIELDS: [FieldDef; 2] = [
         ty: WireType::U8,
         scale: 1.0,
         unit: "",
-        doc: " Part index (multiplexor).",
+        doc: spec_text!(" Part index (multiplexor)."),
         values: None,
     },
     FieldDef {
@@ -91,7 +91,7 @@ const PART_FIELDS: [FieldDef; 2] = [
         ty: WireType::U8,
         scale: 1.0,
         unit: "",
-        doc: " Low byte of the segment sequence number.",
+        doc: spec_text!(" Low byte of the segment sequence number."),
         values: None,
     },
 ];
@@ -123,7 +123,7 @@ pub fn word_fields(w: usize) -> [Option<WordField>; 2] {
                 ty: WireType::U16,
                 scale: 1.0,
                 unit: "",
-                doc: " Segment sequence number (0 = first after Reset).",
+                doc: spec_text!(" Segment sequence number (0 = first after Reset)."),
             }),
             Some(WordField {
                 name: "duration_us",
@@ -131,7 +131,7 @@ pub fn word_fields(w: usize) -> [Option<WordField>; 2] {
                 ty: WireType::U32,
                 scale: 1.0,
                 unit: "us",
-                doc: " Segment duration h.",
+                doc: spec_text!(" Segment duration h."),
             }),
         ],
         1..=18 => {
@@ -143,7 +143,7 @@ pub fn word_fields(w: usize) -> [Option<WordField>; 2] {
                     ty: WireType::I48,
                     scale: COEFF_SCALE,
                     unit: "m",
-                    doc: " Normalised coefficient b_jk = c_jk h^k of axis j, power k.",
+                    doc: spec_text!(" Normalised coefficient b_jk = c_jk h^k of axis j, power k."),
                 }),
                 None,
             ]
@@ -155,7 +155,7 @@ pub fn word_fields(w: usize) -> [Option<WordField>; 2] {
                 ty: WireType::U16,
                 scale: 1.0,
                 unit: "",
-                doc: " Bit 0: first segment of the plan; bit 1: last.",
+                doc: spec_text!(" Bit 0: first segment of the plan; bit 1: last."),
             }),
             Some(WordField {
                 name: "crc",
@@ -163,7 +163,7 @@ pub fn word_fields(w: usize) -> [Option<WordField>; 2] {
                 ty: WireType::U32,
                 scale: 1.0,
                 unit: "",
-                doc: " CRC-32 of body bytes 0-115.",
+                doc: spec_text!(" CRC-32 of body bytes 0-115."),
             }),
         ],
     }

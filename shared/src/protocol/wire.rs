@@ -110,6 +110,23 @@ pub fn get_i48(buf: &[u8], off: usize) -> i64 {
 /// Largest magnitude an i48 holds.
 pub const I48_MAX: i64 = (1 << 47) - 1;
 
+/// The spec's prose (what a message, field, code or parameter means): kept
+/// where the DBC and docs are generated, empty in the drives' images, whose
+/// flash it would otherwise fill through the tables the codec references.
+#[cfg(any(feature = "alloc", test))]
+macro_rules! spec_text {
+    ($($s:literal),* $(,)?) => {
+        concat!($($s),*)
+    };
+}
+#[cfg(not(any(feature = "alloc", test)))]
+macro_rules! spec_text {
+    ($($s:literal),* $(,)?) => {
+        ""
+    };
+}
+pub(crate) use spec_text;
+
 /// One named value of a code enumeration (state, fault, reject reason, command).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EnumEntry {
@@ -222,7 +239,7 @@ macro_rules! code_enum {
             /// Every value with its name and meaning (for the spec and the DBC).
             pub const TABLE: &'static [$crate::protocol::wire::EnumEntry] = &[
                 $( $crate::protocol::wire::EnumEntry {
-                    value: $n, name: stringify!($v), doc: concat!($($vdoc),*)
+                    value: $n, name: stringify!($v), doc: $crate::protocol::wire::spec_text!($($vdoc),*)
                 } ),*
             ];
             pub const fn from_u8(x: u8) -> Option<Self> {
@@ -259,7 +276,7 @@ macro_rules! messages {
                     len: $len,
                     sender: $sender,
                     period: $period,
-                    doc: concat!($($doc),*),
+                    doc: $crate::protocol::wire::spec_text!($($doc),*),
                     mux: None,
                     fd: false,
                     fields: &[ $( $crate::protocol::wire::FieldDef {
@@ -268,7 +285,7 @@ macro_rules! messages {
                         ty: <$ty as $crate::protocol::wire::Wire>::TYPE,
                         scale: $scale,
                         unit: $unit,
-                        doc: concat!($($fdoc),*),
+                        doc: $crate::protocol::wire::spec_text!($($fdoc),*),
                         values: messages!(@values $($enum)?),
                     } ),* ],
                 };
