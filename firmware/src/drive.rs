@@ -42,8 +42,9 @@ const FF_LOOKAHEAD_NS_PER_S: f32 = FF_LOOKAHEAD_TICKS * 1e9;
 /// for the position it reports before it has one.
 pub const UNCONFIGURED_M_PER_COUNT: f32 = 1e-9;
 
-/// Segment queue capacity of a node (segments).
-pub const QUEUE_CAPACITY: usize = 16;
+/// Segment queue capacity of a node (segments): declared in shared, where
+/// the planner and `check` hold plans to it (`protocol::streaming`).
+pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 64;
 

@@ -30,7 +30,7 @@ RATE = os.environ.get("HIL_RATE", "1000")
 with open(os.path.join(ROOT, "shared", "src", "protocol", "messages.rs")) as _f:
     PROTOCOL_VERSION = int(re.search(r"pub const PROTOCOL_VERSION: u8 = (\d+);", _f.read()).group(1))
 # The segment queue capacity the drives report, from its one declaration.
-with open(os.path.join(ROOT, "firmware", "src", "drive.rs")) as _f:
+with open(os.path.join(ROOT, "shared", "src", "protocol", "streaming.rs")) as _f:
     QUEUE_CAPACITY = int(re.search(r"pub const QUEUE_CAPACITY: usize = (\d+);", _f.read()).group(1))
 
 

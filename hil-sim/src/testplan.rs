@@ -282,6 +282,58 @@ pub fn spiral(n: usize, turns: f64, total_time: f64) -> Result<Plan, KinematicsE
     plan_through(&Robot::default(), &limits, &pts, &h)
 }
 
+/// The streaming fixtures (issue 35): a rest-to-rest move of `d` (m)
+/// along x in `n` equal segments over `t` s, through the points of a
+/// quintic smoothstep at the knots.
+pub fn point_to_point(n: usize, t: f64, d: f64) -> Result<Plan, KinematicsError> {
+    let pts: Vec<[f64; 3]> = (0..=n)
+        .map(|i| {
+            let u = i as f64 / n as f64;
+            let s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+            [d * s, 0.0, 0.62]
+        })
+        .collect();
+    let h = vec![t / n as f64; n];
+    plan_through(&Robot::default(), &Limits::default(), &pts, &h)
+}
+
+/// A 3-turn helix of radius 80 mm rising from 560 to 680 mm, rest to rest
+/// (path parameter a smoothstep of time), in `n` segments over `t` s,
+/// every tenth segment `short` s long (the others share the rest): with
+/// `short` a stand-in for a shaped plan's millisecond segments.
+pub fn helix(n: usize, t: f64, short: Option<f64>) -> Result<Plan, KinematicsError> {
+    let shorts = if short.is_some() { n / 10 } else { 0 };
+    let s = short.unwrap_or(0.0);
+    let long = (t - s * shorts as f64) / (n - shorts) as f64;
+    let h: Vec<f64> = (0..n)
+        .map(|i| {
+            if short.is_some() && i % 10 == 9 {
+                s
+            } else {
+                long
+            }
+        })
+        .collect();
+    let mut knot_t = vec![0.0];
+    for x in &h {
+        knot_t.push(knot_t.last().copied().unwrap_or(0.0) + x);
+    }
+    let pts: Vec<[f64; 3]> = knot_t
+        .iter()
+        .map(|&tk| {
+            let v = (tk / t).clamp(0.0, 1.0);
+            let u = v * v * v * (10.0 - 15.0 * v + 6.0 * v * v);
+            let th = 2.0 * std::f64::consts::PI * 3.0 * u;
+            [0.08 * th.cos(), 0.08 * th.sin(), 0.56 + 0.12 * u]
+        })
+        .collect();
+    let limits = Limits {
+        total_time: t,
+        ..Limits::default()
+    };
+    plan_through(&Robot::default(), &limits, &pts, &h)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

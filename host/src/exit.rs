@@ -6,12 +6,15 @@ pub use triquint_cli_common::exit::*;
 
 use crate::ops::error::OpError;
 
-/// The status of a planner error: infeasible 3, cancelled 7, solver
+/// The status of a planner error: infeasible (or unstreamable) 3, cancelled 7, solver
 /// failure 6, anything else bad input 2.
 pub fn plan_error(e: triquint_planner::PlanError) -> CliError {
     use triquint_planner::PlanError as E;
     let status = match &e {
-        E::Infeasible { .. } | E::LeavesTravel { .. } | E::BelowHoldingTorque { .. } => {
+        E::Infeasible { .. }
+        | E::LeavesTravel { .. }
+        | E::BelowHoldingTorque { .. }
+        | E::Unstreamable { .. } => {
             Status::Infeasible
         }
         E::Cancelled { .. } => Status::Cancelled,

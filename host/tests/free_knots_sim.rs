@@ -1,7 +1,7 @@
 //! Free-knot plans on the in-process virtual hardware: a move of no more
-//! segments than the drives queue runs to completion. (A longer one may
-//! not stream: the drives' queue must hold enough of the plan ahead,
-//! `protocol::streaming`; see docs/planner-speed.md.)
+//! segments than the drives queue runs to completion. (A longer one that
+//! would not stream, `protocol::streaming`, the planner writes at the
+//! fixed knots instead; see docs/planner-speed.md.)
 
 use triquint_host::inprocess::simulate::{SimulateOptions, simulate};
 use triquint_planner::{Job, KnotPlacement, Objective, Options, plan};

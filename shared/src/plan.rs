@@ -18,6 +18,7 @@ use crate::{Limits, Robot, Travel};
 pub mod eval;
 pub mod extrema;
 pub mod figures;
+pub mod override_cap;
 
 pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 

@@ -14,7 +14,7 @@ use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::stop_ramp::stop_time;
 use triquint_shared::{Limits, Robot};
 
-use crate::override_cap::{Maxima, override_scaling};
+use triquint_shared::plan::override_cap::{Maxima, override_scaling};
 
 /// Why a plan's maxima cannot size the stop ramps.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

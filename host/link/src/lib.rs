@@ -24,7 +24,6 @@
 pub mod configs;
 pub mod estop;
 pub mod host_clock;
-pub mod override_cap;
 pub mod session;
 pub mod socketcan;
 pub mod status;
@@ -37,6 +36,7 @@ pub use session::{
 };
 pub use socketcan::{SocketCanError, SocketCanPort, SocketRx, open_host};
 pub use status::{Listener, MachineStatus, NodeStatus};
+pub use triquint_shared::plan::override_cap;
 
 use triquint_shared::protocol::Frame;
 

@@ -180,6 +180,26 @@ pub enum PlanError {
         reached: f64,
         shortest_total_time: Option<f64>,
     },
+    /// The plan meets every limit but would not stream to the default
+    /// drives (docs/protocol.md, "Streamability"): segments `first` to
+    /// `last` (0-based, a queue's worth less one) last `run_s` together,
+    /// less than the `need_s` (look-ahead plus refill delay) that drives
+    /// queueing `capacity` segments must hold ahead. Fewer, longer
+    /// segments (fewer points, or a longer total time) stream.
+    #[error(
+        "unstreamable: segments {}–{} last {} s together, less than the {} s drives queueing {capacity} segments must hold ahead (docs/protocol.md, Streamability); use fewer points or a longer total time",
+        first + 1,
+        last + 1,
+        readable(*run_s),
+        readable(*need_s)
+    )]
+    Unstreamable {
+        first: usize,
+        last: usize,
+        run_s: f64,
+        need_s: f64,
+        capacity: usize,
+    },
     /// Planning stopped before it finished.
     #[error("{}", match reason {
         CancelReason::Observer => "planning cancelled",

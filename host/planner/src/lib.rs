@@ -40,7 +40,8 @@
 //! descent on the total time from the jerk-only optimum's shapes, each
 //! iterate time-scaled until it meets every limit; `rounding` the intervals
 //! in whole microseconds (what the drives run), repaired until every limit
-//! holds; `planning` the entry point, [`plan`].
+//! holds; `planning` the entry point, [`plan`], which writes no plan that
+//! breaks the streaming rule of the default drives (`streaming`).
 //!
 //! Beside the planner: [`files`] reads plan and points files, [`stats`]
 //! and [`poly`] are the figures of a plan for reports, [`bounds`] the
@@ -75,6 +76,7 @@ pub mod shaping;
 mod spline;
 pub mod stats;
 mod step;
+mod streaming;
 mod sturm;
 mod time_descent;
 mod time_scaling;

@@ -22,6 +22,7 @@ use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
 use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, round_within};
 use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
+use crate::streaming::{shortfall, streams};
 use crate::time_scaling::{scaled_x, stretch};
 
 /// How often [`plan_with`] calls its observer.
@@ -105,6 +106,7 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     if let Some(e) = leaves_travel(&plan, job.travel()) {
         return Err(e);
     }
+    streams(&plan)?;
     plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
         .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
     let progress = state.progress();
@@ -155,8 +157,9 @@ fn planned(
         plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
         plan.free_knots = (1..p.knots.len() - 1).collect();
     }
-    if free && !passes_check(&plan)? {
-        // Nothing the planner writes fails the check: the fixed knots then.
+    if free && (!passes_check(&plan)? || shortfall(&plan).is_some()) {
+        // Nothing the planner writes fails the check or the streaming
+        // rule: the fixed knots then (fewer, longer segments).
         let (sol, _) = solve(job, fixed, opts)?;
         return Ok((assemble(job, fixed, &sol), starts));
     }

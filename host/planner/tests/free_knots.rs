@@ -5,6 +5,7 @@
 
 use triquint_planner::files::parse_plan;
 use triquint_planner::{Job, KnotPlacement, Limits, Objective, Options, PlanError, check, plan};
+use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 
 const LIMITS: Limits = Limits {
     velocity: 0.5,
@@ -68,6 +69,14 @@ fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
         let fixed = plan(&job(m, KnotPlacement::Fixed).unwrap(), &Options::default()).unwrap();
         let rows = check(&free).unwrap();
         assert!(rows.iter().all(|r| r.ok), "{m:?}: {rows:?}");
+        planned += 1;
+        if free.free_knots.is_empty() {
+            // Too many short segments to stream to the drives' queue: the
+            // planner wrote the fixed knots' plan instead.
+            assert_eq!(free.segments, fixed.segments, "{m:?}");
+            assert!(free.segments.len() <= QUEUE_CAPACITY, "{m:?}");
+            continue;
+        }
         let (a, b) = (free.knots_m[0], free.knots_m[free.knots_m.len() - 1]);
         let d = (0..3).map(|j| (b[j] - a[j]).abs()).fold(0.0, f64::max);
         let optimum = double_s_time(d, &LIMITS);
@@ -88,7 +97,6 @@ fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
         assert!(fixed.free_knots.is_empty() && fixed.format == "triquint-plan/3");
         let back = parse_plan(&serde_json::to_string(&free).unwrap()).unwrap();
         assert_eq!(back, free);
-        planned += 1;
     }
     assert!(planned >= 15, "only {planned} of 20 moves in the workspace");
 }
@@ -99,6 +107,9 @@ fn free_knots_come_within_four_per_cent_of_the_jerk_limited_optimum() {
 #[test]
 fn where_torque_binds_free_knots_are_never_worse_than_fixed() {
     let m = [[-90.0, 90.0, 680.0], [40.0, -60.0, 600.0]];
+    // A queue that cannot take the free shape's segments whole makes it
+    // unstreamable (docs/protocol.md, Streamability): the fixed knots then.
+    let free_streams = QUEUE_CAPACITY >= 15;
     let mut chose = [false; 2];
     for torque in [0.25, 0.12] {
         let with = |knots| {
@@ -114,13 +125,16 @@ fn where_torque_binds_free_knots_are_never_worse_than_fixed() {
         let (free, fixed) = (with(KnotPlacement::Free), with(KnotPlacement::Fixed));
         assert!(check(&free).unwrap().iter().all(|r| r.ok));
         assert!(free.total_time_s <= fixed.total_time_s, "torque {torque}");
-        // Torque binds: the plan reaches it on some joint.
+        // Torque binds: the plan reaches it on some joint (the fixed
+        // knots' plan written in the free shape's place need not).
         let reached = free.max_abs.torque.iter().fold(0.0, |a: f64, &b| a.max(b));
-        assert!(reached > torque * 0.999, "torque {torque}: {reached}");
+        if free_streams || torque < 0.2 {
+            assert!(reached > torque * 0.999, "torque {torque}: {reached}");
+        }
         chose[usize::from(free.free_knots.is_empty())] = true;
     }
     // At 0.25 N·m the scaled free shape wins; at 0.12 the fixed knots do.
-    assert_eq!(chose, [true, true]);
+    assert_eq!(chose, [free_streams, true]);
 }
 
 #[test]

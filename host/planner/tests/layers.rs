@@ -30,6 +30,7 @@ const LAYERS: &[&str] = &[
     "load",         // plan files
     "stats",        // statistics of a plan
     "check",        // independent verification of a plan
+    "streaming",    // the streaming rule every plan written keeps to
     "shaping",      // input shaping of a plan, re-checked
     "problem",      // the problem at fixed knots and its exact evaluation
     "program",      // its program at a point (cutting planes, trust region)

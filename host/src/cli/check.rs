@@ -4,11 +4,9 @@ use std::path::PathBuf;
 
 use clap::Args;
 use triquint_cli_common::outln;
-use triquint_firmware::QUEUE_CAPACITY;
-use triquint_link::DriveConfigs;
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::config::DriveSettings;
-use triquint_shared::protocol::streaming::{Shortfall, StreamRule};
+use triquint_shared::protocol::streaming::{QUEUE_CAPACITY, Shortfall, StreamRule};
 
 use crate::cli::load_plan;
 use crate::exit::{CliError, CliResult};
@@ -91,18 +89,11 @@ pub fn run(args: &CheckArgs) -> CliResult {
 }
 
 /// The shortest run of segments the drives' queues hold ahead, against what
-/// they need at σ = 1 with the default drive settings and this firmware's
-/// queue (docs/protocol.md, Streamability); `None` when the plan fits the
-/// queue whole or has no configuration.
+/// they need at σ = 1 with the default drive settings and queue
+/// (docs/protocol.md, Streamability); `None` when the plan fits the queue
+/// whole or has no motion.
 fn streamability(plan: &Plan) -> Option<Shortfall> {
-    let s = DriveSettings::default();
-    let configs = DriveConfigs::for_plan(plan, &s).ok()?;
-    let rule = StreamRule::new(
-        QUEUE_CAPACITY,
-        configs.stop_time_s,
-        s.underrun_margin,
-        s.heartbeat_period,
-    );
+    let rule = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY)?;
     let d: Vec<u32> = plan
         .wire_segments()
         .ok()?

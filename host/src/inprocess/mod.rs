@@ -10,6 +10,8 @@ mod feed_tests;
 mod measure;
 pub mod simulate;
 #[cfg(test)]
+mod stop_tests;
+#[cfg(test)]
 mod streaming_tests;
 pub mod test_reference;
 #[cfg(test)]

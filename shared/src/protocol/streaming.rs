@@ -12,6 +12,15 @@
 //! The rule: every run of capacity − 1 consecutive segments that does not
 //! end with the plan's last segment lasts at least L + δ. A plan of at most
 //! `capacity` segments is queued whole before Start and always streams.
+//!
+//! [`StreamRule::for_plan`] is the rule a plan meets on the default
+//! drives ([`QUEUE_CAPACITY`], the stop ramp the host configures for it,
+//! `override_cap`): what `check` reports and the planner keeps to.
+
+/// Segments a drive queues: the firmware's queue is this long, and the
+/// planner and `check` hold plans to it (drives report their own capacity,
+/// which `upload` checks against).
+pub const QUEUE_CAPACITY: usize = 16;
 
 /// The rule for one machine: queue capacity, look-ahead and refill delay.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +71,36 @@ impl StreamRule {
             lookahead_us: us(0.5 * stop_time_s) + us(underrun_margin_s),
             refill_us: us(heartbeat_period_s) + SEGMENT_TRANSFER_US,
         }
+    }
+
+    /// The rule for `plan` on drives of queue `capacity` with `settings`:
+    /// the stop ramp the host configures for the plan (sized for its
+    /// override cap, [`crate::plan::override_cap`]) from the exact maxima
+    /// of its segments. `None` when the plan has no motion or non-finite
+    /// maxima (no ramp to size; nothing to stream).
+    #[cfg(feature = "alloc")]
+    pub fn for_plan(
+        plan: &crate::plan::Plan,
+        settings: &super::config::DriveSettings,
+        capacity: usize,
+    ) -> Option<Self> {
+        use crate::plan::override_cap::{Maxima, override_scaling};
+        let k = crate::plan::figures::kinematics(&plan.segments);
+        let finite = [k.velocity, k.acceleration, k.jerk]
+            .iter()
+            .flatten()
+            .all(|x| x.is_finite());
+        let [v, a, j] = k.largest();
+        if !finite || v + a + j == 0.0 {
+            return None;
+        }
+        let s = override_scaling(plan, Maxima { v, a, j });
+        Some(Self::new(
+            capacity,
+            s.stop_time_s,
+            settings.underrun_margin,
+            settings.heartbeat_period,
+        ))
     }
 
     /// What every run of `capacity − 1` segments needs, L + δ (µs).

@@ -14,12 +14,15 @@
 //! Torque in a transition is checked on a grid of the plan against the
 //! limit (or the σ = 1 transitions' own peak if that is above it).
 
+use alloc::vec::Vec;
+
 use nalgebra::Vector3;
-use triquint_shared::Limits;
-use triquint_shared::dynamics::torque;
-use triquint_shared::plan::Plan;
-use triquint_shared::protocol::config::SMOOTHSTEP_MAX_D1;
-use triquint_shared::protocol::stop_ramp::stop_time;
+
+use super::Plan;
+use crate::Limits;
+use crate::dynamics::torque;
+use crate::protocol::config::SMOOTHSTEP_MAX_D1;
+use crate::protocol::stop_ramp::stop_time;
 
 /// The largest cap the drives accept (configuration range 1–32).
 pub const CAP_MAX: f64 = 32.0;
@@ -61,14 +64,14 @@ pub fn override_scaling(plan: &Plan, m: Maxima) -> Scaling {
     let kinematic_ok = |k: f64| {
         k * m.v <= l.velocity * tol
             && k * k * m.a <= l.acceleration * tol
-            && k.powi(3) * m.j <= l.jerk * tol
+            && k * k * k * m.j <= l.jerk * tol
     };
     let k = bisect(1.0, CAP_MAX, kinematic_ok);
     let k = match TorqueGrid::new(plan, m) {
         Some(g) if !g.ok(k) => bisect(1.0, k, |x| g.ok(x)),
         _ => k,
     };
-    let cap = ((k * 1000.0 + 1e-6).floor() / 1000.0).clamp(1.0, CAP_MAX);
+    let cap = (libm::floor(k * 1000.0 + 1e-6) / 1000.0).clamp(1.0, CAP_MAX);
     let (ts, tq) = ramps(m, l, cap);
     Scaling {
         cap,
@@ -157,7 +160,7 @@ mod tests {
     fn case2() -> Plan {
         let text = std::fs::read_to_string(concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../../testdata/protocol/plans/case2-spline.json"
+            "/../testdata/protocol/plans/case2-spline.json"
         ))
         .expect("paper case II plan");
         serde_json::from_str(&text).expect("a plan")

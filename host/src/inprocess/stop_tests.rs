@@ -1,0 +1,252 @@
+//! A Stop at seeded instants of the three streaming fixtures (issue 35):
+//! a 15-segment point-to-point move under 1 s, a helix with a 2 ms
+//! segment every tenth, and a 2 000-segment helix, each streamed to the
+//! in-process drives and stopped with the host's Stop at instants drawn
+//! from a seeded generator. Every run must end at rest, every drive Idle
+//! without a fault, the platform on the planned path throughout, the
+//! reference within the stop budget (docs/protocol.md, "Stop ramp"). The
+//! figures are printed (`--nocapture`) for docs/protocol.md.
+
+use nalgebra::Vector3;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use triquint_link::{DriveConfigs, Feed, Session, SessionOptions};
+use triquint_shared::plan::Plan;
+use triquint_shared::plan::figures::kinematics;
+use triquint_shared::protocol::State;
+use triquint_shared::protocol::config::{DriveSettings, SMOOTHSTEP_MAX_D1};
+use triquint_sim::host_port::SimPort;
+use triquint_sim::{Sim, SimConfig, testplan};
+
+/// Largest distance of the plant from the planned joint path from the
+/// Stop on (m): the servo's cross-path error, not only the rest position.
+const OFF_PATH_M: f64 = 50e-6;
+/// Largest distance of the rest position from the path (m).
+const REST_OFF_PATH_M: f64 = 10e-6;
+/// At rest: joint speed over the last 100 ms below this (m/s).
+const REST_SPEED: f64 = 1e-4;
+/// How long after every drive is Idle the run goes on (ns).
+const SETTLE_NS: u64 = 300_000_000;
+
+/// One stopped run.
+#[derive(Clone, Copy, Debug)]
+struct StopRun {
+    /// Plan time at which the Stop was sent (s).
+    at_s: f64,
+    /// From the Stop to every drive Idle (s).
+    stop_s: f64,
+    /// Worst distance of the plant from the path, from the Stop on (m).
+    off_path_m: f64,
+    /// Distance of the rest position from the path (m).
+    rest_off_path_m: f64,
+    /// Joint speed over the last 100 ms (m/s).
+    rest_speed: f64,
+    /// Largest |jerk| of any drive's reference while Stopping (m/s³).
+    jerk: f64,
+    /// Largest |acceleration| of the reference from the Stop on (m/s²).
+    accel: f64,
+    /// Every drive Idle, no fault on any node or reported to the host, and
+    /// the session ended stopped (or completed: the plan ended first).
+    clean: bool,
+}
+
+/// The bounds a stop keeps to (docs/protocol.md, "Stop ramp"): jerk within
+/// max(J, j + J/2), acceleration within max(A, a + 1.875·v/T_s), for the
+/// plan's exact maxima v, a, j at σ = 1.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    jerk: f64,
+    accel: f64,
+}
+
+fn bounds(plan: &Plan, stop_time_s: f64) -> Bounds {
+    let [v, a, j] = kinematics(&plan.segments).largest();
+    let l = &plan.limits;
+    Bounds {
+        jerk: l.jerk.max(j + 0.5 * l.jerk),
+        accel: l.acceleration.max(a + SMOOTHSTEP_MAX_D1 * v / stop_time_s),
+    }
+}
+
+/// Runs `plan` from its start and sends Stop at plan time `at_s`.
+fn stop_at(plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let mut sim = Sim::new(&plan.robot, q0, SimConfig::default());
+    let mut session = Session::new(plan, configs.nodes, SessionOptions::default()).unwrap();
+    let limit_ns = ((plan.total_time_s + 30.0) * 1e9) as u64;
+    let mut sent_ns: Option<u64> = None;
+    let mut accel = 0.0f32;
+    let outcome = loop {
+        let start_ns = session.start_us() * 1000;
+        if start_ns > 0 && sent_ns.is_none() && sim.now_ns() as f64 >= start_ns as f64 + at_s * 1e9
+        {
+            session.feed(Feed::Stop);
+            sent_ns = Some(sim.now_ns());
+        }
+        if sent_ns.is_some() {
+            accel = accel.max(sim.nodes[0].node.stats.reference.qdd.amax());
+        }
+        let mut port = SimPort {
+            sim: &mut sim,
+            tx_queue: 32,
+        };
+        if let Some(o) = session.poll(&mut port).unwrap() {
+            break o;
+        }
+        let t = sim.now_ns() + 100_000;
+        assert!(t < limit_ns, "at {at_s} s: the run did not end");
+        sim.run_until(t).unwrap();
+    };
+    sim.run_until(sim.now_ns() + SETTLE_NS).unwrap();
+    let sent = sent_ns.expect("the Stop was sent before the session ended");
+    let idle_at = sim
+        .nodes
+        .iter()
+        .map(|n| {
+            n.states
+                .iter()
+                .filter(|(t, _)| *t >= sent)
+                .find(|(_, s)| *s == State::Idle)
+                .map_or(u64::MAX, |x| x.0)
+        })
+        .max()
+        .unwrap_or(u64::MAX);
+    // Drives that were already Idle (the plan ended first) stopped at once.
+    let idle_at = if idle_at == u64::MAX && sim.nodes.iter().all(|n| n.node.state() == State::Idle)
+    {
+        sent
+    } else {
+        idle_at
+    };
+    let clean = sim.nodes.iter().all(|n| n.node.state() == State::Idle)
+        && sim.faults().is_empty()
+        && outcome.faults.is_empty()
+        && (outcome.stopped || outcome.completed);
+    let stop_s = configs.stop_time_s;
+    let path = Path::new(plan, at_s - 0.1, at_s + stop_s + 0.1);
+    let after: Vec<_> = sim.samples.iter().filter(|s| s.t_ns >= sent).collect();
+    let off_path_m = after
+        .iter()
+        .step_by(5)
+        .map(|s| path.distance(&Vector3::from(s.q)))
+        .fold(0.0, f64::max);
+    let last = after.last().expect("samples after the stop");
+    let rest_off_path_m = path.distance(&Vector3::from(last.q));
+    let before = after
+        .iter()
+        .rev()
+        .find(|s| s.t_ns + 100_000_000 <= last.t_ns)
+        .expect("100 ms of samples");
+    let rest_speed = (Vector3::from(last.q) - Vector3::from(before.q)).amax()
+        / ((last.t_ns - before.t_ns) as f64 * 1e-9);
+    StopRun {
+        at_s,
+        stop_s: idle_at.saturating_sub(sent) as f64 * 1e-9,
+        off_path_m,
+        rest_off_path_m,
+        rest_speed,
+        jerk: sim
+            .nodes
+            .iter()
+            .map(|n| n.max_stop_jerk as f64)
+            .fold(0.0, f64::max),
+        accel: accel as f64,
+        clean,
+    }
+}
+
+/// The planned joint path over plan times [from, to], as a polyline of
+/// 0.5 ms samples.
+struct Path(Vec<Vector3<f64>>);
+
+impl Path {
+    fn new(plan: &Plan, from: f64, to: f64) -> Self {
+        let (from, to) = (from.max(0.0), to.min(plan.total_time_s));
+        let n = ((to - from) / 0.0005).ceil().max(1.0) as usize;
+        Path(
+            (0..=n)
+                .filter_map(|i| plan.at(from + (to - from) * i as f64 / n as f64))
+                .map(|s| Vector3::from(s.q))
+                .collect(),
+        )
+    }
+
+    fn distance(&self, q: &Vector3<f64>) -> f64 {
+        self.0
+            .windows(2)
+            .map(|w| {
+                let d = w[1] - w[0];
+                let u = if d.norm_squared() > 0.0 {
+                    ((q - w[0]).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (w[0] + d * u - q).norm()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Stops `plan` at `n` seeded instants in [0, T); asserts each and
+/// prints the worst figures.
+fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
+    let configs = DriveConfigs::for_plan(plan, &DriveSettings::default()).unwrap();
+    let b = bounds(plan, configs.stop_time_s);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let runs: Vec<StopRun> = (0..n)
+        .map(|_| stop_at(plan, &configs, rng.random_range(0.0..plan.total_time_s)))
+        .collect();
+    let unsafe_endings: Vec<&StopRun> = runs
+        .iter()
+        .filter(|r| {
+            !r.clean
+                || r.off_path_m > OFF_PATH_M
+                || r.rest_off_path_m > REST_OFF_PATH_M
+                || r.rest_speed > REST_SPEED
+                || r.jerk > b.jerk * 1.001
+                || r.accel > b.accel * 1.001
+                || r.stop_s > configs.stop_time_s + 0.01
+        })
+        .collect();
+    let worst = |f: fn(&StopRun) -> f64| runs.iter().map(f).fold(0.0, f64::max);
+    let worst_at = runs
+        .iter()
+        .max_by(|a, b| a.off_path_m.total_cmp(&b.off_path_m))
+        .map_or(0.0, |r| r.at_s);
+    eprintln!(
+        "{name}: {n} stops, T_s {:.3} s: worst off path {:.2} µm (Stop at {worst_at:.3} s; at rest {:.2} µm), \
+         worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
+         rest speed {:.1e} m/s; {} unsafe",
+        configs.stop_time_s,
+        worst(|r| r.off_path_m) * 1e6,
+        worst(|r| r.rest_off_path_m) * 1e6,
+        worst(|r| r.stop_s),
+        worst(|r| r.jerk),
+        b.jerk,
+        worst(|r| r.accel),
+        b.accel,
+        worst(|r| r.rest_speed),
+        unsafe_endings.len()
+    );
+    assert!(unsafe_endings.is_empty(), "{name}: {unsafe_endings:#?}");
+}
+
+#[test]
+fn a_stop_at_100_instants_of_the_15_segment_move_ends_on_the_path() {
+    let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
+    stops_end_on_the_path("15 segments in 0.9 s", &plan, 100, 35);
+}
+
+#[test]
+fn a_stop_at_100_instants_of_the_2_ms_every_tenth_plan_ends_on_the_path() {
+    let plan = testplan::helix(100, 20.0, Some(0.002)).unwrap();
+    stops_end_on_the_path("2 ms every tenth", &plan, 100, 36);
+}
+
+/// 12 instants, not 100: each run streams the 100 s plan up to its Stop,
+/// 50 s of simulation on average, and CI has two cores.
+#[test]
+fn a_stop_at_12_instants_of_the_2000_segment_plan_ends_on_the_path() {
+    let plan = testplan::helix(2000, 100.0, None).unwrap();
+    stops_end_on_the_path("2000 segments", &plan, 12, 37);
+}
