@@ -11,9 +11,7 @@ use crate::ops::error::OpError;
 pub fn plan_error(e: triquint_planner::PlanError) -> CliError {
     use triquint_planner::PlanError as E;
     let status = match &e {
-        E::Infeasible { .. } | E::LeavesTravel { .. } | E::Deviation { .. } => {
-            Status::Infeasible
-        }
+        E::Infeasible { .. } | E::LeavesTravel { .. } | E::Deviation { .. } => Status::Infeasible,
         E::Cancelled { .. } => Status::Cancelled,
         E::Solver(_) => Status::SolverFailure,
         _ => Status::BadInput,

@@ -30,8 +30,8 @@
 //!
 //! A bound on the Cartesian deviation is met by [`toward_straight`]: each
 //! knot moved a fraction λ of the way to the inverse kinematics of the
-//! Cartesian point at the same fraction of the move, and the plan
-//! re-solved there and lengthened until every limit holds.
+//! Cartesian point at the same fraction of the move, and the min-time
+//! search run at those knots.
 
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
@@ -377,19 +377,17 @@ fn slowed_until_feasible(p: &Problem, s: &Solution) -> Option<Solution> {
     lengthen_until_feasible(p, &slower)
 }
 
-/// The free-knot plan `(p, s)` of the move from `a` to `b` (Cartesian, m)
+/// The free-knot problem `p` of the move from `a` to `b` (Cartesian, m)
 /// with its interior knots moved the fraction `lambda` of the way to the
 /// straight Cartesian segment: the knot at the fraction f of the joints'
-/// travel goes toward the inverse kinematics of a + f (b − a). Re-solved
-/// at the new knots and lengthened until every limit holds; None when the
-/// segment leaves the workspace or no lengthening holds.
+/// travel goes toward the inverse kinematics of a + f (b − a). None when
+/// that leaves the workspace. The min-time search plans it.
 pub(crate) fn toward_straight(
     p: &Problem,
-    s: &Solution,
     a: [f64; 3],
     b: [f64; 3],
     lambda: f64,
-) -> Option<(Problem, Solution)> {
+) -> Option<Problem> {
     let q = &p.knots.q;
     let (start, end) = (q[0], q[q.len() - 1]);
     let dq = Vector3::from(end) - Vector3::from(start);
@@ -402,113 +400,5 @@ pub(crate) fn toward_straight(
     }
     let mut blended = p.clone();
     blended.knots = Knots { q: moved };
-    let mut x = s.x.clone();
-    blended.project(&s.h, &mut x);
-    let exact = blended.evaluate(&s.h, &x);
-    let solved = slowed_until_feasible(&blended, &exact)?;
-    Some((blended, solved))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const LIMITS: (f64, f64, f64) = (0.5, 1.2, 5.0);
-
-    /// The double S reaches the distance at rest, its duration is the
-    /// closed form of each regime, and no phase exceeds a limit.
-    #[test]
-    fn the_double_s_ends_at_rest_at_the_distance_in_the_least_time() {
-        let (v, a, j) = LIMITS;
-        // Acceleration binds from d = 2a³/j² = 0.138 m, velocity (v·j ≥ a²)
-        // from d = v (a/j + v/a) = 0.328 m.
-        for d in [0.01, 0.1, 0.2, 0.3, 0.5, 1.0] {
-            let t = double_s(d, v, a, j);
-            let p = Profile::new(&t.phases(j));
-            let [_, s, vel, acc] = p.end_state;
-            assert!((s - d).abs() < 1e-12, "d {d}: {s}");
-            assert!(vel.abs() < 1e-12 && acc.abs() < 1e-12, "d {d}");
-            let want = if d < 2.0 * a.powi(3) / (j * j) {
-                4.0 * (d / (2.0 * j)).cbrt()
-            } else if d < v * (a / j + v / a) {
-                let tj = a / j;
-                2.0 * (0.5 * tj + (0.25 * tj * tj + d / a).sqrt())
-            } else {
-                d / v + a / j + v / a
-            };
-            assert!((p.end - want).abs() < 1e-12, "d {d}: {} vs {want}", p.end);
-            let (pv, pa) = t.peaks();
-            assert!(j * pv <= v * (1.0 + 1e-12) && j * pa <= a * (1.0 + 1e-12));
-        }
-    }
-
-    /// Averaged, the profile ends at rest at the distance one window later,
-    /// and its velocity and acceleration stay within the original's limits.
-    #[test]
-    fn averaging_keeps_the_limits_and_adds_the_window() {
-        let (v, a, j) = LIMITS;
-        for d in [0.02, 0.2, 0.6] {
-            let p = Profile::new(&double_s(d, v, a, j).phases(j));
-            let tau = WINDOW * p.end;
-            let end = p.averaged(p.end + tau, tau);
-            assert!((end[0] - d).abs() < 1e-12 && end[1].abs() < 1e-12 && end[2].abs() < 1e-12);
-            assert_eq!(p.averaged(0.0, tau), [0.0; 3]);
-            let mut peak: [f64; 2] = [0.0; 2];
-            for i in 0..=2000 {
-                let s = p.averaged((p.end + tau) * i as f64 / 2000.0, tau);
-                peak = [peak[0].max(s[1].abs()), peak[1].max(s[2].abs())];
-            }
-            assert!(peak[0] <= v * (1.0 + 1e-12) && peak[1] <= a * (1.0 + 1e-12));
-            // Velocity binds at 0.6 m and is reached on the cruise.
-            if d == 0.6 {
-                assert!(peak[0] > v * (1.0 - 1e-9), "{peak:?}");
-            }
-        }
-    }
-
-    /// Whole microseconds: the phases are at least the continuous ones, the
-    /// jerk keeps the distance and no limit is exceeded; knot times are
-    /// whole µs and apart by at least the shortest segment.
-    #[test]
-    fn the_whole_microsecond_profile_keeps_the_limits() {
-        let (v, a, j) = LIMITS;
-        for d in [1e-6, 0.003, 0.2, 0.6] {
-            let t = double_s(d, v, a, j);
-            let (us, jerk) = whole_microseconds(t, d, v, a, j).unwrap();
-            assert!(us[0] as f64 * 1e-6 >= t.jerk && jerk <= j);
-            let t = Timing {
-                jerk: us[0] as f64 * 1e-6,
-                hold: us[1] as f64 * 1e-6,
-                cruise: us[2] as f64 * 1e-6,
-            };
-            let p = Profile::new(&t.phases(jerk));
-            assert!((p.end_state[1] - d).abs() < 1e-12 * d.max(1e-3), "d {d}");
-            let (pv, pa) = t.peaks();
-            assert!(jerk * pv <= v && jerk * pa <= a, "d {d}");
-            let window = ((p.end * WINDOW * 1e6) as i64).max(MIN_SEGMENT_US);
-            if let Some(times) = knot_times(us, window) {
-                assert!(times.windows(2).all(|w| w[1] - w[0] >= MIN_SEGMENT_US));
-                assert_eq!(
-                    times[times.len() - 1],
-                    4 * us[0] + 2 * us[1] + us[2] + window
-                );
-            }
-        }
-        // A window equal to a phase puts two knots on one time: one knot.
-        assert_eq!(
-            knot_times([20_000, 0, 0], 20_000),
-            Some(vec![0, 20_000, 40_000, 60_000, 80_000, 100_000])
-        );
-        // 7 segments when only jerk binds, 11 when acceleration does, 15
-        // when velocity does.
-        for (us, segments) in [
-            ([200_000, 0, 0], 7),
-            ([240_000, 100_000, 0], 11),
-            ([240_000, 100_000, 200_000], 15),
-        ] {
-            assert_eq!(knot_times(us, 30_000).map(|t| t.len() - 1), Some(segments));
-        }
-        // One closer to a switch than the shortest segment is refused.
-        assert_eq!(knot_times([20_000, 0, 0], 17_000), None);
-    }
+    Some(blended)
 }

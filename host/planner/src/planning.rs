@@ -162,21 +162,21 @@ fn planned(
         let plan = assemble(job, fixed, &sol);
         return within_deviation(job, fixed, opts, plan, None).map(|p| (p, starts));
     }
-    let free = free.then_some((&p, &sol));
+    let free = free.then_some(&p);
     within_deviation(job, fixed, opts, plan, free).map(|p| (p, starts))
 }
 
 /// `plan` when the job sets no bound on the Cartesian deviation or its
-/// certificate proves it; else a free-knot plan (`free`: its problem and
-/// solution) moved toward the straight segment until the certificate
-/// holds, or else the fixed knots' plan if that holds; or the verdict with
+/// certificate proves it; else a free-knot plan (`free`: its problem)
+/// with its knots moved toward the straight segment and re-planned by the
+/// min-time search until the certificate holds, or else the fixed knots' plan if that holds; or the verdict with
 /// the closest plan's figures.
 fn within_deviation(
     job: &Job,
     fixed: &Problem,
     opts: &Options,
     plan: Plan,
-    free: Option<(&Problem, &Solution)>,
+    free: Option<&Problem>,
 ) -> Result<Plan, PlanError> {
     let Some(limit) = job.max_deviation_m() else {
         return Ok(plan);
@@ -195,7 +195,7 @@ fn within_deviation(
             closest = d;
         }
     };
-    if let Some((p, sol)) = free {
+    if let Some(p) = free {
         let [a, b] = [0, 1].map(|i| job.points_m()[i]);
         // The deviation falls about linearly in λ: aim below the bound,
         // then closer to the straight segment, then onto it.
@@ -208,7 +208,10 @@ fn within_deviation(
                 continue;
             }
             tried.push(lambda);
-            let Some((q, s)) = toward_straight(p, sol, a, b, lambda) else {
+            let Some(q) = toward_straight(p, a, b, lambda) else {
+                continue;
+            };
+            let Ok((s, _)) = solve(job, &q, opts) else {
                 continue;
             };
             let mut moved = assemble(job, &q, &s);

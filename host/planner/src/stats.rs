@@ -447,9 +447,10 @@ mod tests {
         for _ in 0..200 {
             let r = Vector3::new(0.2 * next() - 0.1, 0.2 * next() - 0.1, 0.54 + 0.14 * next());
             let pose = Pose::from_cartesian(&model, r).unwrap();
-            for rho in [1e-5, 1e-3, 2e-2] {
+            for rho in [1e-5, 1e-4, 1e-3] {
                 let k = jacobian_bound(&pose, model.l, rho).unwrap();
-                assert!(pose.platform_jacobian().norm() <= k);
+                let spectral = |g: Matrix3<f64>| g.svd(false, false).singular_values.max();
+                assert!(spectral(pose.platform_jacobian()) <= k);
                 for _ in 0..20 {
                     let dir = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
                     let q = pose.q + dir * rho * next();
