@@ -14,9 +14,8 @@ pub fn plan_error(e: triquint_planner::PlanError) -> CliError {
         E::Infeasible { .. }
         | E::LeavesTravel { .. }
         | E::BelowHoldingTorque { .. }
-        | E::Unstreamable { .. } => {
-            Status::Infeasible
-        }
+        | E::Unstreamable { .. }
+        | E::Deviation { .. } => Status::Infeasible,
         E::Cancelled { .. } => Status::Cancelled,
         E::Solver(_) => Status::SolverFailure,
         _ => Status::BadInput,

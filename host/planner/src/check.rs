@@ -16,7 +16,7 @@ use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::quintic::eval_poly;
 
 use crate::load::{LoadError, validate_plan};
-use crate::stats::StatsError;
+use crate::stats::{StatsError, path_deviation_within};
 use crate::sturm;
 
 /// Torque samples per segment in checks and in the reported maxima.
@@ -222,4 +222,33 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
         );
     }
     Ok(rows)
+}
+
+/// The check of a job's `path.max_deviation_mm` (`limit_m`, m), which the
+/// plan file does not record: the certified bound on the platform's
+/// distance from the straight segments between the via-points
+/// ([`PathDeviation`](crate::stats::PathDeviation): samples, and a bound
+/// on ‖∂r/∂q‖ over each interval between them) against it.
+///
+/// ```
+/// use triquint_planner::{Job, KnotPlacement, Objective, Options, check_deviation, plan};
+/// let job = Job::builder()
+///     .objective(Objective::MinTime)
+///     .knots(KnotPlacement::Free)
+///     .max_deviation_mm(0.5)
+///     .points_mm([[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]])
+///     .build()?;
+/// let p = plan(&job, &Options::default())?;
+/// assert!(check_deviation(&p, 0.5e-3)?.ok);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn check_deviation(plan: &Plan, limit_m: f64) -> Result<CheckRow, LoadError> {
+    validate_plan(plan)?;
+    let d = path_deviation_within(plan, limit_m).map_err(|e| LoadError::Invalid(e.to_string()))?;
+    Ok(CheckRow {
+        what: "path deviation, certified (m)".to_string(),
+        value: d.bound_m,
+        bound: limit_m,
+        ok: d.bound_m <= limit_m,
+    })
 }

@@ -200,6 +200,23 @@ pub enum PlanError {
         need_s: f64,
         capacity: usize,
     },
+    /// The platform would leave the straight segments between the
+    /// via-points by more than `path.max_deviation_mm` (`limit_m`): the
+    /// closest plan's certified bound `bound_m`, and its largest sampled
+    /// distance `reached_m`, at plan time `at_s` (stats::PathDeviation).
+    #[error(
+        "path.max_deviation_mm: the closest plan leaves the straight path by up to {} mm ({} mm sampled at {} s), above the bound {} mm",
+        readable(bound_m * 1e3),
+        readable(reached_m * 1e3),
+        readable(*at_s),
+        readable(limit_m * 1e3)
+    )]
+    Deviation {
+        limit_m: f64,
+        bound_m: f64,
+        reached_m: f64,
+        at_s: f64,
+    },
     /// Planning stopped before it finished.
     #[error("{}", match reason {
         CancelReason::Observer => "planning cancelled",

@@ -22,6 +22,19 @@
 //! it binds, the shape is time-scaled until it holds and rounded as any
 //! min-time plan is (and `planning` keeps the fixed knots' plan when that
 //! is shorter).
+//!
+//! A segment count set by the job: more than the shape's are its segments
+//! halved, longest first, which changes nothing of the motion; fewer keep
+//! the shape's knots nearest its jerk switches and leave the times and
+//! derivatives to the min-time search, as at fixed knots.
+//!
+//! A bound on the Cartesian deviation is met by [`toward_straight`]: each
+//! knot moved a fraction λ of the way to the inverse kinematics of the
+//! Cartesian point at the same fraction of the move, and the min-time
+//! search run at those knots.
+
+use nalgebra::Vector3;
+use triquint_shared::kinematics::Pose;
 
 use crate::problem::{Problem, Solution};
 use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, meets_every_limit};
@@ -225,12 +238,62 @@ fn knot_times(us: [i64; 3], window: i64) -> Option<Vec<i64>> {
         .then_some(all)
 }
 
-/// The shortest plan at free knots of a point-to-point move, in whole
-/// microseconds and meeting every limit, with the problem at those knots
-/// and whether torque made it slower than the construction; None when no
-/// time-scaling of the shape meets the limits. `template` is the job's
-/// problem: its first and last knots are the move's ends.
-pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution, bool)> {
+/// What the free knots of a point-to-point move come to.
+pub(crate) enum FreeShape {
+    /// The plan at the knots, in whole microseconds and meeting every
+    /// limit, and whether torque made it slower than the construction.
+    Solved(Problem, Solution, bool),
+    /// Fewer segments than the shape has: the knots, for the min-time search.
+    Knots(Problem),
+}
+
+/// Why a job's segment count cannot be had.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TooManySegments {
+    /// The most this move takes: its segments halved down to the shortest.
+    pub(crate) most: usize,
+}
+
+/// `times` (µs) with segments halved, longest first, until there are
+/// `segments`; Err with the most there can be when a half would be
+/// shorter than the shortest segment.
+fn split(mut times: Vec<i64>, segments: usize) -> Result<Vec<i64>, TooManySegments> {
+    while times.len() - 1 < segments {
+        let k = (0..times.len() - 1)
+            .max_by_key(|&k| (times[k + 1] - times[k], std::cmp::Reverse(k)))
+            .expect("two knots at least");
+        let mid = (times[k] + times[k + 1]) / 2;
+        if mid - times[k] < MIN_SEGMENT_US || times[k + 1] - mid < MIN_SEGMENT_US {
+            return Err(TooManySegments {
+                most: times.len() - 1,
+            });
+        }
+        times.insert(k + 1, mid);
+    }
+    Ok(times)
+}
+
+/// `times` (µs) down to `segments`: the interior knot whose removal makes
+/// the shortest merged segment goes first, so the knots kept are those
+/// the shape's long phases begin and end at.
+fn merge(mut times: Vec<i64>, segments: usize) -> Vec<i64> {
+    while times.len() - 1 > segments {
+        let k = (1..times.len() - 1)
+            .min_by_key(|&k| times[k + 1] - times[k - 1])
+            .expect("an interior knot");
+        times.remove(k);
+    }
+    times
+}
+
+/// The free knots of a point-to-point move ([`FreeShape`]), with
+/// `segments` segments when given; Ok(None) when no time-scaling of the
+/// shape meets the limits. `template` is the job's problem: its first and
+/// last knots are the move's ends.
+pub(crate) fn free_knots(
+    template: &Problem,
+    segments: Option<usize>,
+) -> Result<Option<FreeShape>, TooManySegments> {
     let q = &template.knots.q;
     let (start, end) = (q[0], q[q.len() - 1]);
     let dq: [f64; 3] = [0, 1, 2].map(|j| end[j] - start[j]);
@@ -238,15 +301,26 @@ pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution, bool)
     let d = dq.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
     let l = &template.limits;
     let [v, a, j] = [l.velocity, l.acceleration, l.jerk].map(|x| x * (1.0 - MARGIN));
-    let (us, jerk) = whole_microseconds(double_s(d, v, a, j), d, v, a, j)?;
+    let Some((us, jerk)) = whole_microseconds(double_s(d, v, a, j), d, v, a, j) else {
+        return Ok(None);
+    };
     let total_us = 4 * us[0] + 2 * us[1] + us[2];
     // The window nearest the wanted fraction that keeps every segment at
     // least the shortest: tried at millisecond steps either side.
     let aim = ((total_us as f64 * WINDOW).round() as i64).max(MIN_SEGMENT_US);
-    let (window, times) = (0..64)
+    let Some((window, times)) = (0..64)
         .map(|i| aim + if i % 2 == 0 { 1 } else { -1 } * (i + 1) / 2 * 1_000)
         .filter(|&w| w >= MIN_SEGMENT_US)
-        .find_map(|w| knot_times(us, w).map(|t| (w, t)))?;
+        .find_map(|w| knot_times(us, w).map(|t| (w, t)))
+    else {
+        return Ok(None);
+    };
+    let fewer = segments.is_some_and(|n| n < times.len() - 1);
+    let times = match segments {
+        Some(n) if n < times.len() - 1 => merge(times, n),
+        Some(n) => split(times, n)?,
+        None => times,
+    };
     let timing = Timing {
         jerk: us[0] as f64 * 1e-6,
         hold: us[1] as f64 * 1e-6,
@@ -281,120 +355,50 @@ pub(crate) fn free_knots(template: &Problem) -> Option<(Problem, Solution, bool)
     });
     let mut p = template.clone();
     p.knots = Knots { q: knots };
+    if fewer {
+        return Ok(Some(FreeShape::Knots(p)));
+    }
     p.torque_samples = FINAL_TORQUE_SAMPLES;
     p.total_time = h.iter().sum();
     // C3 holds in exact arithmetic; the projection takes out the rounding.
     p.project(&h, &mut x);
     let exact = p.evaluate(&h, &x);
     if meets_every_limit(&p, &exact) {
-        return Some((p, exact, false));
+        return Ok(Some(FreeShape::Solved(p, exact, false)));
     }
     // Torque binds: slowed down until it holds, then rounded and re-solved.
-    let slower = shortest_scaling(&p, &exact)?;
-    let rounded = lengthen_until_feasible(&p, &slower)?;
-    Some((p, rounded, true))
+    Ok(slowed_until_feasible(&p, &exact).map(|s| FreeShape::Solved(p, s, true)))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// `s` time-scaled until every limit holds, then rounded to whole µs and
+/// re-solved there.
+fn slowed_until_feasible(p: &Problem, s: &Solution) -> Option<Solution> {
+    let slower = shortest_scaling(p, s)?;
+    lengthen_until_feasible(p, &slower)
+}
 
-    const LIMITS: (f64, f64, f64) = (0.5, 1.2, 5.0);
-
-    /// The double S reaches the distance at rest, its duration is the
-    /// closed form of each regime, and no phase exceeds a limit.
-    #[test]
-    fn the_double_s_ends_at_rest_at_the_distance_in_the_least_time() {
-        let (v, a, j) = LIMITS;
-        // Acceleration binds from d = 2a³/j² = 0.138 m, velocity (v·j ≥ a²)
-        // from d = v (a/j + v/a) = 0.328 m.
-        for d in [0.01, 0.1, 0.2, 0.3, 0.5, 1.0] {
-            let t = double_s(d, v, a, j);
-            let p = Profile::new(&t.phases(j));
-            let [_, s, vel, acc] = p.end_state;
-            assert!((s - d).abs() < 1e-12, "d {d}: {s}");
-            assert!(vel.abs() < 1e-12 && acc.abs() < 1e-12, "d {d}");
-            let want = if d < 2.0 * a.powi(3) / (j * j) {
-                4.0 * (d / (2.0 * j)).cbrt()
-            } else if d < v * (a / j + v / a) {
-                let tj = a / j;
-                2.0 * (0.5 * tj + (0.25 * tj * tj + d / a).sqrt())
-            } else {
-                d / v + a / j + v / a
-            };
-            assert!((p.end - want).abs() < 1e-12, "d {d}: {} vs {want}", p.end);
-            let (pv, pa) = t.peaks();
-            assert!(j * pv <= v * (1.0 + 1e-12) && j * pa <= a * (1.0 + 1e-12));
-        }
+/// The free-knot problem `p` of the move from `a` to `b` (Cartesian, m)
+/// with its interior knots moved the fraction `lambda` of the way to the
+/// straight Cartesian segment: the knot at the fraction f of the joints'
+/// travel goes toward the inverse kinematics of a + f (b − a). None when
+/// that leaves the workspace. The min-time search plans it.
+pub(crate) fn toward_straight(
+    p: &Problem,
+    a: [f64; 3],
+    b: [f64; 3],
+    lambda: f64,
+) -> Option<Problem> {
+    let q = &p.knots.q;
+    let (start, end) = (q[0], q[q.len() - 1]);
+    let dq = Vector3::from(end) - Vector3::from(start);
+    let (a, b) = (Vector3::from(a), Vector3::from(b));
+    let mut moved = q.clone();
+    for k in moved.iter_mut().take(q.len() - 1).skip(1) {
+        let f = (Vector3::from(*k) - Vector3::from(start)).dot(&dq) / dq.norm_squared();
+        let on = Pose::from_cartesian(&p.model, a + (b - a) * f).ok()?.q;
+        *k = [0, 1, 2].map(|j| k[j] + lambda * (on[j] - k[j]));
     }
-
-    /// Averaged, the profile ends at rest at the distance one window later,
-    /// and its velocity and acceleration stay within the original's limits.
-    #[test]
-    fn averaging_keeps_the_limits_and_adds_the_window() {
-        let (v, a, j) = LIMITS;
-        for d in [0.02, 0.2, 0.6] {
-            let p = Profile::new(&double_s(d, v, a, j).phases(j));
-            let tau = WINDOW * p.end;
-            let end = p.averaged(p.end + tau, tau);
-            assert!((end[0] - d).abs() < 1e-12 && end[1].abs() < 1e-12 && end[2].abs() < 1e-12);
-            assert_eq!(p.averaged(0.0, tau), [0.0; 3]);
-            let mut peak: [f64; 2] = [0.0; 2];
-            for i in 0..=2000 {
-                let s = p.averaged((p.end + tau) * i as f64 / 2000.0, tau);
-                peak = [peak[0].max(s[1].abs()), peak[1].max(s[2].abs())];
-            }
-            assert!(peak[0] <= v * (1.0 + 1e-12) && peak[1] <= a * (1.0 + 1e-12));
-            // Velocity binds at 0.6 m and is reached on the cruise.
-            if d == 0.6 {
-                assert!(peak[0] > v * (1.0 - 1e-9), "{peak:?}");
-            }
-        }
-    }
-
-    /// Whole microseconds: the phases are at least the continuous ones, the
-    /// jerk keeps the distance and no limit is exceeded; knot times are
-    /// whole µs and apart by at least the shortest segment.
-    #[test]
-    fn the_whole_microsecond_profile_keeps_the_limits() {
-        let (v, a, j) = LIMITS;
-        for d in [1e-6, 0.003, 0.2, 0.6] {
-            let t = double_s(d, v, a, j);
-            let (us, jerk) = whole_microseconds(t, d, v, a, j).unwrap();
-            assert!(us[0] as f64 * 1e-6 >= t.jerk && jerk <= j);
-            let t = Timing {
-                jerk: us[0] as f64 * 1e-6,
-                hold: us[1] as f64 * 1e-6,
-                cruise: us[2] as f64 * 1e-6,
-            };
-            let p = Profile::new(&t.phases(jerk));
-            assert!((p.end_state[1] - d).abs() < 1e-12 * d.max(1e-3), "d {d}");
-            let (pv, pa) = t.peaks();
-            assert!(jerk * pv <= v && jerk * pa <= a, "d {d}");
-            let window = ((p.end * WINDOW * 1e6) as i64).max(MIN_SEGMENT_US);
-            if let Some(times) = knot_times(us, window) {
-                assert!(times.windows(2).all(|w| w[1] - w[0] >= MIN_SEGMENT_US));
-                assert_eq!(
-                    times[times.len() - 1],
-                    4 * us[0] + 2 * us[1] + us[2] + window
-                );
-            }
-        }
-        // A window equal to a phase puts two knots on one time: one knot.
-        assert_eq!(
-            knot_times([20_000, 0, 0], 20_000),
-            Some(vec![0, 20_000, 40_000, 60_000, 80_000, 100_000])
-        );
-        // 7 segments when only jerk binds, 11 when acceleration does, 15
-        // when velocity does.
-        for (us, segments) in [
-            ([200_000, 0, 0], 7),
-            ([240_000, 100_000, 0], 11),
-            ([240_000, 100_000, 200_000], 15),
-        ] {
-            assert_eq!(knot_times(us, 30_000).map(|t| t.len() - 1), Some(segments));
-        }
-        // One closer to a switch than the shortest segment is refused.
-        assert_eq!(knot_times([20_000, 0, 0], 17_000), None);
-    }
+    let mut blended = p.clone();
+    blended.knots = Knots { q: moved };
+    Some(blended)
 }

@@ -33,6 +33,19 @@ pub const LIMIT_RANGE: (f64, f64) = (1e-6, 1e6);
 pub const MAX_SEGMENT_S: f64 = MAX_DURATION_US as f64 * 1e-6;
 /// Shortest interval the planner uses (s).
 pub const MIN_SEGMENT_S: f64 = 1e-3;
+/// Range of `knots.segments`, the segment count of a free-knot move: the
+/// fewest a C3 quintic at rest at both ends with a free jerk takes (four
+/// knots), and more than any time-optimal shape needs (its phases take 7,
+/// 11 or 15).
+pub const KNOT_SEGMENTS: (usize, usize) = (3, 64);
+/// Range of `path.max_deviation_mm` (mm): down to a micrometre, which the
+/// certificate's floating point still resolves.
+pub const MAX_DEVIATION_MM: (f64, f64) = (1e-3, 1e3);
+/// Where a job does not say `knots`, does a point-to-point min-time move
+/// get free knots? The one switch of the default; `move-to` follows it.
+/// Off while a free move's 15 segments outrun the drives' queue
+/// (docs/planner.md, Free knots).
+pub const FREE_KNOTS_BY_DEFAULT: bool = false;
 
 /// How the planner places the knots between the via-points.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
@@ -61,6 +74,8 @@ pub struct Job {
     ceilings: Ceilings,
     points_m: Vec<[f64; 3]>,
     knots: KnotPlacement,
+    knot_segments: Option<usize>,
+    max_deviation_m: Option<f64>,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
@@ -76,7 +91,10 @@ pub struct JobBuilder {
     /// The machine's robot, which a robot given with the job must equal.
     machine_robot: Option<Robot>,
     points_m: Vec<[f64; 3]>,
-    knots: KnotPlacement,
+    /// None: the default ([`FREE_KNOTS_BY_DEFAULT`]).
+    knots: Option<KnotPlacement>,
+    knot_segments: Option<usize>,
+    max_deviation_mm: Option<f64>,
 }
 
 impl JobBuilder {
@@ -111,9 +129,24 @@ impl JobBuilder {
         self.limits.total_time = seconds;
         self
     }
-    /// How the knots are placed ([`KnotPlacement::Fixed`] by default).
+    /// How the knots are placed. By default fixed, or free for a
+    /// point-to-point min-time move when [`FREE_KNOTS_BY_DEFAULT`] is set.
     pub fn knots(mut self, knots: KnotPlacement) -> Self {
-        self.knots = knots;
+        self.knots = Some(knots);
+        self
+    }
+    /// The segment count of a free-knot move (`knots.segments`), in
+    /// [`KNOT_SEGMENTS`]; automatic (7, 11 or 15 by which limits bind) by
+    /// default.
+    pub fn knot_segments(mut self, segments: usize) -> Self {
+        self.knot_segments = Some(segments);
+        self
+    }
+    /// The most the platform may leave the straight segment between two
+    /// via-points (mm, `path.max_deviation_mm`), which the planner meets
+    /// and `check_deviation` proves.
+    pub fn max_deviation_mm(mut self, mm: f64) -> Self {
+        self.max_deviation_mm = Some(mm);
         self
     }
     /// Replaces the via-points, in metres.
@@ -214,20 +247,48 @@ impl JobBuilder {
             }
         }
         check_holding(&model, pts, l.torque)?;
-        if self.knots == KnotPlacement::Free
-            && (self.objective != Objective::MinTime || pts.len() != 2)
-        {
+        let point_to_point = self.objective == Objective::MinTime && pts.len() == 2;
+        let knots = match self.knots {
+            Some(k) => k,
+            None if FREE_KNOTS_BY_DEFAULT && point_to_point => KnotPlacement::Free,
+            None => KnotPlacement::Fixed,
+        };
+        if knots == KnotPlacement::Free && !point_to_point {
             return Err(PlanError::invalid(
                 "knots",
                 "free knots need objective = \"min-time\" and exactly 2 via-points",
             ));
         }
-        let knots = knot_points(pts);
-        for (i, k) in knots.iter().enumerate() {
+        if let Some(n) = self.knot_segments {
+            let (lo, hi) = KNOT_SEGMENTS;
+            if knots != KnotPlacement::Free {
+                return Err(PlanError::invalid(
+                    "knots.segments",
+                    "a segment count needs placement = \"free\" (fixed knots are the via-points)",
+                ));
+            }
+            if !(lo..=hi).contains(&n) {
+                return Err(PlanError::invalid(
+                    "knots.segments",
+                    format!("{n} is outside {lo}..{hi}"),
+                ));
+            }
+        }
+        if let Some(mm) = self.max_deviation_mm {
+            let (lo, hi) = MAX_DEVIATION_MM;
+            if !(mm.is_finite() && (lo..=hi).contains(&mm)) {
+                return Err(PlanError::invalid(
+                    "path.max_deviation_mm",
+                    out_of_range(mm, " mm", lo, hi),
+                ));
+            }
+        }
+        let knot_pts = knot_points(pts);
+        for (i, k) in knot_pts.iter().enumerate() {
             reachable(&model, &self.travel, *k, PointKind::Knot, i)?;
         }
         let t = l.total_time;
-        let segments = (knots.len() - 1) as f64;
+        let segments = (knot_pts.len() - 1) as f64;
         let longest = MAX_SEGMENT_S * segments;
         if !(t.is_finite() && t >= MIN_SEGMENT_S * segments && t <= longest) {
             return Err(PlanError::invalid(
@@ -248,7 +309,9 @@ impl JobBuilder {
             travel: self.travel,
             ceilings: self.ceilings,
             points_m: self.points_m,
-            knots: self.knots,
+            knots,
+            knot_segments: self.knot_segments,
+            max_deviation_m: self.max_deviation_mm.map(|mm| mm * 1e-3),
         })
     }
 }
@@ -295,7 +358,9 @@ impl Job {
             ceilings: self.ceilings.clone(),
             machine_robot: None,
             points_m: self.points_m.clone(),
-            knots: self.knots,
+            knots: Some(self.knots),
+            knot_segments: self.knot_segments,
+            max_deviation_mm: self.max_deviation_m.map(|m| m * 1e3),
         }
     }
     pub fn objective(&self) -> Objective {
@@ -321,6 +386,15 @@ impl Job {
     /// How the knots are placed.
     pub fn knot_placement(&self) -> KnotPlacement {
         self.knots
+    }
+    /// The segment count asked of a free-knot move, if any.
+    pub fn knot_segments(&self) -> Option<usize> {
+        self.knot_segments
+    }
+    /// The bound on the platform's distance from the straight segments
+    /// between the via-points (m), if any.
+    pub fn max_deviation_m(&self) -> Option<f64> {
+        self.max_deviation_m
     }
     /// The fixed knots the planner interpolates: the via-points, with points on
     /// the straight lines between them when there are fewer than five.

@@ -2,13 +2,15 @@
 //!
 //! ```toml
 //! objective = "min-max-jerk"        # or "min-time"
-//! knots = "fixed"                    # or "free" (min-time, two via-points)
+//! knots = "fixed"                    # or "free" (min-time, two via-points),
+//!                                    # or { placement = "free", segments = 7 }
 //! [robot]                            # optional; defaults = paper Table 1
 //! [limits]                           # defaults = paper Table 3
 //! [path]
 //! units = "mm"                       # or "m"
 //! points = [[-90, 90, 680], [-90, 90, 660]]
 //! # or: file = "points.csv"         # relative to the job file
+//! max_deviation_mm = 0.5             # optional: off the straight segments
 //! ```
 //!
 //! ```
@@ -46,6 +48,20 @@ struct PathSpec {
     units: Units,
     points: Option<Vec<Point>>,
     file: Option<String>,
+    max_deviation_mm: Option<f64>,
+}
+
+/// `knots`: a placement, or a table of the placement and a segment count.
+enum KnotsSpec {
+    Placement(KnotPlacement),
+    Table(KnotsTable),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KnotsTable {
+    placement: KnotPlacement,
+    segments: Option<i64>,
 }
 
 /// A via-point `[x, y, z]`: exactly three numbers (serde's `[f64; 3]`
@@ -92,8 +108,7 @@ struct JobFile {
     robot: Option<Robot>,
     #[serde(default)]
     limits: Limits,
-    #[serde(default)]
-    knots: KnotPlacement,
+    knots: Option<toml::Value>,
     path: PathSpec,
 }
 
@@ -206,12 +221,47 @@ fn parse(
         Some(r) => builder.robot(r),
         None => builder,
     };
+    let builder = match f.knots.map(knots_spec).transpose()? {
+        Some(KnotsSpec::Placement(k)) => builder.knots(k),
+        Some(KnotsSpec::Table(t)) => {
+            let builder = builder.knots(t.placement);
+            match t.segments {
+                Some(n) => builder.knot_segments(usize::try_from(n).map_err(|_| {
+                    PlanError::invalid("knots.segments", format!("{n} is not a count"))
+                })?),
+                None => builder,
+            }
+        }
+        None => builder,
+    };
+    let builder = match f.path.max_deviation_mm {
+        Some(mm) => builder.max_deviation_mm(mm),
+        None => builder,
+    };
     builder
         .objective(f.objective)
         .limits(f.limits)
-        .knots(f.knots)
         .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
         .build()
+}
+
+/// The `knots` value, or what is wrong with it.
+fn knots_spec(v: toml::Value) -> Result<KnotsSpec, PlanError> {
+    let wrong = |e: toml::de::Error| PlanError::invalid("knots", e.message().replace('\n', " "));
+    match v {
+        toml::Value::String(_) => KnotPlacement::deserialize(v)
+            .map(KnotsSpec::Placement)
+            .map_err(wrong),
+        toml::Value::Table(_) => KnotsTable::deserialize(v)
+            .map(KnotsSpec::Table)
+            .map_err(wrong),
+        other => Err(PlanError::invalid(
+            "knots",
+            format!(
+                "{other} is neither \"fixed\", \"free\" nor {{ placement = \"free\", segments = N }}"
+            ),
+        )),
+    }
 }
 
 #[cfg(test)]

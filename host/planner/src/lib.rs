@@ -87,9 +87,9 @@ mod scale_tests;
 mod search_tests;
 
 pub use bounded_read::{MAX_JOB_BYTES, MAX_PLAN_BYTES, MAX_POINTS_FILE_BYTES, read_text};
-pub use check::{CheckRow, check};
+pub use check::{CheckRow, check, check_deviation};
 pub use error::{CancelReason, Limit, PlanError, PointKind};
-pub use job::{Job, JobBuilder, KnotPlacement};
+pub use job::{FREE_KNOTS_BY_DEFAULT, Job, JobBuilder, KnotPlacement};
 pub use options::{Control, MAX_STARTS, Observer, Options, Progress, Stage};
 pub use planning::{plan, plan_with};
 pub use triquint_shared::plan::{Objective, Plan};
@@ -103,7 +103,7 @@ pub mod files {
 
 /// The bounds a [`Job`] must stay within (checked by [`JobBuilder::build`]).
 pub mod bounds {
-    pub use crate::job::{LIMIT_RANGE, MAX_POINTS, MAX_SEGMENT_S};
+    pub use crate::job::{KNOT_SEGMENTS, LIMIT_RANGE, MAX_DEVIATION_MM, MAX_POINTS, MAX_SEGMENT_S};
 }
 
 /// Exact extrema and integrals of polynomials in segment-local time (power

@@ -14,7 +14,7 @@ use triquint_shared::plan::{
 
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
-use crate::free_knots::free_knots;
+use crate::free_knots::{FreeShape, free_knots, toward_straight};
 use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
@@ -23,6 +23,7 @@ use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, round_withi
 use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
 use crate::streaming::{shortfall, streams};
+use crate::stats::{PathDeviation, path_deviation_within};
 use crate::time_scaling::{scaled_x, stretch};
 
 /// How often [`plan_with`] calls its observer.
@@ -128,7 +129,7 @@ fn planned(
     state: &Arc<RunState>,
 ) -> Result<(Plan, usize), PlanError> {
     let (p, free, r) = match job.knot_placement() {
-        KnotPlacement::Free => match solve_free(job, fixed) {
+        KnotPlacement::Free => match solve_free(job, fixed, opts)? {
             Some((p, r, false)) => (p, true, r),
             // Torque bound the free shape, which is only time-scaled for
             // it: the fixed knots, reshaped by the search, may do better.
@@ -161,9 +162,101 @@ fn planned(
         // Nothing the planner writes fails the check or the streaming
         // rule: the fixed knots then (fewer, longer segments).
         let (sol, _) = solve(job, fixed, opts)?;
-        return Ok((assemble(job, fixed, &sol), starts));
+        let plan = assemble(job, fixed, &sol);
+        return within_deviation(job, fixed, opts, plan, None).map(|p| (p, starts));
     }
-    Ok((plan, starts))
+    let free = free.then_some(&p);
+    within_deviation(job, fixed, opts, plan, free).map(|p| (p, starts))
+}
+
+/// `plan` when the job sets no bound on the Cartesian deviation or its
+/// certificate proves it; else a free-knot plan (`free`: its problem)
+/// with its knots moved toward the straight segment and re-planned by the
+/// min-time search until the certificate holds, or else the fixed knots' plan if that holds; or the verdict with
+/// the closest plan's figures.
+fn within_deviation(
+    job: &Job,
+    fixed: &Problem,
+    opts: &Options,
+    plan: Plan,
+    free: Option<&Problem>,
+) -> Result<Plan, PlanError> {
+    let Some(limit) = job.max_deviation_m() else {
+        return Ok(plan);
+    };
+    let certify = |plan: &Plan| {
+        path_deviation_within(plan, limit)
+            .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))
+    };
+    let first = certify(&plan)?;
+    if first.bound_m <= limit {
+        return Ok(plan);
+    }
+    let mut closest = first.clone();
+    let mut closer = |d: PathDeviation| {
+        if d.bound_m < closest.bound_m {
+            closest = d;
+        }
+    };
+    if let Some(p) = free {
+        let [a, b] = [0, 1].map(|i| job.points_m()[i]);
+        // The deviation falls about linearly in λ: aim below the bound,
+        // then closer to the straight segment, then onto it.
+        let share = limit / first.max_m;
+        let mut tried = Vec::new();
+        let mut found = None;
+        for lambda in [1.0 - 0.8 * share, 1.0 - 0.4 * share, 1.0] {
+            let lambda = lambda.clamp(0.0, 1.0);
+            if tried.contains(&lambda) {
+                continue;
+            }
+            tried.push(lambda);
+            let Some(q) = toward_straight(p, a, b, lambda) else {
+                continue;
+            };
+            let Ok((s, _)) = solve(job, &q, opts) else {
+                continue;
+            };
+            let mut moved = assemble(job, &q, &s);
+            moved.format = PLAN_FORMAT_FREE_KNOTS.to_string();
+            moved.free_knots = (1..q.knots.len() - 1).collect();
+            if !passes_check(&moved)? {
+                continue;
+            }
+            let d = certify(&moved)?;
+            if d.bound_m <= limit {
+                found = Some(moved);
+                break;
+            }
+            closer(d);
+        }
+        // The fixed knots' plan when it holds and is no longer.
+        let (sol, _) = solve(job, fixed, opts)?;
+        let straight = assemble(job, fixed, &sol);
+        let d = certify(&straight)?;
+        return match found {
+            Some(moved) if d.bound_m > limit || moved.total_time_s <= straight.total_time_s => {
+                Ok(moved)
+            }
+            _ if d.bound_m <= limit => Ok(straight),
+            _ => {
+                closer(d);
+                Err(deviation(limit, &closest))
+            }
+        };
+    }
+    Err(deviation(limit, &closest))
+}
+
+/// The verdict when no plan met the deviation bound `limit` (m): the
+/// closest plan's figures.
+fn deviation(limit: f64, closest: &PathDeviation) -> PlanError {
+    PlanError::Deviation {
+        limit_m: limit,
+        bound_m: closest.bound_m,
+        reached_m: closest.max_m,
+        at_s: closest.at_s,
+    }
 }
 
 /// A free-knot plan's check (its maxima recorded first, as the plan will).
@@ -346,17 +439,38 @@ type FreeResult = Result<(Solution, usize), PlanError>;
 /// shortest plan in whole microseconds (or the verdict against the job's
 /// total time), and whether torque slowed it; None when no time-scaling
 /// of the free-knot shape meets every limit, and the fixed knots are
-/// planned instead.
-fn solve_free(job: &Job, fixed: &Problem) -> Option<(Problem, FreeResult, bool)> {
+/// planned instead. Err when the job's segment count cannot be had.
+fn solve_free(
+    job: &Job,
+    fixed: &Problem,
+    opts: &Options,
+) -> Result<Option<(Problem, FreeResult, bool)>, PlanError> {
     fixed.run.set_stage(Stage::MinTime);
-    let (p, s, slowed) = free_knots(fixed)?;
+    let shape = free_knots(fixed, job.knot_segments()).map_err(|e| {
+        PlanError::invalid(
+            "knots.segments",
+            format!(
+                "{} segments: this move takes at most {} (segments of at least 5 ms)",
+                job.knot_segments().unwrap_or_default(),
+                e.most
+            ),
+        )
+    })?;
+    let (p, s, slowed) = match shape {
+        None => return Ok(None),
+        Some(FreeShape::Solved(p, s, slowed)) => (p, s, slowed),
+        Some(FreeShape::Knots(p)) => {
+            let r = solve(job, &p, opts);
+            return Ok(Some((p, r, false)));
+        }
+    };
     let total_time = job.limits().total_time;
     let r = if s.h.iter().sum::<f64>() > total_time * (1.0 + 1e-12) {
         Err(too_short(&p, &s, total_time))
     } else {
         Ok((s, 0))
     };
-    Some((p, r, slowed))
+    Ok(Some((p, r, slowed)))
 }
 
 /// The verdict when the shortest plan `s` is longer than `total_time`: the

@@ -10,7 +10,7 @@
 //! between the via-points ([`PathDeviation`]) is sampled densely, with a
 //! bound between samples.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use triquint_shared::Model;
 use triquint_shared::dynamics;
@@ -77,14 +77,22 @@ pub struct PlanStats {
 }
 
 /// The platform's largest distance from the straight Cartesian segment
-/// between the via-points it is travelling between. Forward kinematics is
-/// not polynomial, so it is sampled at most [`DEVIATION_STEP_S`] apart;
-/// between two samples the distance changes by at most the platform's
-/// speed times the time, and the speed is at most ‖∂r/∂q‖ (Frobenius, at
-/// the nearer sample) times the joints' exact largest speed |q̇| in the
-/// segment. `bound_m` adds half a step of that to the sampled maximum: a
-/// Lipschitz bound, exact but for ‖∂r/∂q‖ read at the samples (it changes
-/// by a tiny fraction over one step on a smooth path).
+/// between the via-points it is travelling between, sampled at most
+/// [`DEVIATION_STEP_S`] apart, with a certified bound between samples.
+///
+/// The certificate. With the struts' unit vectors as the rows of U (d_i/l)
+/// and R = diag(d_iz/l), ∂r/∂q = U⁻¹R (paper eq. 21), so ‖∂r/∂q‖ ≤
+/// max R / σ_min(U). Over a sample interval the joints travel at most
+/// ρ = |q̇|·Δt (|q̇| the Euclidean norm of each joint's exact largest speed in
+/// the segment). If ‖∂r/∂q‖ ≤ K along it, the platform moves at most Kρ, so
+/// each row of U moves at most (Kρ + ρ)/l, ‖ΔU‖ ≤ (√3Kρ + ρ)/l (Frobenius),
+/// and by Weyl σ_min falls at most that much; then ‖∂r/∂q‖ ≤ g(K) =
+/// (max R + (K + 1)ρ/l) / (σ_min(U) − (√3K + 1)ρ/l). A K with g(K) < K is
+/// therefore a bound on the whole interval (the first time ‖∂r/∂q‖ reached
+/// K it would be at most g(K)), read from the sample at either end. The
+/// distance from a segment is 1-Lipschitz in r, so between samples at
+/// distances d₀ and d₁ it is at most (d₀ + d₁ + Kρ)/2. Exact but for the
+/// floating-point arithmetic of the samples (no interval arithmetic).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct PathDeviation {
     /// Largest sampled distance (m).
@@ -93,15 +101,40 @@ pub struct PathDeviation {
     pub at_s: f64,
     /// The distance anywhere is at most this (m), as above.
     pub bound_m: f64,
-    /// Time between samples (s), at most [`DEVIATION_STEP_S`].
+    /// Longest time between two samples (s), at most [`DEVIATION_STEP_S`].
     pub step_s: f64,
 }
+
+/// How many times an interval whose bound is above the target is halved.
+const REFINEMENTS: usize = 12;
 
 /// Distance of `p` from the segment a–b.
 fn from_segment(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> f64 {
     let ab = b - a;
     let u = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
     (p - (a + ab * u)).norm()
+}
+
+/// A bound on ‖∂r/∂q‖ over every pose the joints reach within a path of
+/// length `rho` (m) from `pose` ([`PathDeviation`]'s certificate), or None
+/// when the path is too long for one.
+fn jacobian_bound(pose: &Pose<f64>, l: f64, rho: f64) -> Option<f64> {
+    let u = Matrix3::from_rows(&pose.struts.map(|d| (d / l).transpose()));
+    let sigma = u.singular_values().min();
+    let rise = pose
+        .struts
+        .iter()
+        .fold(0.0, |m: f64, d| m.max(d.z.abs() / l));
+    let g = |k: f64| {
+        let den = sigma - (3f64.sqrt() * k + 1.0) * rho / l;
+        (den > 0.0).then(|| (rise + (k + 1.0) * rho / l) / den)
+    };
+    let mut k = g(0.0)?;
+    for _ in 0..8 {
+        k = g(k)?;
+    }
+    let k = k * (1.0 + 1e-6) + 1e-12;
+    g(k).filter(|&gk| gk < k).map(|_| k)
 }
 
 /// For each segment of a (validated) plan, the via-points it runs between:
@@ -141,6 +174,14 @@ fn via_of_segments(plan: &Plan, model: &Model<f64>) -> Vec<usize> {
 
 /// The path's deviation of a (validated) plan ([`PathDeviation`]).
 pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
+    path_deviation_within(plan, f64::INFINITY)
+}
+
+/// [`path_deviation`], with every sample interval whose bound is above
+/// `target_m` halved (up to [`REFINEMENTS`] times) until it is not: the
+/// bound then proves `target_m` whenever the path stays below it by more
+/// than the last halving's share.
+pub fn path_deviation_within(plan: &Plan, target_m: f64) -> Result<PathDeviation, StatsError> {
     let model = plan.robot.model::<f64>();
     if plan.via_points_m.len() < 2 || plan.knots_m.len() != plan.segments.len() + 1 {
         // Not a validated plan: no segments between via-points to measure.
@@ -148,7 +189,6 @@ pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
     }
     let via = via_of_segments(plan, &model);
     let mut out = PathDeviation::default();
-    let mut lipschitz: f64 = 0.0;
     for (k, seg) in plan.segments.iter().enumerate() {
         let a = Vector3::from(plan.via_points_m[via[k]]);
         let b = Vector3::from(plan.via_points_m[via[k] + 1]);
@@ -162,23 +202,56 @@ pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
             .map(|v| v * v)
             .sum::<f64>()
             .sqrt();
-        for i in 0..=n {
-            let t = step * i as f64;
+        let sample = |t: f64| {
             let q = seg.quintic().eval(t).q;
-            let pose = Pose::from_joints(&model, q).map_err(|source| StatsError {
-                segment: k + 1,
-                time_s: seg.t0_s + t,
-                source,
-            })?;
-            let d = from_segment(pose.r, a, b);
-            if d > out.max_m {
-                out.max_m = d;
-                out.at_s = seg.t0_s + t;
+            Pose::from_joints(&model, q)
+                .map(|pose| (from_segment(pose.r, a, b), pose))
+                .map_err(|source| StatsError {
+                    segment: k + 1,
+                    time_s: seg.t0_s + t,
+                    source,
+                })
+        };
+        let mut before = sample(0.0)?;
+        for i in 1..=n {
+            let t1 = if i == n { h } else { step * i as f64 };
+            let after = sample(t1)?;
+            for (d, t) in [(before.0, t1 - step), (after.0, t1)] {
+                if d > out.max_m {
+                    out.max_m = d;
+                    out.at_s = seg.t0_s + t;
+                }
             }
-            lipschitz = lipschitz.max(pose.platform_jacobian().norm() * qd * step);
+            // Intervals to certify: (t0, t1, both ends' samples, halvings).
+            let mut open = vec![(t1 - step, t1, before, after, 0)];
+            while let Some((t0, t1, s0, s1, depth)) = open.pop() {
+                let rho = qd * (t1 - t0);
+                let bound = [&s0.1, &s1.1]
+                    .iter()
+                    .filter_map(|p| jacobian_bound(p, model.l, rho))
+                    .reduce(f64::min)
+                    .map(|kb| 0.5 * (s0.0 + s1.0 + kb * rho));
+                // Halving helps only while both samples are below the target.
+                let settled = depth == REFINEMENTS || s0.0.max(s1.0) > target_m;
+                match bound {
+                    Some(b) if b <= target_m || settled => out.bound_m = out.bound_m.max(b),
+                    _ if settled => out.bound_m = f64::INFINITY,
+                    _ => {
+                        let tm = 0.5 * (t0 + t1);
+                        let mid = sample(tm)?;
+                        if mid.0 > out.max_m {
+                            out.max_m = mid.0;
+                            out.at_s = seg.t0_s + tm;
+                        }
+                        open.push((t0, tm, s0, mid, depth + 1));
+                        open.push((tm, t1, mid, s1, depth + 1));
+                    }
+                }
+            }
+            before = after;
         }
     }
-    out.bound_m = out.max_m + 0.5 * lipschitz;
+    out.bound_m = out.bound_m.max(out.max_m);
     Ok(out)
 }
 
@@ -351,4 +424,53 @@ fn golden_max<E>(f: impl Fn(f64) -> Result<f64, E>, lo: f64, hi: f64) -> Result<
         }
     }
     Ok(if fc > fd { (c, fc) } else { (d, fd) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The certificate's ‖∂r/∂q‖ bound holds at joints anywhere within the
+    /// path length from the pose it is read at (a straight path there is
+    /// one such path), across the workspace.
+    #[test]
+    fn the_jacobian_bound_holds_within_the_path_length() {
+        let model = triquint_shared::Robot::default().model::<f64>();
+        let mut state: u64 = 7;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut tight: f64 = 0.0;
+        for _ in 0..200 {
+            let r = Vector3::new(0.2 * next() - 0.1, 0.2 * next() - 0.1, 0.54 + 0.14 * next());
+            let pose = Pose::from_cartesian(&model, r).unwrap();
+            for rho in [1e-5, 1e-4, 1e-3] {
+                let k = jacobian_bound(&pose, model.l, rho).unwrap();
+                let spectral = |g: Matrix3<f64>| g.svd(false, false).singular_values.max();
+                assert!(spectral(pose.platform_jacobian()) <= k);
+                for _ in 0..20 {
+                    let dir = Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                    let q = pose.q + dir * rho * next();
+                    let at = Pose::from_joints(&model, q).unwrap();
+                    let norm = at
+                        .platform_jacobian()
+                        .svd(false, false)
+                        .singular_values
+                        .max();
+                    assert!(norm <= k, "rho {rho}: {norm} over {k}");
+                    if rho == 1e-5 {
+                        tight = tight.max(norm / k);
+                    }
+                }
+            }
+        }
+        // Over a short path the bound is close to the largest value.
+        assert!(tight > 0.5, "{tight}");
+        // A path too long for the struts' geometry gets no bound.
+        let pose = Pose::from_cartesian(&model, Vector3::new(0.0, 0.0, 0.6)).unwrap();
+        assert_eq!(jacobian_bound(&pose, model.l, 1.0), None);
+    }
 }

@@ -164,7 +164,11 @@ fn free_knots_need_a_point_to_point_min_time_job() {
         KnotPlacement::Free
     );
     let e = Job::from_toml(&text.replace("\"free\"", "\"loose\"")).unwrap_err();
-    assert!(e.to_string().contains("job:2"), "{e}");
+    assert!(
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("unknown variant `loose`"), "{e}");
 }
 
 #[test]
@@ -239,4 +243,208 @@ fn the_path_deviation_bounds_a_denser_sampling() {
             }
         }
     }
+}
+
+/// `knots = { placement = "free", segments = N }`: more segments than the
+/// shape's halve its segments and change nothing of the motion; fewer are
+/// planned by the min-time search at the shape's knots; every plan passes
+/// `check` and has N segments.
+#[test]
+fn a_segment_count_is_met_or_refused_with_the_most_there_can_be() {
+    let m = [[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]];
+    let auto = plan(&job(m, KnotPlacement::Free).unwrap(), &Options::default()).unwrap();
+    let natural = auto.segments.len();
+    for n in [4, natural - 2, natural, natural + 3, 30] {
+        let j = Job::builder()
+            .objective(Objective::MinTime)
+            .limits(LIMITS)
+            .knots(KnotPlacement::Free)
+            .knot_segments(n)
+            .points_mm(m)
+            .build()
+            .unwrap();
+        let p = plan(&j, &Options::default()).unwrap();
+        assert_eq!(p.segments.len(), n, "asked {n}");
+        assert!(check(&p).unwrap().iter().all(|r| r.ok), "asked {n}");
+        assert_eq!(p.free_knots, (1..n).collect::<Vec<_>>());
+        if n >= natural {
+            // The same motion, cut finer.
+            assert_eq!(p.total_time_s, auto.total_time_s, "asked {n}");
+            for t in [0.1, 0.37, 0.8].map(|f| f * p.total_time_s) {
+                let (a, b) = (p.at(t).unwrap(), auto.at(t).unwrap());
+                let gap = |x: [f64; 3], y: [f64; 3]| {
+                    (0..3).map(|j| (x[j] - y[j]).abs()).fold(0.0, f64::max)
+                };
+                assert!(
+                    gap(a.q, b.q) < 1e-9 && gap(a.v, b.v) < 1e-6,
+                    "asked {n} at {t}"
+                );
+            }
+        } else {
+            // Never below the time-optimal jerk-limited duration.
+            let (a, b) = (p.knots_m[0], p.knots_m[n]);
+            let d = (0..3).map(|j| (b[j] - a[j]).abs()).fold(0.0, f64::max);
+            let optimum = double_s_time(d, &LIMITS);
+            assert!(p.total_time_s >= optimum * (1.0 - 1e-9), "asked {n}");
+        }
+    }
+    // More than 5 ms segments allow: refused with the most there can be.
+    let short = [[0.0, 0.0, 600.0], [2.0, 0.0, 600.0]];
+    let e = plan(
+        &job(short, KnotPlacement::Free)
+            .unwrap()
+            .to_builder()
+            .knot_segments(64)
+            .build()
+            .unwrap(),
+        &Options::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots.segments"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("at most"), "{e}");
+}
+
+#[test]
+fn bad_segment_counts_and_knot_tables_are_refused_naming_the_key() {
+    let file = |knots: &str| {
+        format!(
+            "objective = \"min-time\"\nknots = {knots}\n[path]\nunits = \"mm\"\npoints = [[0, 0, 600], [20, 0, 600]]\n"
+        )
+    };
+    let ok = Job::from_toml(&file("{ placement = \"free\", segments = 9 }")).unwrap();
+    assert_eq!(
+        (ok.knot_placement(), ok.knot_segments()),
+        (KnotPlacement::Free, Some(9))
+    );
+    let auto = Job::from_toml(&file("{ placement = \"free\" }")).unwrap();
+    assert_eq!(auto.knot_segments(), None);
+    for (knots, field, says) in [
+        (
+            "{ placement = \"free\", segments = 2 }",
+            "knots.segments",
+            "outside 3..64",
+        ),
+        (
+            "{ placement = \"free\", segments = 65 }",
+            "knots.segments",
+            "outside 3..64",
+        ),
+        (
+            "{ placement = \"free\", segments = -1 }",
+            "knots.segments",
+            "not a count",
+        ),
+        (
+            "{ placement = \"fixed\", segments = 7 }",
+            "knots.segments",
+            "placement = \"free\"",
+        ),
+        (
+            "{ placement = \"free\", segment = 7 }",
+            "knots",
+            "unknown field `segment`",
+        ),
+        (
+            "{ placement = \"free\", segments = \"7\" }",
+            "knots",
+            "expected i64",
+        ),
+        ("{ segments = 7 }", "knots", "placement"),
+        ("7", "knots", "neither"),
+    ] {
+        let e = Job::from_toml(&file(knots)).unwrap_err();
+        assert!(
+            matches!(&e, PlanError::InvalidJob { field: f, .. } if f == field),
+            "{knots}: {e:?}"
+        );
+        assert!(e.to_string().contains(says), "{knots}: {e}");
+    }
+}
+
+/// `path.max_deviation_mm`: on the seeded moves, every free-knot plan
+/// bounded to 0.5 mm passes `check` and the deviation's own check, its
+/// certificate is above a sampling ten times denser, and it is no longer
+/// than at fixed knots.
+#[test]
+fn a_deviation_bound_is_met_and_proved() {
+    use nalgebra::Vector3;
+    use triquint_planner::check_deviation;
+    use triquint_shared::kinematics::platform_position;
+    let model = triquint_planner::Robot::default().model::<f64>();
+    let mut bent = 0;
+    for (i, m) in moves(10).into_iter().enumerate() {
+        let Ok(free) = job(m, KnotPlacement::Free) else {
+            continue;
+        };
+        let unbounded = plan(&free, &Options::default()).unwrap();
+        let j = free.to_builder().max_deviation_mm(0.5).build().unwrap();
+        let p = plan(&j, &Options::default()).unwrap();
+        assert!(check(&p).unwrap().iter().all(|r| r.ok), "move {i}");
+        let row = check_deviation(&p, 0.5e-3).unwrap();
+        assert!(row.ok && row.value <= 0.5e-3, "move {i}: {row:?}");
+        let fixed = plan(&job(m, KnotPlacement::Fixed).unwrap(), &Options::default()).unwrap();
+        assert!(
+            p.total_time_s <= fixed.total_time_s,
+            "move {i}: {} against {}",
+            p.total_time_s,
+            fixed.total_time_s
+        );
+        let (a, b) = (
+            Vector3::from(p.via_points_m[0]),
+            Vector3::from(p.via_points_m[1]),
+        );
+        let n = (p.total_time_s / 2e-5).ceil() as usize;
+        let mut dense: f64 = 0.0;
+        for k in 0..=n {
+            let q = p.at(p.total_time_s * k as f64 / n as f64).unwrap().q;
+            let r = platform_position(&model, q).unwrap();
+            let u = ((r - a).dot(&(b - a)) / (b - a).norm_squared()).clamp(0.0, 1.0);
+            dense = dense.max((r - (a + (b - a) * u)).norm());
+        }
+        assert!(dense <= row.value, "move {i}: {dense} over {}", row.value);
+        if !check_deviation(&unbounded, 0.5e-3).unwrap().ok {
+            bent += 1;
+        }
+    }
+    assert!(bent >= 3, "only {bent} moves needed the bound");
+}
+
+/// A bound no plan meets is refused with the closest plan's figures.
+#[test]
+fn an_unmeetable_deviation_bound_says_how_close_the_plan_came() {
+    let m = [[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]];
+    for knots in [KnotPlacement::Free, KnotPlacement::Fixed] {
+        let j = job(m, knots)
+            .unwrap()
+            .to_builder()
+            .max_deviation_mm(1e-3)
+            .build()
+            .unwrap();
+        match plan(&j, &Options::default()) {
+            Err(PlanError::Deviation {
+                limit_m,
+                bound_m,
+                reached_m,
+                ..
+            }) => {
+                assert_eq!(limit_m, 1e-6);
+                assert!(
+                    bound_m > limit_m && bound_m >= reached_m,
+                    "{bound_m} {reached_m}"
+                );
+            }
+            other => panic!("{knots:?}: {other:?}"),
+        }
+    }
+    let e = Job::from_toml(
+        "[path]\nunits = \"mm\"\nmax_deviation_mm = -1\npoints = [[0, 0, 600], [20, 0, 600]]\n",
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "path.max_deviation_mm"),
+        "{e:?}"
+    );
 }

@@ -221,6 +221,17 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             inst.setattr("shortest_total_time", None::<f64>)?;
             inst
         }
+        PlanError::Deviation {
+            limit_m, bound_m, ..
+        } => {
+            let inst = new_error(py, &errs.infeasible, &msg)?;
+            inst.setattr("limit", "max_deviation_mm")?;
+            inst.setattr("unit", "mm")?;
+            inst.setattr("limit_value", limit_m * 1e3)?;
+            inst.setattr("reached", bound_m * 1e3)?;
+            inst.setattr("shortest_total_time", py.None())?;
+            inst
+        }
         PlanError::Cancelled { reason } => {
             let inst = new_error(py, &errs.cancelled, &msg)?;
             let reason = match reason {

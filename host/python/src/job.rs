@@ -25,8 +25,12 @@ use crate::units::Units;
 /// plan's duration for min-max-jerk). `objective` is 'min-max-jerk' (the
 /// smallest maximum |jerk| within total_time) or 'min-time' (the shortest
 /// time that meets every limit). `knots` is 'fixed' or, for min-time
-/// between two via-points, 'free' (the planner chooses the knots). Defaults:
-/// the paper's Table 3 limits and Table 1 robot.
+/// between two via-points, 'free' (the planner chooses the knots);
+/// `knot_segments` sets a free-knot move's segment count (3..64), and
+/// `max_deviation_mm` bounds the platform's distance from the straight
+/// segments between via-points (the planner meets it or raises
+/// InfeasibleError with limit 'max_deviation_mm'). Defaults: the paper's
+/// Table 3 limits and Table 1 robot.
 ///
 /// `Job.from_toml(path)` reads a job file of `triquint plan`.
 #[pyclass(name = "Job", module = "triquint", frozen)]
@@ -64,6 +68,8 @@ pub struct JobArgs<'a, 'py> {
     pub units: Option<&'a str>,
     pub objective: Option<&'a str>,
     pub knots: Option<&'a str>,
+    pub knot_segments: Option<usize>,
+    pub max_deviation_mm: Option<f64>,
     pub total_time: Option<f64>,
     pub velocity: Option<f64>,
     pub acceleration: Option<f64>,
@@ -85,6 +91,8 @@ impl JobArgs<'_, '_> {
         add("units", self.units.is_some());
         add("objective", self.objective.is_some());
         add("knots", self.knots.is_some());
+        add("knot_segments", self.knot_segments.is_some());
+        add("max_deviation_mm", self.max_deviation_mm.is_some());
         add("total_time", self.total_time.is_some());
         add("velocity", self.velocity.is_some());
         add("acceleration", self.acceleration.is_some());
@@ -100,7 +108,8 @@ impl JobArgs<'_, '_> {
 pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> PyResult<PyJob> {
     let units = Units::parse(args.units.unwrap_or("mm"))?;
     let objective = parse_objective(py, args.objective.unwrap_or("min-max-jerk"))?;
-    let knots = parse_knots(py, args.knots.unwrap_or("fixed"))?;
+    // Not given: the job's default placement.
+    let knots = args.knots.map(|k| parse_knots(py, k)).transpose()?;
     let d = Limits::default();
     let limits = Limits {
         velocity: args.velocity.unwrap_or(d.velocity),
@@ -130,10 +139,18 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
     if args.robot.is_some() || args.machine.is_none() {
         builder = builder.robot(robot_or_default(args.robot));
     }
+    if let Some(k) = knots {
+        builder = builder.knots(k);
+    }
+    if let Some(n) = args.knot_segments {
+        builder = builder.knot_segments(n);
+    }
+    if let Some(mm) = args.max_deviation_mm {
+        builder = builder.max_deviation_mm(mm);
+    }
     let job = guard(py, || {
         builder
             .objective(objective)
-            .knots(knots)
             .limits(limits)
             .points_m(rows)
             .build()
@@ -145,10 +162,12 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
 #[pymethods]
 impl PyJob {
     #[new]
-    #[pyo3(signature = (points, *, units = None, objective = None, knots = None, total_time = None,
+    #[pyo3(signature = (points, *, units = None, objective = None, knots = None, knot_segments = None,
+        max_deviation_mm = None, total_time = None,
         velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
         machine = None),
-        text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', total_time=5.0, \
+        text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', knot_segments=None, \
+            max_deviation_mm=None, total_time=5.0, \
             velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -157,6 +176,8 @@ impl PyJob {
         units: Option<&str>,
         objective: Option<&str>,
         knots: Option<&str>,
+        knot_segments: Option<usize>,
+        max_deviation_mm: Option<f64>,
         total_time: Option<f64>,
         velocity: Option<f64>,
         acceleration: Option<f64>,
@@ -169,6 +190,8 @@ impl PyJob {
             units,
             objective,
             knots,
+            knot_segments,
+            max_deviation_mm,
             total_time,
             velocity,
             acceleration,
@@ -325,10 +348,12 @@ impl From<&Progress> for PyProgress {
 /// (index, point), InfeasibleError (limit, reached, shortest_total_time),
 /// SolverError.
 #[pyfunction]
-#[pyo3(signature = (points, *, units = None, objective = None, knots = None, total_time = None,
+#[pyo3(signature = (points, *, units = None, objective = None, knots = None, knot_segments = None,
+        max_deviation_mm = None, total_time = None,
     velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
     machine = None, starts = 8, seed = 1, progress = None),
-    text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', total_time=5.0, \
+    text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', knot_segments=None, \
+            max_deviation_mm=None, total_time=5.0, \
         velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None, \
         starts=8, seed=1, progress=None)")]
 #[allow(clippy::too_many_arguments)]
@@ -338,6 +363,8 @@ pub fn plan(
     units: Option<&str>,
     objective: Option<&str>,
     knots: Option<&str>,
+    knot_segments: Option<usize>,
+    max_deviation_mm: Option<f64>,
     total_time: Option<f64>,
     velocity: Option<f64>,
     acceleration: Option<f64>,
@@ -353,6 +380,8 @@ pub fn plan(
         units,
         objective,
         knots,
+        knot_segments,
+        max_deviation_mm,
         total_time,
         velocity,
         acceleration,

@@ -168,3 +168,24 @@ def test_knots_keyword():
     assert e.value.field == "knots"
     with pytest.raises(TypeError):
         triquint.plan(job, knots="free")
+
+
+def test_knot_segments_and_the_deviation_bound():
+    move = [[-90, 90, 680], [40, -60, 600]]
+    p = triquint.plan(move, objective="min-time", knots="free", knot_segments=20)
+    assert len(p.segments) == 20 and all(row["ok"] for row in p.check())
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.plan(move, objective="min-time", knots="free", knot_segments=2)
+    assert e.value.field == "knots.segments"
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.plan(move, objective="min-time", knot_segments=7)  # fixed knots
+    assert e.value.field == "knots.segments"
+    bounded = triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=0.5)
+    assert bounded.path_deviation["max"] <= 0.5e-3 < triquint.plan(move, objective="min-time", knots="free").path_deviation["max"]
+    assert all(row["ok"] for row in bounded.check())
+    with pytest.raises(triquint.InfeasibleError) as e:
+        triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=1e-3)
+    assert e.value.limit == "max_deviation_mm" and e.value.reached > 1e-3
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.plan(move, objective="min-time", max_deviation_mm=float("nan"))
+    assert e.value.field == "path.max_deviation_mm"

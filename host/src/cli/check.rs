@@ -18,6 +18,11 @@ pub struct CheckArgs {
     /// Print the checks as JSON: `{"ok", "checks": [{"check", "value", "bound", "ok"}]}`.
     #[arg(long)]
     pub json: bool,
+    /// Also prove the job's `path.max_deviation_mm` (the plan file does not
+    /// record it): the certified bound on the platform's distance from the
+    /// straight segments between the via-points.
+    #[arg(long, value_name = "MM")]
+    pub max_deviation_mm: Option<f64>,
     #[command(flatten)]
     pub machine: crate::machine_arg::MachineArg,
 }
@@ -45,6 +50,22 @@ pub fn run(args: &CheckArgs) -> CliResult {
             ok: r.ok,
         })
         .collect();
+    if let Some(mm) = args.max_deviation_mm {
+        if !(mm.is_finite() && mm > 0.0) {
+            return Err(CliError::bad_input(format!(
+                "--max-deviation-mm {mm}: a bound is a positive number of millimetres"
+            )));
+        }
+        let r = triquint_planner::check_deviation(&plan, mm * 1e-3).map_err(|e| {
+            CliError::bad_input(format!("{}: not a valid plan: {e}", args.plan.display()))
+        })?;
+        table.push(Row {
+            what: r.what,
+            value: r.value,
+            bound: r.bound,
+            ok: r.ok,
+        });
+    }
     if let Some(s) = streamability(&plan) {
         table.push(Row {
             what: format!("streaming: segments {}–{} (s)", s.first, s.last),
