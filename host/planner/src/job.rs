@@ -45,7 +45,7 @@ pub const MAX_DEVIATION_MM: (f64, f64) = (1e-3, 1e3);
 /// get free knots? The one switch of the default; `move-to` follows it.
 /// Off while a free move's 15 segments outrun the drives' queue
 /// (docs/planner.md, Free knots).
-pub const FREE_KNOTS_BY_DEFAULT: bool = false;
+pub const FREE_KNOTS_BY_DEFAULT: bool = true;
 
 /// How the planner places the knots between the via-points.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]

@@ -22,8 +22,8 @@ use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
 use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, round_within};
 use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
-use crate::streaming::{shortfall, streams};
 use crate::stats::{PathDeviation, path_deviation_within};
+use crate::streaming::{shortfall, streams};
 use crate::time_scaling::{scaled_x, stretch};
 
 /// How often [`plan_with`] calls its observer.
@@ -157,6 +157,11 @@ fn planned(
     if free {
         plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
         plan.free_knots = (1..p.knots.len() - 1).collect();
+    }
+    if free && job.knot_segments().is_some() {
+        // A segment count the job asks for is kept, or refused: falling
+        // back to other knots would not be what it asked.
+        streams(&plan)?;
     }
     if free && (!passes_check(&plan)? || shortfall(&plan).is_some()) {
         // Nothing the planner writes fails the check or the streaming

@@ -254,7 +254,26 @@ fn a_segment_count_is_met_or_refused_with_the_most_there_can_be() {
     let m = [[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]];
     let auto = plan(&job(m, KnotPlacement::Free).unwrap(), &Options::default()).unwrap();
     let natural = auto.segments.len();
-    for n in [4, natural - 2, natural, natural + 3, 30] {
+    // Beyond a queue's worth, a sub-second move's segments do not stream:
+    // the count asked for is refused, not silently changed.
+    let queue = QUEUE_CAPACITY;
+    let too_many = Job::builder()
+        .objective(Objective::MinTime)
+        .limits(LIMITS)
+        .knots(KnotPlacement::Free)
+        .knot_segments(4 * queue)
+        .points_mm(m)
+        .build()
+        .unwrap();
+    assert!(
+        matches!(
+            plan(&too_many, &Options::default()),
+            Err(PlanError::Unstreamable { .. })
+        ),
+        "{} segments",
+        4 * queue
+    );
+    for n in [4, natural - 2, natural, natural + 3, queue] {
         let j = Job::builder()
             .objective(Objective::MinTime)
             .limits(LIMITS)
