@@ -15,6 +15,7 @@ use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::{Ceilings, Machine};
 use triquint_shared::plan::Objective;
+use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::{Limits, Model, Robot, Travel};
 
@@ -60,6 +61,7 @@ pub struct Job {
     ceilings: Ceilings,
     points_m: Vec<[f64; 3]>,
     knots: KnotPlacement,
+    shaper: Option<ShaperSpec>,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
@@ -76,6 +78,7 @@ pub struct JobBuilder {
     machine_robot: Option<Robot>,
     points_m: Vec<[f64; 3]>,
     knots: KnotPlacement,
+    shaper: Option<ShaperSpec>,
 }
 
 impl JobBuilder {
@@ -113,6 +116,11 @@ impl JobBuilder {
     /// How the knots are placed ([`KnotPlacement::Fixed`] by default).
     pub fn knots(mut self, knots: KnotPlacement) -> Self {
         self.knots = knots;
+        self
+    }
+    /// The input shaper the plan is convolved with (none by default).
+    pub fn shaper(mut self, shaper: Option<ShaperSpec>) -> Self {
+        self.shaper = shaper;
         self
     }
     /// Replaces the via-points, in metres.
@@ -212,6 +220,9 @@ impl JobBuilder {
                 ));
             }
         }
+        if let Some(spec) = &self.shaper {
+            crate::shaper::Impulses::for_spec(spec)?;
+        }
         if self.knots == KnotPlacement::Free
             && (self.objective != Objective::MinTime || pts.len() != 2)
         {
@@ -247,6 +258,7 @@ impl JobBuilder {
             ceilings: self.ceilings,
             points_m: self.points_m,
             knots: self.knots,
+            shaper: self.shaper,
         })
     }
 }
@@ -294,6 +306,7 @@ impl Job {
             machine_robot: None,
             points_m: self.points_m.clone(),
             knots: self.knots,
+            shaper: self.shaper,
         }
     }
     pub fn objective(&self) -> Objective {
@@ -319,6 +332,10 @@ impl Job {
     /// How the knots are placed.
     pub fn knot_placement(&self) -> KnotPlacement {
         self.knots
+    }
+    /// The input shaper, if the plan is to be shaped.
+    pub fn shaper(&self) -> Option<&ShaperSpec> {
+        self.shaper.as_ref()
     }
     /// The fixed knots the planner interpolates: the via-points, with points on
     /// the straight lines between them when there are fewer than five.

@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use triquint_shared::machine::Machine;
 use triquint_shared::plan::Objective;
+use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::{Limits, Robot};
 
 use crate::bounded_read::{MAX_JOB_BYTES, MAX_POINTS_FILE_BYTES, io_reason, read_text};
@@ -94,6 +95,7 @@ struct JobFile {
     limits: Limits,
     #[serde(default)]
     knots: KnotPlacement,
+    shaper: Option<ShaperSpec>,
     path: PathSpec,
 }
 
@@ -210,6 +212,7 @@ fn parse(
         .objective(f.objective)
         .limits(f.limits)
         .knots(f.knots)
+        .shaper(f.shaper)
         .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
         .build()
 }
