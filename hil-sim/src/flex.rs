@@ -60,6 +60,21 @@ impl Default for FlexParams {
     }
 }
 
+impl FlexParams {
+    /// The machine file's `[vibration]` (its defaults are [`Default`]'s).
+    pub fn for_machine(machine: &triquint_shared::machine::Machine) -> Self {
+        let v = &machine.vibration;
+        Self {
+            screw_hz: v.screw_hz,
+            screw_damping: v.screw_damping,
+            platform_hz: v.platform_hz,
+            platform_damping: v.platform_damping,
+            current_loop_hz: v.current_loop_hz,
+            ..Self::default()
+        }
+    }
+}
+
 /// Why flexible parameters cannot describe a machine.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum FlexError {
@@ -485,6 +500,20 @@ impl FlexPlant {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_default_machine_file_gives_the_default_parameters() {
+        use triquint_shared::machine::Machine;
+        assert_eq!(
+            FlexParams::for_machine(&Machine::default()),
+            FlexParams::default()
+        );
+        let mut m = Machine::default();
+        m.vibration.platform_hz = 42.0;
+        m.vibration.screw_damping = 0.08;
+        let f = FlexParams::for_machine(&m);
+        assert_eq!((f.platform_hz, f.screw_damping), (42.0, 0.08));
+    }
 
     fn quiet() -> PlantConfig {
         PlantConfig {

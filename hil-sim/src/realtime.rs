@@ -61,6 +61,7 @@ pub struct RealtimeConfig {
 
 impl RealtimeConfig {
     pub fn new(iface: &str, machine: Machine, q0: Vector3<f64>) -> Self {
+        let flex = FlexParams::for_machine(&machine);
         Self {
             iface: iface.to_string(),
             nodes: vec![1, 2, 3],
@@ -71,7 +72,7 @@ impl RealtimeConfig {
             rate_hz: 1000.0,
             plant: PlantConfig::default(),
             plant_kind: PlantKind::Rigid,
-            flex: FlexParams::default(),
+            flex,
             q0,
             clock_seed: 7,
             max_drift_ppm: 200.0,

@@ -152,6 +152,7 @@ pub fn plan_through(
         segments,
         max_abs: MaxAbs::default(),
         solver: SolverStats::default(),
+        shaping: None,
     };
     plan.max_abs = sampled_max_abs(&plan)?;
     Ok(plan)

@@ -51,6 +51,8 @@ enum Command {
     Stop(cli::stop::StopArgs),
     /// Feed override in per cent of the planned speed (persists).
     Override(cli::feed_override::OverrideArgs),
+    /// The flexible machine's modes at a pose or across the workspace, and a shaper.
+    Resonance(cli::resonance::ResonanceArgs),
 }
 
 fn run(cli: Cli) -> CliResult {
@@ -73,6 +75,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Resume(a) => cli::resume::run(a),
         Command::Stop(a) => cli::stop::run(a),
         Command::Override(a) => cli::feed_override::run(a),
+        Command::Resonance(a) => cli::resonance::run(a, &a.machine.load()?),
     }
 }
 

@@ -58,7 +58,53 @@ fn cases() -> Vec<Case> {
         "plan", "job.toml", "-o", "out.json", "--starts", "1", "--quiet",
     ];
     let units = "units = \"mm\"";
+    let good_job = || vec![("job.toml", job("", &format!("{units}\n{GOOD_POINTS}")))];
+    let with = |extra: &'static [&'static str]| {
+        let mut a = plan_args.clone();
+        a.extend_from_slice(extra);
+        a
+    };
     vec![
+        Case {
+            name: "unknown shaper",
+            files: good_job(),
+            args: with(&["--shaper", "zz:30"]),
+            status: 2,
+            says: "unknown shaper `zz`",
+        },
+        Case {
+            name: "shaper without a frequency",
+            files: good_job(),
+            args: with(&["--shaper", "ei"]),
+            status: 2,
+            says: "give TYPE:HZ[:DAMPING]",
+        },
+        Case {
+            name: "shaper damping out of range",
+            files: good_job(),
+            args: with(&["--shaper", "ei:30:1.5"]),
+            status: 2,
+            says: "shaper.damping",
+        },
+        Case {
+            name: "a job's shaper out of range",
+            files: vec![(
+                "job.toml",
+                format!(
+                    "[shaper]\ntype = \"mzv\"\nfrequency_hz = 0\n[path]\n{units}\n{GOOD_POINTS}\n"
+                ),
+            )],
+            args: plan_args.clone(),
+            status: 2,
+            says: "shaper.frequency_hz",
+        },
+        Case {
+            name: "resonance outside the workspace",
+            files: vec![],
+            args: vec!["resonance", "--at", "0,0,100"],
+            status: 2,
+            says: "outside the travel",
+        },
         Case {
             name: "malformed TOML",
             files: vec![("job.toml", "[limits\nvelocity = 0.5\n".into())],

@@ -60,6 +60,7 @@ fn rest_to_rest_plan(points_mm: &[[f64; 3]], h: &[f64]) -> Plan {
         segments,
         max_abs: MaxAbs::default(),
         solver: SolverStats::default(),
+        shaping: None,
     }
 }
 

@@ -113,6 +113,36 @@ impl Default for Tuning {
     }
 }
 
+/// The machine's compliance, as the frequencies and damping ratios of its
+/// modes at the simulator's reference pose (docs/vibration.md): what the
+/// flexible plant of the simulator is built from, and what `triquint
+/// resonance` reports. The defaults are assumptions, not measurements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vibration {
+    /// One slider on its screw and coupling, motor held, platform rigid (Hz).
+    pub screw_hz: f64,
+    /// Damping ratio of that mode.
+    pub screw_damping: f64,
+    /// Lowest mode of the platform and payload on the struts, sliders held (Hz).
+    pub platform_hz: f64,
+    /// Damping ratio of that mode.
+    pub platform_damping: f64,
+    /// Bandwidth of the drives' current loop (Hz).
+    pub current_loop_hz: f64,
+}
+
+impl Default for Vibration {
+    fn default() -> Self {
+        Self {
+            screw_hz: 50.0,
+            screw_damping: 0.05,
+            platform_hz: 30.0,
+            platform_damping: 0.03,
+            current_loop_hz: 1000.0,
+        }
+    }
+}
+
 /// A whole machine. Build it with [`Machine::default`] (the paper's
 /// machine) or from a machine file; [`Machine::validate`] holds it to the
 /// rules docs/machine.md states.
@@ -123,6 +153,7 @@ pub struct Machine {
     pub drive: Tuning,
     pub axes: [Axis; 3],
     pub ceilings: Ceilings,
+    pub vibration: Vibration,
 }
 
 impl Default for Machine {
@@ -148,6 +179,7 @@ impl Default for Machine {
             drive: Tuning::default(),
             axes,
             ceilings: Ceilings::default(),
+            vibration: Vibration::default(),
         }
     }
 }
@@ -421,6 +453,27 @@ impl Machine {
             1e-6,
             CEILING_MAX,
             "must be in 1e-6..1e6 N·m",
+        )?;
+        let v = &self.vibration;
+        for (key, value) in [
+            ("vibration.screw_hz", v.screw_hz),
+            ("vibration.platform_hz", v.platform_hz),
+        ] {
+            within(key, None, value, 0.1, 1e4, "must be in 0.1..1e4 Hz")?;
+        }
+        for (key, value) in [
+            ("vibration.screw_damping", v.screw_damping),
+            ("vibration.platform_damping", v.platform_damping),
+        ] {
+            within(key, None, value, 0.0, 0.99, "must be in 0..0.99")?;
+        }
+        within(
+            "vibration.current_loop_hz",
+            None,
+            v.current_loop_hz,
+            1.0,
+            1e6,
+            "must be in 1..1e6 Hz",
         )?;
         for (i, a) in self.axes.iter().enumerate() {
             let n = Some(i + 1);

@@ -1,4 +1,4 @@
-//! The plan file (`triquint-plan/3`, docs/plan-format.md): what the planner
+//! The plan file (`triquint-plan/3`, 4 with free knots, 5 shaped; docs/plan-format.md): what the planner
 //! writes and every other tool (check, report, simulate, upload) reads, and
 //! its evaluation at a plan time ([`Plan::at`], [`Plan::sample`]; the
 //! conventions are in [`eval`]). Format 1 and 2 plans still load,
@@ -19,6 +19,7 @@ pub mod eval;
 pub mod extrema;
 pub mod figures;
 pub mod override_cap;
+pub mod shaping;
 
 pub use eval::{JointState, MAX_SAMPLES, SampleError, Samples};
 
@@ -31,6 +32,9 @@ pub const PLAN_FORMAT_2: &str = "triquint-plan/2";
 /// Format 3 with `free_knots`: written for a plan whose planner chose some
 /// knots (docs/plan-format.md); a plan without free knots is format 3.
 pub const PLAN_FORMAT_FREE_KNOTS: &str = "triquint-plan/4";
+/// A shaped plan, with `shaping` (its shaper and the unshaped plan, whose
+/// free knots it keeps): written for every plan a job shapes.
+pub const PLAN_FORMAT_SHAPED: &str = "triquint-plan/5";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -122,6 +126,9 @@ pub struct Plan {
     pub segments: Vec<Segment>,
     pub max_abs: MaxAbs,
     pub solver: SolverStats,
+    /// The shaper and the unshaped plan (format 5; absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shaping: Option<shaping::Shaping>,
 }
 
 impl Plan {
@@ -133,7 +140,7 @@ impl Plan {
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
-    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// assert_eq!(plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]).duration(), 2.0);
     /// assert_eq!(plan(vec![]).duration(), 0.0);
@@ -152,7 +159,7 @@ impl Plan {
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
-    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// let p = plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]);
     /// assert_eq!(p.segment_at(0.0).map(|(i, _)| i), Some(0));
@@ -176,7 +183,7 @@ impl Plan {
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
-    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
     /// let p = plan(vec![
     ///     Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.0, 0.1, 0.0, 0.0, 0.0]; 3] },
@@ -207,7 +214,7 @@ impl Plan {
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
     /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
-    /// #     segments, max_abs: Default::default(), solver: Default::default() } }
+    /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
     /// let samples: Vec<(f64, JointState)> = p.sample(0.4)?.collect();
     /// let times: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
@@ -279,6 +286,7 @@ mod tests {
             segments: (0..n).map(seg).collect(),
             max_abs: MaxAbs::default(),
             solver: SolverStats::default(),
+            shaping: None,
         }
     }
 

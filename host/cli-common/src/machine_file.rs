@@ -58,6 +58,17 @@ struct File {
     drive: Option<DriveTable>,
     axis: Option<BTreeMap<String, AxisTable>>,
     ceilings: Option<CeilingsTable>,
+    vibration: Option<VibrationTable>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VibrationTable {
+    screw_hz: Option<f64>,
+    screw_damping: Option<f64>,
+    platform_hz: Option<f64>,
+    platform_damping: Option<f64>,
+    current_loop_hz: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -197,6 +208,13 @@ pub fn parse_machine(text: &str) -> Result<Machine, MachineFileError> {
     set(&mut cs.acceleration, c.acceleration);
     set(&mut cs.jerk, c.jerk);
     set(&mut cs.torque, c.torque);
+    let v = file.vibration.unwrap_or_default();
+    let vs = &mut m.vibration;
+    set(&mut vs.screw_hz, v.screw_hz);
+    set(&mut vs.screw_damping, v.screw_damping);
+    set(&mut vs.platform_hz, v.platform_hz);
+    set(&mut vs.platform_damping, v.platform_damping);
+    set(&mut vs.current_loop_hz, v.current_loop_hz);
     m.validate().map_err(|error| {
         let (table, key) = table_and_key(&error);
         // An axis key may have come from its machine-wide default.
@@ -327,6 +345,19 @@ mod tests {
         assert_eq!(m.travel().max, [0.415, 0.40, 0.415]);
         assert_eq!(m.ceilings.jerk, 20.0);
         assert_eq!(parse_machine("").unwrap(), Machine::default());
+    }
+
+    #[test]
+    fn the_vibration_table_is_read_and_held_to_its_ranges() {
+        let m = parse_machine("[vibration]\nplatform_hz = 42\nscrew_damping = 0.08\n").unwrap();
+        assert_eq!(m.vibration.platform_hz, 42.0);
+        assert_eq!(m.vibration.screw_damping, 0.08);
+        assert_eq!(m.vibration.screw_hz, Machine::default().vibration.screw_hz);
+        assert_eq!(
+            err("[vibration]\nscrew_hz = 60\nplatform_damping = 1.5\n"),
+            "line 3: `vibration.platform_damping` = 1.5: must be in 0..0.99"
+        );
+        assert!(err("[vibration]\nmode_hz = 3\n").contains("unknown field"));
     }
 
     #[test]

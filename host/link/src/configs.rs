@@ -175,6 +175,7 @@ mod tests {
             }],
             max_abs: MaxAbs::default(),
             solver: SolverStats::default(),
+            shaping: None,
         }
     }
 

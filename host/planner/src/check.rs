@@ -15,7 +15,8 @@ use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::{MaxAbs, Plan};
 use triquint_shared::quintic::eval_poly;
 
-use crate::load::{LoadError, validate_plan};
+use crate::load::{LoadError, unshaped, validate_plan};
+use crate::shaper::{Impulses, convolve, knot_deviation};
 use crate::stats::{StatsError, path_deviation_within};
 use crate::sturm;
 
@@ -221,6 +222,14 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
             tol * val.iter().fold(1.0, |a: f64, b| a.max(*b)),
         );
     }
+    if let Some((convolution, deviation, bound)) = shaping_figures(plan)? {
+        row(
+            "shaped = unshaped ∗ shaper (m)",
+            convolution,
+            CONTINUITY_TOL,
+        );
+        row("via-point deviation of shaping (m)", deviation, bound);
+    }
     Ok(rows)
 }
 
@@ -251,4 +260,81 @@ pub fn check_deviation(plan: &Plan, limit_m: f64) -> Result<CheckRow, LoadError>
         bound: limit_m,
         ok: d.bound_m <= limit_m,
     })
+}
+
+/// A shaped plan's figures: how far its segments are from the unshaped
+/// plan convolved again (m over each segment: Σₖ |Δcₖ| hᵏ, infinite if the
+/// segments differ in number or time), and the largest joint distance at a
+/// via-point's time plus the shaper's mean delay from the via-point, with
+/// its bound, the unshaped plan's top speed times the shaper's duration
+/// (each copy is within that of the via-point). `None` for a plan that is
+/// not shaped; the unshaped plan is itself checked.
+fn shaping_figures(plan: &Plan) -> Result<Option<(f64, f64, f64)>, LoadError> {
+    let (Some(record), Some(base)) = (&plan.shaping, unshaped(plan)) else {
+        return Ok(None);
+    };
+    let nested = |e: &dyn std::fmt::Display| LoadError::Invalid(format!("shaping.unshaped: {e}"));
+    if let Some(bad) = check(&base)
+        .map_err(|e| nested(&e))?
+        .into_iter()
+        .find(|r| !r.ok)
+    {
+        return Err(nested(&format!(
+            "{} is {}, bound {}",
+            bad.what, bad.value, bad.bound
+        )));
+    }
+    let impulses =
+        Impulses::for_spec(&record.shaper).map_err(|e| LoadError::Invalid(e.to_string()))?;
+    let again = convolve(&base.segments, &impulses).map_err(|e| nested(&e))?;
+    let mut convolution: f64 = 0.0;
+    if again.len() != plan.segments.len() {
+        convolution = f64::INFINITY;
+    }
+    for (a, b) in again.iter().zip(&plan.segments) {
+        if (a.t0_s - b.t0_s).abs() > 1e-9 || (a.duration_s - b.duration_s).abs() > 1e-9 {
+            convolution = f64::INFINITY;
+        }
+        for j in 0..3 {
+            let d: f64 = (0..6)
+                .map(|k| (a.coeffs[j][k] - b.coeffs[j][k]).abs() * b.duration_s.powi(k as i32))
+                .sum();
+            convolution = if d.is_nan() {
+                f64::INFINITY
+            } else {
+                convolution.max(d)
+            };
+        }
+    }
+    // The via-points' knots and their times in the unshaped plan.
+    let model = base.robot.model::<f64>();
+    let mut times = Vec::new();
+    let mut knots = Vec::new();
+    let mut next = 0;
+    for p in &base.via_points_m {
+        let q = triquint_shared::kinematics::Pose::from_cartesian(&model, Vector3::from(*p))
+            .map_err(|e| nested(&e))?
+            .q;
+        let found = (next..base.knots_m.len())
+            .find(|&k| (0..3).all(|j| (base.knots_m[k][j] - q[j]).abs() <= CONTINUITY_TOL));
+        let Some(k) = found else {
+            return Err(nested(&"a via-point is not a knot"));
+        };
+        times.push(base.intervals_s[..k].iter().sum::<f64>());
+        knots.push(base.knots_m[k]);
+        next = k + 1;
+    }
+    let deviation = knot_deviation(&knots, &times, &plan.segments, &impulses)
+        .into_iter()
+        .fold(0.0, f64::max);
+    let speed = base
+        .max_abs
+        .velocity
+        .iter()
+        .fold(0.0, |a: f64, b| a.max(*b));
+    Ok(Some((
+        convolution,
+        deviation,
+        speed * impulses.duration_s() * (1.0 + LIMIT_TOL) + CONTINUITY_TOL,
+    )))
 }

@@ -15,6 +15,7 @@ use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::{Ceilings, Machine};
 use triquint_shared::plan::Objective;
+use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::{Limits, Model, Robot, Travel};
 
@@ -76,6 +77,7 @@ pub struct Job {
     knots: KnotPlacement,
     knot_segments: Option<usize>,
     max_deviation_m: Option<f64>,
+    shaper: Option<ShaperSpec>,
 }
 
 /// Builds a [`Job`]; [`JobBuilder::build`] validates it. Defaults: min-max
@@ -95,6 +97,7 @@ pub struct JobBuilder {
     knots: Option<KnotPlacement>,
     knot_segments: Option<usize>,
     max_deviation_mm: Option<f64>,
+    shaper: Option<ShaperSpec>,
 }
 
 impl JobBuilder {
@@ -147,6 +150,11 @@ impl JobBuilder {
     /// and `check_deviation` proves.
     pub fn max_deviation_mm(mut self, mm: f64) -> Self {
         self.max_deviation_mm = Some(mm);
+        self
+    }
+    /// The input shaper the plan is convolved with (none by default).
+    pub fn shaper(mut self, shaper: Option<ShaperSpec>) -> Self {
+        self.shaper = shaper;
         self
     }
     /// Replaces the via-points, in metres.
@@ -246,6 +254,9 @@ impl JobBuilder {
                 ));
             }
         }
+        if let Some(spec) = &self.shaper {
+            crate::shaper::Impulses::for_spec(spec)?;
+        }
         check_holding(&model, pts, l.torque)?;
         let point_to_point = self.objective == Objective::MinTime && pts.len() == 2;
         let knots = match self.knots {
@@ -312,6 +323,7 @@ impl JobBuilder {
             knots,
             knot_segments: self.knot_segments,
             max_deviation_m: self.max_deviation_mm.map(|mm| mm * 1e-3),
+            shaper: self.shaper,
         })
     }
 }
@@ -361,6 +373,7 @@ impl Job {
             knots: Some(self.knots),
             knot_segments: self.knot_segments,
             max_deviation_mm: self.max_deviation_m.map(|m| m * 1e3),
+            shaper: self.shaper.clone(),
         }
     }
     pub fn objective(&self) -> Objective {
@@ -395,6 +408,10 @@ impl Job {
     /// between the via-points (m), if any.
     pub fn max_deviation_m(&self) -> Option<f64> {
         self.max_deviation_m
+    }
+    /// The input shaper, if the plan is to be shaped.
+    pub fn shaper(&self) -> Option<&ShaperSpec> {
+        self.shaper.as_ref()
     }
     /// The fixed knots the planner interpolates: the via-points, with points on
     /// the straight lines between them when there are fewer than five.

@@ -26,6 +26,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use triquint_shared::machine::Machine;
 use triquint_shared::plan::Objective;
+use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::{Limits, Robot};
 
 use crate::bounded_read::{MAX_JOB_BYTES, MAX_POINTS_FILE_BYTES, io_reason, read_text};
@@ -109,6 +110,7 @@ struct JobFile {
     #[serde(default)]
     limits: Limits,
     knots: Option<toml::Value>,
+    shaper: Option<ShaperSpec>,
     path: PathSpec,
 }
 
@@ -241,6 +243,7 @@ fn parse(
     builder
         .objective(f.objective)
         .limits(f.limits)
+        .shaper(f.shaper)
         .points_m(points.into_iter().map(|p| p.map(|x| x * scale)))
         .build()
 }

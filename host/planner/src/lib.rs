@@ -72,6 +72,7 @@ mod program;
 mod rounding;
 mod run_state;
 mod search;
+mod shaper;
 pub mod shaping;
 mod spline;
 pub mod stats;

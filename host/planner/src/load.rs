@@ -4,12 +4,14 @@
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{
-    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, PLAN_FORMAT_FREE_KNOTS, Plan,
+    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, PLAN_FORMAT_FREE_KNOTS,
+    PLAN_FORMAT_SHAPED, Plan,
 };
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
 use crate::job::LIMIT_RANGE;
+use crate::shaper::Impulses;
 
 /// Why a text is not a usable plan.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -20,7 +22,7 @@ pub enum LoadError {
     Json(String),
     /// Another format or version than this library reads.
     #[error(
-        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_SHAPED}`, `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
     )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
@@ -43,6 +45,7 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
         // gets the default machine's values for what it lacks.
         let records: &[&str] = match f {
             PLAN_FORMAT | PLAN_FORMAT_FREE_KNOTS => &["travel", "ceilings"],
+            PLAN_FORMAT_SHAPED => &["travel", "ceilings", "shaping"],
             PLAN_FORMAT_2 => &["travel"],
             PLAN_FORMAT_1 => &[],
             _ => return Err(LoadError::Format { found: one_line(f) }),
@@ -174,7 +177,68 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
         ));
     }
     via_points_are_knots(plan)?;
-    free_knots_valid(plan)
+    free_knots_valid(plan)?;
+    shaping_valid(plan)
+}
+
+/// A shaping record only in format 5, with a shaper the planner makes and
+/// an unshaped plan that is a plan by every rule here; that the shaped plan
+/// is its convolution is `check`'s to prove.
+fn shaping_valid(plan: &Plan) -> Result<(), LoadError> {
+    let shaped = plan.format == PLAN_FORMAT_SHAPED;
+    let Some(record) = &plan.shaping else {
+        return if shaped {
+            Err(LoadError::Invalid(format!(
+                "a `{PLAN_FORMAT_SHAPED}` plan records its `shaping`; this one has none"
+            )))
+        } else {
+            Ok(())
+        };
+    };
+    if !shaped {
+        return Err(LoadError::Invalid(format!(
+            "a `{}` plan has no `shaping` (only `{PLAN_FORMAT_SHAPED}` records one)",
+            one_line(&plan.format)
+        )));
+    }
+    let impulses = Impulses::for_spec(&record.shaper)
+        .map_err(|e| LoadError::Invalid(format!("shaping: {e}")))?;
+    let base = unshaped(plan).ok_or_else(|| LoadError::Invalid("shaping: no record".into()))?;
+    validate_plan(&base).map_err(|e| LoadError::Invalid(format!("shaping.unshaped: {e}")))?;
+    let want = base.limits.total_time + impulses.duration_s();
+    if (plan.limits.total_time - want).abs() > 1e-9 * want.max(1.0) {
+        return Err(LoadError::Invalid(format!(
+            "limits: `total_time` is {}, the unshaped plan's {} plus the shaper's {} s",
+            exact(plan.limits.total_time),
+            exact(base.limits.total_time),
+            exact(impulses.duration_s())
+        )));
+    }
+    Ok(())
+}
+
+/// The unshaped plan a shaped plan records (format 3, or 4 with free
+/// knots), with the shaped plan's robot, limits but the total time, travel
+/// and ceilings; `None` for a plan that is not shaped.
+pub(crate) fn unshaped(plan: &Plan) -> Option<Plan> {
+    let r = &plan.shaping.as_ref()?.unshaped;
+    let mut base = plan.clone();
+    base.format = if r.free_knots.is_empty() {
+        PLAN_FORMAT
+    } else {
+        PLAN_FORMAT_FREE_KNOTS
+    }
+    .to_string();
+    base.limits.total_time = r.total_time_limit_s;
+    base.via_points_m = r.via_points_m.clone();
+    base.knots_m = r.knots_m.clone();
+    base.free_knots = r.free_knots.clone();
+    base.intervals_s = r.intervals_s.clone();
+    base.total_time_s = r.total_time_s;
+    base.segments = r.segments.clone();
+    base.max_abs = r.max_abs.clone();
+    base.shaping = None;
+    Some(base)
 }
 
 /// The formats this loader reads.
@@ -182,6 +246,7 @@ fn known_format(f: &str) -> bool {
     [
         PLAN_FORMAT,
         PLAN_FORMAT_FREE_KNOTS,
+        PLAN_FORMAT_SHAPED,
         PLAN_FORMAT_2,
         PLAN_FORMAT_1,
     ]
@@ -308,6 +373,7 @@ mod tests {
             segments,
             max_abs: MaxAbs::default(),
             solver: SolverStats::default(),
+            shaping: None,
         }
     }
 

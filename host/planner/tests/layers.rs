@@ -21,6 +21,7 @@ const LAYERS: &[&str] = &[
     "sturm",        // polynomial extrema by Sturm sequences (the check's)
     "banded",       // banded least-change projection
     "spline",       // the quintic spline as affine forms of the knot derivatives
+    "shaper",       // a shaper's impulses and the convolution with them
     "lp",           // the conic program and its solver
     "holding",      // the torque that holds the platform still
     "job",          // the job model

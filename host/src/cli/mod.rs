@@ -17,6 +17,7 @@ pub mod monitor;
 pub mod move_to;
 pub mod plan;
 pub mod report;
+pub mod resonance;
 pub mod resume;
 pub mod simulate;
 pub mod status;

@@ -1,4 +1,5 @@
-//! `triquint plan JOB.toml -o PLAN.json [--plot DIR]`: plans a job.
+//! `triquint plan JOB.toml -o PLAN.json [--plot DIR] [--shaper TYPE:HZ[:ζ]]`:
+//! plans a job.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -6,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use triquint_planner::shaping::{DEFAULT_DAMPING, Impulses, Shaper, ShaperSpec};
 use triquint_planner::{Control, Job, Options, Progress, Stage, plan_with};
 
 use triquint_cli_common::output::{check_target, output_error, write_outputs};
@@ -23,6 +25,44 @@ fn parse_starts(text: &str) -> CliResult<usize> {
             crate::cli::shortened(text)
         ))),
     }
+}
+
+/// Parses `--shaper TYPE:HZ[:DAMPING]` (`none` for no shaper): bad input
+/// (exit 2) for an unknown type or a frequency or damping out of range.
+fn parse_shaper(text: &str) -> CliResult<Option<ShaperSpec>> {
+    let bad = |why: String| {
+        CliError::bad_input(format!("--shaper `{}`: {why}", crate::cli::shortened(text)))
+    };
+    if text.eq_ignore_ascii_case("none") {
+        return Ok(None);
+    }
+    let mut parts = text.split(':');
+    let shaper: Shaper = parts
+        .next()
+        .unwrap_or_default()
+        .parse()
+        .map_err(|e: triquint_planner::shaping::UnknownShaper| bad(e.to_string()))?;
+    let number = |part: Option<&str>, what: &str| -> CliResult<Option<f64>> {
+        part.map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(format!("the {what} `{p}` is not a number")))
+        })
+        .transpose()
+    };
+    let frequency_hz = number(parts.next(), "frequency")?
+        .ok_or_else(|| bad("give TYPE:HZ[:DAMPING], e.g. ei:25.5:0.05".into()))?;
+    let damping = number(parts.next(), "damping")?.unwrap_or(DEFAULT_DAMPING);
+    if parts.next().is_some() {
+        return Err(bad("give TYPE:HZ[:DAMPING], e.g. ei:25.5:0.05".into()));
+    }
+    let spec = ShaperSpec {
+        shaper,
+        frequency_hz,
+        damping,
+    };
+    Impulses::for_spec(&spec).map_err(|e| bad(e.to_string()))?;
+    Ok(Some(spec))
 }
 
 #[derive(Args, Debug)]
@@ -47,6 +87,11 @@ pub struct PlanArgs {
     /// Print the summary as JSON on standard output (not with `-o -`).
     #[arg(long)]
     pub json: bool,
+    /// Shape the plan: TYPE (zv, mzv, zvd, ei, 2hump_ei), the mode's
+    /// frequency and damping ratio (default 0.1), e.g. `ei:25.5:0.05`;
+    /// `none` drops the job's `[shaper]`.
+    #[arg(long, value_name = "TYPE:HZ[:DAMPING]")]
+    pub shaper: Option<String>,
     #[command(flatten)]
     pub machine: crate::machine_arg::MachineArg,
 }
@@ -99,12 +144,17 @@ impl Watcher {
 
 pub fn run(args: &PlanArgs) -> CliResult {
     let starts = parse_starts(&args.starts)?;
+    let shaper = args.shaper.as_deref().map(parse_shaper).transpose()?;
     crate::cli::check_plot_folder(args.plot.as_deref())?;
     let machine = match &args.machine.file {
         Some(_) => Some(args.machine.load()?),
         None => None,
     };
     let (job, inputs) = Job::load_for(&args.job, machine.as_ref()).map_err(plan_error)?;
+    let job = match shaper {
+        Some(spec) => job.to_builder().shaper(spec).build().map_err(plan_error)?,
+        None => job,
+    };
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     let to_stdout = args.output.as_os_str() == "-";
     if to_stdout && args.json {
@@ -163,19 +213,27 @@ pub fn run(args: &PlanArgs) -> CliResult {
             "starts": plan.solver.starts,
             "lp_solves": plan.solver.lp_solves,
             "seconds": plan.solver.seconds,
+            "shaper": plan.shaping.as_ref().map(|s| s.shaper),
         });
         triquint_cli_common::outln!("{summary:#}")?;
     } else if !args.quiet {
         let m = &plan.max_abs;
         let max = |v: [f64; 3]| v.iter().fold(0.0f64, |a, b| a.max(*b));
         triquint_cli_common::errln!(
-            "planned {} segments, T = {:.6} s: max |jerk| {:.6} m/s³, |a| {:.4} m/s², |v| {:.4} m/s, |τ| {:.4} N·m ({} starts, {} LP solves, {:.3} s) → {}",
+            "planned {} segments, T = {:.6} s: max |jerk| {:.6} m/s³, |a| {:.4} m/s², |v| {:.4} m/s, |τ| {:.4} N·m{} ({} starts, {} LP solves, {:.3} s) → {}",
             plan.segments.len(),
             plan.total_time_s,
             max(m.jerk),
             max(m.acceleration),
             max(m.velocity),
             max(m.torque),
+            plan.shaping.as_ref().map_or(String::new(), |s| format!(
+                ", shaped {} {} Hz ζ {} (+{:.6} s)",
+                s.shaper.shaper,
+                s.shaper.frequency_hz,
+                s.shaper.damping,
+                plan.total_time_s - s.unshaped.total_time_s
+            )),
             plan.solver.starts,
             plan.solver.lp_solves,
             plan.solver.seconds,

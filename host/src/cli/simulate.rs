@@ -79,6 +79,7 @@ pub fn run(args: &SimulateArgs) -> CliResult {
         feedforward: !args.no_feedforward,
         rate_hz,
         plant: args.plant,
+        flex: triquint_sim::flex::FlexParams::for_machine(&machine),
         ..SimulateOptions::default()
     };
     if let Some(kind) = args.test_reference {

@@ -230,7 +230,7 @@ mod tests {
     /// in their queue, and they stop with Underrun.)
     #[test]
     fn shaping_removes_the_ringing_of_the_jerk_steps() {
-        use triquint_planner::shaping::{Impulses, Shaper, shape};
+        use triquint_planner::shaping::{Impulses, Shaper, ShaperSpec, shape};
         use triquint_sim::flex::FlexPlant;
         use triquint_sim::plant::PlantConfig;
 
@@ -294,8 +294,15 @@ mod tests {
         );
 
         // The planner's shaping of the plan itself: C3, checked, run by the drives.
-        let imp = Impulses::new(Shaper::Zvd, mode.hz, mode.damping).unwrap();
-        let s = shape(&p, &imp).unwrap();
+        let s = shape(
+            &p,
+            &ShaperSpec {
+                shaper: Shaper::Zvd,
+                frequency_hz: mode.hz,
+                damping: mode.damping,
+            },
+        )
+        .unwrap();
         assert!(triquint_planner::check(&s).unwrap().iter().all(|r| r.ok));
         // Through the law it leaves no more than the floor after a move.
         let law = run(&s, &opts, TestReference::Plan).unwrap();

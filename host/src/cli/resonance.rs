@@ -1,0 +1,324 @@
+//! `triquint resonance [--at X,Y,Z | --across] [--json]`: the flexible
+//! plant's modes from the machine file's `[vibration]`, at a pose or across
+//! the workspace, and the input shaper that keeps the lowest modes' residual
+//! smallest for the least time (docs/vibration.md).
+
+use clap::Args;
+use nalgebra::Vector3;
+use serde::Serialize;
+use triquint_cli_common::outln;
+use triquint_planner::shaping::{Impulses, Shaper};
+use triquint_shared::kinematics::Pose;
+use triquint_shared::machine::Machine;
+use triquint_sim::flex::{FlexError, FlexParams, FlexPlant, Mode};
+use triquint_sim::plant::PlantConfig;
+
+use crate::exit::{CliError, CliResult};
+
+/// The residual a suggested shaper may leave (Klipper's 5 %).
+const TARGET_RESIDUAL: f64 = 0.05;
+/// Modes within this factor of the lowest at a pose are the shaper's targets.
+const TARGET_BAND: f64 = 1.2;
+/// Horizontal offsets of `--across` (mm), on a square grid at the pose's height.
+const ACROSS_MM: [f64; 5] = [-120.0, -60.0, 0.0, 60.0, 120.0];
+
+#[derive(Args, Debug)]
+pub struct ResonanceArgs {
+    /// Platform position (mm) [default: the machine's reference pose, 0,0,600].
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub at: Option<String>,
+    /// Also every pose of a ±120 mm grid at that height inside the travel.
+    #[arg(long)]
+    pub across: bool,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub machine: crate::machine_arg::MachineArg,
+}
+
+/// Why the modes cannot be found.
+#[derive(Debug, thiserror::Error)]
+pub enum ResonanceError {
+    #[error("the flexible plant: {0}")]
+    Plant(#[from] FlexError),
+    #[error("({x:.1}, {y:.1}, {z:.1}) mm: {reason}")]
+    Pose {
+        x: f64,
+        y: f64,
+        z: f64,
+        reason: String,
+    },
+}
+
+#[derive(Serialize)]
+struct PoseModes {
+    position_mm: [f64; 3],
+    modes: Vec<ModeRow>,
+}
+
+#[derive(Serialize)]
+struct ModeRow {
+    hz: f64,
+    damping: f64,
+    platform_share: f64,
+}
+
+#[derive(Serialize)]
+struct ShaperRow {
+    #[serde(rename = "type")]
+    shaper: Shaper,
+    frequency_hz: f64,
+    damping: f64,
+    /// What the shaper adds to a move (ms).
+    duration_ms: f64,
+    /// The largest residual over the target modes at every pose (0–1).
+    worst_residual: f64,
+}
+
+/// The modes at each pose.
+fn modes(machine: &Machine, poses_mm: &[[f64; 3]]) -> Result<Vec<PoseModes>, ResonanceError> {
+    let params = FlexParams::for_machine(machine);
+    let model = machine.robot.model::<f64>();
+    let bad = |p: [f64; 3], reason: String| ResonanceError::Pose {
+        x: p[0],
+        y: p[1],
+        z: p[2],
+        reason,
+    };
+    let reference = params.reference_pose;
+    let q0 = Pose::from_cartesian(&model, Vector3::from(reference))
+        .map_err(|e| bad(reference.map(|x| x * 1e3), e.to_string()))?
+        .q;
+    let plant = FlexPlant::new(&machine.robot, PlantConfig::default(), params, q0)?;
+    poses_mm
+        .iter()
+        .map(|&p| {
+            let r = Vector3::from(p) * 1e-3;
+            let pose = Pose::from_cartesian(&model, r).map_err(|e| bad(p, e.to_string()))?;
+            if let Some(o) = machine.travel().outside(&pose.q.into()) {
+                return Err(bad(p, format!("outside the travel: {o}")));
+            }
+            let modes = plant.modes(r).map_err(|e| bad(p, e.to_string()))?;
+            Ok(PoseModes {
+                position_mm: p,
+                modes: modes
+                    .iter()
+                    .map(|m: &Mode| ModeRow {
+                        hz: m.hz,
+                        damping: m.damping,
+                        platform_share: m.platform_share,
+                    })
+                    .collect(),
+            })
+        })
+        .collect()
+}
+
+/// The modes a shaper aims at: at each pose, those within [`TARGET_BAND`]
+/// of the lowest (the lateral pair of the platform), as (Hz, damping).
+fn targets(poses: &[PoseModes]) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for p in poses {
+        let lowest = p.modes.iter().map(|m| m.hz).fold(f64::INFINITY, f64::min);
+        out.extend(
+            p.modes
+                .iter()
+                .filter(|m| m.hz <= TARGET_BAND * lowest)
+                .map(|m| (m.hz, m.damping)),
+        );
+    }
+    out
+}
+
+/// For each shaper, the frequency (0.1 Hz grid over ±30 % of the targets)
+/// whose worst residual over the targets is least, at the targets' mean
+/// damping.
+fn shapers(targets: &[(f64, f64)]) -> Vec<ShaperRow> {
+    let lo = targets.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let hi = targets.iter().map(|t| t.0).fold(0.0, f64::max);
+    let damping = targets.iter().map(|t| t.1).sum::<f64>() / targets.len().max(1) as f64;
+    let steps = ((1.3 * hi - 0.7 * lo) / 0.1).ceil() as usize;
+    Shaper::ALL
+        .into_iter()
+        .filter_map(|shaper| {
+            (0..=steps)
+                .filter_map(|i| {
+                    let f = ((0.7 * lo + 0.1 * i as f64) * 10.0).round() / 10.0;
+                    let imp = Impulses::new(shaper, f, damping).ok()?;
+                    let worst = targets
+                        .iter()
+                        .map(|&(hz, z)| imp.residual(hz, z))
+                        .fold(0.0, f64::max);
+                    Some(ShaperRow {
+                        shaper,
+                        frequency_hz: f,
+                        damping: (damping * 1e3).round() / 1e3,
+                        duration_ms: imp.duration_s() * 1e3,
+                        worst_residual: worst,
+                    })
+                })
+                .min_by(|a, b| a.worst_residual.total_cmp(&b.worst_residual))
+        })
+        .collect()
+}
+
+/// The shortest shaper within [`TARGET_RESIDUAL`], else the one leaving least.
+fn suggestion(rows: &[ShaperRow]) -> Option<&ShaperRow> {
+    rows.iter()
+        .filter(|r| r.worst_residual <= TARGET_RESIDUAL)
+        .min_by(|a, b| a.duration_ms.total_cmp(&b.duration_ms))
+        .or_else(|| {
+            rows.iter()
+                .min_by(|a, b| a.worst_residual.total_cmp(&b.worst_residual))
+        })
+}
+
+pub fn run(args: &ResonanceArgs, machine: &Machine) -> CliResult {
+    let centre: [f64; 3] = match &args.at {
+        Some(text) => triquint_cli_common::parse::parse_triple("--at", text)?.into(),
+        None => FlexParams::for_machine(machine)
+            .reference_pose
+            .map(|x| x * 1e3),
+    };
+    let mut poses = vec![centre];
+    if args.across {
+        for x in ACROSS_MM {
+            for y in ACROSS_MM {
+                let p = [centre[0] + x, centre[1] + y, centre[2]];
+                let inside =
+                    Pose::from_cartesian(&machine.robot.model::<f64>(), Vector3::from(p) * 1e-3)
+                        .is_ok_and(|pose| machine.travel().outside(&pose.q.into()).is_none());
+                if (x, y) != (0.0, 0.0) && inside {
+                    poses.push(p);
+                }
+            }
+        }
+    }
+    let found = modes(machine, &poses).map_err(|e| CliError::bad_input(e.to_string()))?;
+    let rows = shapers(&targets(&found));
+    let suggested = suggestion(&rows);
+    if args.json {
+        outln!(
+            "{:#}",
+            serde_json::json!({
+                "poses": found,
+                "shapers": rows,
+                "suggested": suggested,
+                "target_residual": TARGET_RESIDUAL,
+            })
+        )?;
+        return Ok(());
+    }
+    for p in &found {
+        let cells: Vec<String> = p
+            .modes
+            .iter()
+            .map(|m| {
+                format!(
+                    "{:.1} Hz ζ {:.3}{}",
+                    m.hz,
+                    m.damping,
+                    if m.platform_share > 0.5 {
+                        " (platform)"
+                    } else {
+                        ""
+                    }
+                )
+            })
+            .collect();
+        outln!(
+            "({:.1}, {:.1}, {:.1}) mm: {}",
+            p.position_mm[0],
+            p.position_mm[1],
+            p.position_mm[2],
+            cells.join(", ")
+        )?;
+    }
+    let t = targets(&found);
+    let lo = t.iter().map(|t| t.0).fold(f64::INFINITY, f64::min);
+    let hi = t.iter().map(|t| t.0).fold(0.0, f64::max);
+    outln!(
+        "lowest modes {lo:.1}–{hi:.1} Hz over {} pose{}",
+        found.len(),
+        if found.len() == 1 { "" } else { "s" }
+    )?;
+    outln!(
+        "{:<9} {:>8} {:>7} {:>10} {:>14}",
+        "shaper",
+        "Hz",
+        "ζ",
+        "adds (ms)",
+        "worst residual"
+    )?;
+    for r in &rows {
+        outln!(
+            "{:<9} {:>8.1} {:>7.3} {:>10.1} {:>13.1} %",
+            r.shaper.name(),
+            r.frequency_hz,
+            r.damping,
+            r.duration_ms,
+            r.worst_residual * 100.0
+        )?;
+    }
+    if let Some(s) = suggested {
+        outln!(
+            "suggested: [shaper] type = \"{}\", frequency_hz = {:.1}, damping = {:.3}  (triquint plan --shaper {}:{:.1}:{:.3})",
+            s.shaper.name(),
+            s.frequency_hz,
+            s.damping,
+            s.shaper.name(),
+            s.frequency_hz,
+            s.damping
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_suggestion_is_the_shortest_shaper_within_five_per_cent() {
+        let machine = Machine::default();
+        let at = modes(&machine, &[[0.0, 0.0, 600.0]]).unwrap();
+        let t = targets(&at);
+        // The lateral pair at the centre, degenerate.
+        assert!(t.len() >= 2, "{t:?}");
+        let rows = shapers(&t);
+        assert_eq!(rows.len(), Shaper::ALL.len());
+        // One pose: ZV at the pair's frequency cancels it.
+        let s = suggestion(&rows).unwrap();
+        assert_eq!(s.shaper, Shaper::Zv, "{:?}", s.shaper);
+        assert!(
+            (s.frequency_hz - t[0].0).abs() <= 0.1,
+            "{} vs {t:?}",
+            s.frequency_hz
+        );
+        assert!(s.worst_residual <= TARGET_RESIDUAL);
+
+        // Across the grid the lowest modes spread: ZV no longer holds them
+        // within 5 %, a more robust shaper does, and every residual is what
+        // the impulses leave at every target.
+        let grid: Vec<[f64; 3]> = ACROSS_MM
+            .iter()
+            .flat_map(|&x| ACROSS_MM.iter().map(move |&y| [x, y, 600.0]))
+            .collect();
+        let across = modes(&machine, &grid).unwrap();
+        let t = targets(&across);
+        let rows = shapers(&t);
+        let zv = rows.iter().find(|r| r.shaper == Shaper::Zv).unwrap();
+        assert!(zv.worst_residual > TARGET_RESIDUAL, "{}", zv.worst_residual);
+        let s = suggestion(&rows).unwrap();
+        assert_ne!(s.shaper, Shaper::Zv);
+        assert!(s.worst_residual <= TARGET_RESIDUAL, "{}", s.worst_residual);
+        let imp = Impulses::new(s.shaper, s.frequency_hz, s.damping).unwrap();
+        for (hz, z) in &t {
+            assert!(imp.residual(*hz, *z) <= s.worst_residual + 1e-3);
+        }
+        // A pose outside the workspace is named, not a panic.
+        let e = modes(&machine, &[[0.0, 0.0, 100.0]]).err().unwrap();
+        assert!(e.to_string().starts_with("(0.0, 0.0, 100.0) mm:"), "{e}");
+    }
+}
