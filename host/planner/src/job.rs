@@ -373,7 +373,7 @@ impl Job {
             knots: Some(self.knots),
             knot_segments: self.knot_segments,
             max_deviation_mm: self.max_deviation_m.map(|m| m * 1e3),
-            shaper: self.shaper.clone(),
+            shaper: self.shaper,
         }
     }
     pub fn objective(&self) -> Objective {
