@@ -180,9 +180,12 @@ mod tests {
     /// little as through the law alone.
     #[test]
     fn a_seven_phase_profile_rings_where_the_plans_do_not() {
+        // The plans at the fixed knots: the shape that the seven-phase
+        // profile is compared with.
         let job = |objective, total| {
             Job::builder()
                 .objective(objective)
+                .knots(triquint_planner::KnotPlacement::Fixed)
                 .total_time(total)
                 .points_mm([[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]])
                 .build()
