@@ -75,6 +75,9 @@ pub struct Job {
     ceilings: Ceilings,
     points_m: Vec<[f64; 3]>,
     knots: KnotPlacement,
+    /// What the job asked (None: the default), so that a builder made from
+    /// the job follows the default again where the job did.
+    knots_asked: Option<KnotPlacement>,
     knot_segments: Option<usize>,
     max_deviation_m: Option<f64>,
     shaper: Option<ShaperSpec>,
@@ -321,6 +324,7 @@ impl JobBuilder {
             ceilings: self.ceilings,
             points_m: self.points_m,
             knots,
+            knots_asked: self.knots,
             knot_segments: self.knot_segments,
             max_deviation_m: self.max_deviation_mm.map(|mm| mm * 1e-3),
             shaper: self.shaper,
@@ -370,7 +374,7 @@ impl Job {
             ceilings: self.ceilings.clone(),
             machine_robot: None,
             points_m: self.points_m.clone(),
-            knots: Some(self.knots),
+            knots: self.knots_asked,
             knot_segments: self.knot_segments,
             max_deviation_mm: self.max_deviation_m.map(|m| m * 1e3),
             shaper: self.shaper,
