@@ -7,7 +7,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyType};
 use triquint_shared::kinematics::KinematicsError;
-use triquint_shared::plan::{JointState, PLAN_FORMAT, Plan, SampleError};
+use triquint_shared::plan::{JointState, Plan, SampleError};
 use triquint_shared::{dynamics, kinematics};
 
 use crate::arrays::{array, floats, rows_array};
@@ -421,7 +421,7 @@ impl PyPlan {
             self.plan.segments.len(),
             self.plan.duration(),
             max(self.plan.max_abs.jerk),
-            PLAN_FORMAT
+            self.plan.format
         )
     }
 }

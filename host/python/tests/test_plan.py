@@ -159,7 +159,11 @@ def test_knots_keyword():
     job = triquint.Job(move, objective="min-time", knots="free")
     assert job.knot_placement == "free"
     assert triquint.plan(job).duration == free.duration
-    assert free.free_knots and free.duration < triquint.plan(move, objective="min-time").duration
+    fixed = triquint.plan(move, objective="min-time", knots="fixed")
+    assert free.free_knots and free.duration < fixed.duration and not fixed.free_knots
+    # Without `knots`, a point-to-point min-time move gets free knots.
+    assert triquint.plan(move, objective="min-time").duration == free.duration
+    assert "triquint-plan/4" in repr(free)
     with pytest.raises(triquint.InvalidJobError) as e:
         triquint.plan(move, knots="free")  # min-max-jerk
     assert e.value.field == "knots"
@@ -172,13 +176,17 @@ def test_knots_keyword():
 
 def test_knot_segments_and_the_deviation_bound():
     move = [[-90, 90, 680], [40, -60, 600]]
-    p = triquint.plan(move, objective="min-time", knots="free", knot_segments=20)
-    assert len(p.segments) == 20 and all(row["ok"] for row in p.check())
+    p = triquint.plan(move, objective="min-time", knots="free", knot_segments=16)
+    assert len(p.segments) == 16 and all(row["ok"] for row in p.check())
+    # More than stream in under a second are refused, not changed.
+    with pytest.raises(triquint.TriquintError) as e:
+        triquint.plan(move, objective="min-time", knots="free", knot_segments=40)
+    assert "unstreamable" in str(e.value)
     with pytest.raises(triquint.InvalidJobError) as e:
         triquint.plan(move, objective="min-time", knots="free", knot_segments=2)
     assert e.value.field == "knots.segments"
     with pytest.raises(triquint.InvalidJobError) as e:
-        triquint.plan(move, objective="min-time", knot_segments=7)  # fixed knots
+        triquint.plan(move, objective="min-time", knots="fixed", knot_segments=7)
     assert e.value.field == "knots.segments"
     bounded = triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=0.5)
     assert bounded.path_deviation["max"] <= 0.5e-3 < triquint.plan(move, objective="min-time", knots="free").path_deviation["max"]
