@@ -46,32 +46,29 @@ pub struct FlexParams {
 }
 
 impl Default for FlexParams {
+    /// The machine file's `[vibration]` defaults, declared once in shared.
     fn default() -> Self {
-        Self {
-            screw_hz: 50.0,
-            screw_damping: 0.05,
-            platform_hz: 30.0,
-            platform_damping: 0.03,
-            current_loop_hz: 1000.0,
-            // An ADXL345's fastest rate, as Klipper's resonance tests use it.
-            accelerometer_hz: 3200.0,
-            reference_pose: [0.0, 0.0, 0.6],
-        }
+        Self::from_vibration(&triquint_shared::machine::Vibration::default())
     }
 }
 
 impl FlexParams {
-    /// The machine file's `[vibration]` (its defaults are [`Default`]'s).
-    pub fn for_machine(machine: &triquint_shared::machine::Machine) -> Self {
-        let v = &machine.vibration;
+    fn from_vibration(v: &triquint_shared::machine::Vibration) -> Self {
         Self {
             screw_hz: v.screw_hz,
             screw_damping: v.screw_damping,
             platform_hz: v.platform_hz,
             platform_damping: v.platform_damping,
             current_loop_hz: v.current_loop_hz,
-            ..Self::default()
+            // An ADXL345's fastest rate, as Klipper's resonance tests use it.
+            accelerometer_hz: 3200.0,
+            reference_pose: [0.0, 0.0, 0.6],
         }
+    }
+
+    /// The machine file's `[vibration]` (its defaults are [`Default`]'s).
+    pub fn for_machine(machine: &triquint_shared::machine::Machine) -> Self {
+        Self::from_vibration(&machine.vibration)
     }
 }
 
