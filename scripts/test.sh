@@ -56,6 +56,8 @@ CARGO_TARGET_DIR="$target_dir" ./scripts/getting-started.sh
 
 step "no_std crates for thumbv7em-none-eabihf"
 cargo build --locked -p triquint-shared -p triquint-firmware --target thumbv7em-none-eabihf
+# The plan file type with alloc and without std (a host-less user of plans).
+cargo build --locked -p triquint-shared --features alloc --target thumbv7em-none-eabihf
 
 step "on-target test (QEMU mps2-an386) and the board images"
 ./scripts/qemu-test.sh

@@ -45,7 +45,7 @@ fn fmt_num(x: f64) -> String {
     }
     let s = format!("{x:e}");
     // Plain decimal for simple values, scientific otherwise.
-    if x.fract() == 0.0 && x.abs() < 1e15 {
+    if libm::trunc(x) == x && x.abs() < 1e15 {
         format!("{}", x as i64)
     } else {
         s
