@@ -291,7 +291,7 @@ fn fit_mode(hz: &[f64], h: &[Complex<f64>]) -> Option<(f64, f64)> {
         (a0, a1) = (x[0], x[1]);
         first = false;
     }
-    if !(a0 > 0.0) {
+    if a0.is_nan() || a0 <= 0.0 {
         return None;
     }
     let wn = a0.sqrt();

@@ -116,59 +116,63 @@ impl JobArgs<'_, '_> {
 /// `damping`); `"none"` for none. InvalidJobError (field `shaper`) otherwise.
 fn parse_shaper(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<Option<ShaperSpec>> {
     let bad = |why: String| invalid_job(py, "shaper", &why);
-    let (name, frequency_hz, damping): (String, f64, Option<f64>) =
-        if let Ok(text) = value.extract::<String>() {
-            if text.eq_ignore_ascii_case("none") {
-                return Ok(None);
-            }
-            let parts: Vec<&str> = text.split(':').collect();
-            let number = |p: &str, what: &str| {
-                p.trim()
-                    .parse::<f64>()
-                    .map_err(|_| bad(format!("the {what} {p:?} is not a number")))
-            };
-            match parts.as_slice() {
-                [t, hz] => (t.to_string(), number(hz, "frequency")?, None),
-                [t, hz, z] => (
-                    t.to_string(),
-                    number(hz, "frequency")?,
-                    Some(number(z, "damping")?),
-                ),
-                _ => {
-                    return Err(bad(format!(
-                        "give \"TYPE:HZ[:DAMPING]\", e.g. \"ei:25.5:0.05\", got {text:?}"
-                    )));
-                }
-            }
-        } else if let Ok(d) = value.cast::<PyDict>() {
-            for key in d.keys() {
-                let k: String = key.extract()?;
-                if !["type", "frequency_hz", "damping"].contains(&k.as_str()) {
-                    return Err(bad(format!(
-                        "unknown key {k:?} (type, frequency_hz, damping)"
-                    )));
-                }
-            }
-            let get = |k: &str| d.get_item(k).ok().flatten();
-            let name: String = get("type")
-                .ok_or_else(|| bad("the dict needs \"type\"".into()))?
-                .extract()
-                .map_err(|_| bad("\"type\" must be a string".into()))?;
-            let frequency_hz: f64 = get("frequency_hz")
-                .ok_or_else(|| bad("the dict needs \"frequency_hz\"".into()))?
-                .extract()
-                .map_err(|_| bad("\"frequency_hz\" must be a number".into()))?;
-            let damping = get("damping")
-                .map(|v| v.extract::<f64>())
-                .transpose()
-                .map_err(|_| bad("\"damping\" must be a number".into()))?;
-            (name, frequency_hz, damping)
-        } else {
-            return Err(PyTypeError::new_err(
-                "shaper must be \"TYPE:HZ[:DAMPING]\", a dict (type, frequency_hz, damping) or None",
-            ));
+    let (name, frequency_hz, damping): (String, f64, Option<f64>) = if let Ok(text) =
+        value.extract::<String>()
+    {
+        if text.eq_ignore_ascii_case("none") {
+            return Ok(None);
+        }
+        let parts: Vec<&str> = text.split(':').collect();
+        let number = |p: &str, what: &str| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(format!("the {what} {p:?} is not a number")))
         };
-    let shaper: Shaper = name.trim().parse().map_err(|e: UnknownShaper| bad(e.to_string()))?;
+        match parts.as_slice() {
+            [t, hz] => (t.to_string(), number(hz, "frequency")?, None),
+            [t, hz, z] => (
+                t.to_string(),
+                number(hz, "frequency")?,
+                Some(number(z, "damping")?),
+            ),
+            _ => {
+                return Err(bad(format!(
+                    "give \"TYPE:HZ[:DAMPING]\", e.g. \"ei:25.5:0.05\", got {text:?}"
+                )));
+            }
+        }
+    } else if let Ok(d) = value.cast::<PyDict>() {
+        for key in d.keys() {
+            let k: String = key.extract()?;
+            if !["type", "frequency_hz", "damping"].contains(&k.as_str()) {
+                return Err(bad(format!(
+                    "unknown key {k:?} (type, frequency_hz, damping)"
+                )));
+            }
+        }
+        let get = |k: &str| d.get_item(k).ok().flatten();
+        let name: String = get("type")
+            .ok_or_else(|| bad("the dict needs \"type\"".into()))?
+            .extract()
+            .map_err(|_| bad("\"type\" must be a string".into()))?;
+        let frequency_hz: f64 = get("frequency_hz")
+            .ok_or_else(|| bad("the dict needs \"frequency_hz\"".into()))?
+            .extract()
+            .map_err(|_| bad("\"frequency_hz\" must be a number".into()))?;
+        let damping = get("damping")
+            .map(|v| v.extract::<f64>())
+            .transpose()
+            .map_err(|_| bad("\"damping\" must be a number".into()))?;
+        (name, frequency_hz, damping)
+    } else {
+        return Err(PyTypeError::new_err(
+            "shaper must be \"TYPE:HZ[:DAMPING]\", a dict (type, frequency_hz, damping) or None",
+        ));
+    };
+    let shaper: Shaper = name
+        .trim()
+        .parse()
+        .map_err(|e: UnknownShaper| bad(e.to_string()))?;
     let spec = ShaperSpec {
         shaper,
         frequency_hz,
