@@ -337,6 +337,12 @@ fn run_measured(args: &ResonanceArgs, machine: &Machine, centre: [f64; 3]) -> Cl
             a.max_following_error_m * 1e6
         )?;
     }
+    if axes.iter().any(|a| a.ringdown_damping.is_none()) {
+        outln!(
+            "warning: a ring-down was lost in the accelerometer's {:.1} mg counts: that axis's damping is the sweep's fit, unreliable at this amplitude (the ceilings bound it)",
+            triquint_sim::resonance::ACCEL_COUNT_M_S2 / 9.80665 * 1e3
+        )?;
+    }
     let m: Vec<String> = model[0]
         .modes
         .iter()
