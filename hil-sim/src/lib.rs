@@ -19,6 +19,7 @@ pub mod plant_model;
 pub mod proxy;
 pub mod realtime;
 pub mod report;
+pub mod resonance;
 pub mod sim;
 pub mod test_reference;
 pub mod testplan;

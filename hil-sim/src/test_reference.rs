@@ -123,6 +123,8 @@ pub struct LawRun {
     pub end_s: f64,
     /// Largest |reference − encoder| of any axis from the reference's start (m).
     pub max_error_m: f64,
+    /// What the encoders read at each tick, from plant time 0 (m).
+    pub encoder_m: Vec<Vector3<f64>>,
 }
 
 /// Runs `reference` (motion at time since its start, `duration_s` long) on
@@ -146,6 +148,7 @@ pub fn run(
     let mut acting = Vector3::zeros();
     let ticks = ((hold_s + duration_s + settle_s) / dt).ceil() as usize;
     let mut max_error: f64 = 0.0;
+    let mut encoder_m = Vec::with_capacity(ticks);
     plant.set_braked(false);
     for k in 0..ticks {
         let t = k as f64 * dt - hold_s;
@@ -159,10 +162,12 @@ pub fn run(
         };
         let q = plant.q();
         let mut command = Vector3::zeros();
+        let mut read = Vector3::zeros();
         for i in 0..3 {
             let c = &configs[i];
             let counts = (q[i] * f64::from(c.counts_per_metre)).floor();
-            let measured = (counts / f64::from(c.counts_per_metre)) as f32;
+            read[i] = counts / f64::from(c.counts_per_metre);
+            let measured = read[i] as f32;
             let ff = if c.feedforward != 0.0 {
                 law::feedforward(&model, c, &ahead32, i).unwrap_or(0.0)
             } else {
@@ -174,6 +179,7 @@ pub fn run(
             }
             command[i] = f64::from(out.torque * c.direction);
         }
+        encoder_m.push(read);
         // One tick of actuation delay, as on a drive.
         for i in 0..3 {
             plant.set_torque(i, acting[i]);
@@ -186,6 +192,7 @@ pub fn run(
         start_s: hold_s,
         end_s: hold_s + duration_s,
         max_error_m: max_error,
+        encoder_m,
     })
 }
 

@@ -170,6 +170,7 @@ class Job:
         torque: float = 10.0,
         robot: Optional[Robot] = None,
         machine: Optional[Machine] = None,
+        shaper: Union[str, Dict[str, Any], None] = None,
     ) -> None: ...
     @classmethod
     def from_toml(cls, path: _PathLike, *, machine: Optional[Machine] = None) -> "Job":
@@ -252,6 +253,9 @@ class Plan:
     @property
     def limits(self) -> Dict[str, float]: ...
     @property
+    def shaper(self) -> Optional[Dict[str, Any]]:
+        """The input shaper (type, frequency_hz, damping, duration_s), or None."""
+    @property
     def via_points(self) -> _Array:
         """(n, 3), metres."""
     @property
@@ -303,6 +307,7 @@ def plan(
     torque: float = 10.0,
     robot: Optional[Robot] = None,
     machine: Optional[Machine] = None,
+    shaper: Union[str, Dict[str, Any], None] = None,
     starts: int = 8,
     seed: int = 1,
     progress: Optional[Callable[[Progress], Optional[bool]]] = None,

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyType};
+use triquint_planner::shaping::{DEFAULT_DAMPING, Impulses, Shaper, ShaperSpec, UnknownShaper};
 use triquint_planner::{Control, Job, KnotPlacement, Options, Progress, Stage, plan_with};
 use triquint_shared::Limits;
 use triquint_shared::plan::Objective;
@@ -29,8 +30,12 @@ use crate::units::Units;
 /// `knot_segments` sets a free-knot move's segment count (3..64), and
 /// `max_deviation_mm` bounds the platform's distance from the straight
 /// segments between via-points (the planner meets it or raises
-/// InfeasibleError with limit 'max_deviation_mm'). Defaults: the paper's
-/// Table 3 limits and Table 1 robot.
+/// InfeasibleError with limit 'max_deviation_mm'). `shaper` input-shapes
+/// the plan for a resonance, as the job file's `[shaper]` table and
+/// `triquint plan --shaper` do: "TYPE:HZ[:DAMPING]" (e.g. "ei:25.6:0.062";
+/// zv, mzv, zvd, ei, 2hump_ei) or {"type": "ei", "frequency_hz": 25.6,
+/// "damping": 0.062}; damping defaults to 0.1 (docs/input-shaping.md).
+/// Defaults: the paper's Table 3 limits and Table 1 robot.
 ///
 /// `Job.from_toml(path)` reads a job file of `triquint plan`.
 #[pyclass(name = "Job", module = "triquint", frozen)]
@@ -77,6 +82,7 @@ pub struct JobArgs<'a, 'py> {
     pub torque: Option<f64>,
     pub robot: Option<&'a Bound<'py, PyRobot>>,
     pub machine: Option<&'a Bound<'py, PyMachine>>,
+    pub shaper: Option<&'a Bound<'py, PyAny>>,
 }
 
 impl JobArgs<'_, '_> {
@@ -100,8 +106,80 @@ impl JobArgs<'_, '_> {
         add("torque", self.torque.is_some());
         add("robot", self.robot.is_some());
         add("machine", self.machine.is_some());
+        add("shaper", self.shaper.is_some());
         v
     }
+}
+
+/// A shaper from `"TYPE:HZ[:DAMPING]"` (as `triquint plan --shaper`) or a
+/// dict like the job file's `[shaper]` table (`type`, `frequency_hz`,
+/// `damping`); `"none"` for none. InvalidJobError (field `shaper`) otherwise.
+fn parse_shaper(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<Option<ShaperSpec>> {
+    let bad = |why: String| invalid_job(py, "shaper", &why);
+    let (name, frequency_hz, damping): (String, f64, Option<f64>) = if let Ok(text) =
+        value.extract::<String>()
+    {
+        if text.eq_ignore_ascii_case("none") {
+            return Ok(None);
+        }
+        let parts: Vec<&str> = text.split(':').collect();
+        let number = |p: &str, what: &str| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(format!("the {what} {p:?} is not a number")))
+        };
+        match parts.as_slice() {
+            [t, hz] => (t.to_string(), number(hz, "frequency")?, None),
+            [t, hz, z] => (
+                t.to_string(),
+                number(hz, "frequency")?,
+                Some(number(z, "damping")?),
+            ),
+            _ => {
+                return Err(bad(format!(
+                    "give \"TYPE:HZ[:DAMPING]\", e.g. \"ei:25.5:0.05\", got {text:?}"
+                )));
+            }
+        }
+    } else if let Ok(d) = value.cast::<PyDict>() {
+        for key in d.keys() {
+            let k: String = key.extract()?;
+            if !["type", "frequency_hz", "damping"].contains(&k.as_str()) {
+                return Err(bad(format!(
+                    "unknown key {k:?} (type, frequency_hz, damping)"
+                )));
+            }
+        }
+        let get = |k: &str| d.get_item(k).ok().flatten();
+        let name: String = get("type")
+            .ok_or_else(|| bad("the dict needs \"type\"".into()))?
+            .extract()
+            .map_err(|_| bad("\"type\" must be a string".into()))?;
+        let frequency_hz: f64 = get("frequency_hz")
+            .ok_or_else(|| bad("the dict needs \"frequency_hz\"".into()))?
+            .extract()
+            .map_err(|_| bad("\"frequency_hz\" must be a number".into()))?;
+        let damping = get("damping")
+            .map(|v| v.extract::<f64>())
+            .transpose()
+            .map_err(|_| bad("\"damping\" must be a number".into()))?;
+        (name, frequency_hz, damping)
+    } else {
+        return Err(PyTypeError::new_err(
+            "shaper must be \"TYPE:HZ[:DAMPING]\", a dict (type, frequency_hz, damping) or None",
+        ));
+    };
+    let shaper: Shaper = name
+        .trim()
+        .parse()
+        .map_err(|e: UnknownShaper| bad(e.to_string()))?;
+    let spec = ShaperSpec {
+        shaper,
+        frequency_hz,
+        damping: damping.unwrap_or(DEFAULT_DAMPING),
+    };
+    Impulses::for_spec(&spec).map_err(|e| bad(e.to_string()))?;
+    Ok(Some(spec))
 }
 
 /// A job from points and keywords (defaults for keywords not given).
@@ -148,6 +226,9 @@ pub fn make_job(py: Python<'_>, points: &Bound<'_, PyAny>, args: &JobArgs) -> Py
     if let Some(mm) = args.max_deviation_mm {
         builder = builder.max_deviation_mm(mm);
     }
+    if let Some(v) = args.shaper {
+        builder = builder.shaper(parse_shaper(py, v)?);
+    }
     let job = guard(py, || {
         builder
             .objective(objective)
@@ -165,10 +246,10 @@ impl PyJob {
     #[pyo3(signature = (points, *, units = None, objective = None, knots = None, knot_segments = None,
         max_deviation_mm = None, total_time = None,
         velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
-        machine = None),
+        machine = None, shaper = None),
         text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', knot_segments=None, \
             max_deviation_mm=None, total_time=5.0, \
-            velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None)")]
+            velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None, shaper=None)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -185,6 +266,7 @@ impl PyJob {
         torque: Option<f64>,
         robot: Option<Bound<'_, PyRobot>>,
         machine: Option<Bound<'_, PyMachine>>,
+        shaper: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let args = JobArgs {
             units,
@@ -199,6 +281,7 @@ impl PyJob {
             torque,
             robot: robot.as_ref(),
             machine: machine.as_ref(),
+            shaper: shaper.as_ref(),
         };
         make_job(py, points, &args)
     }
@@ -351,11 +434,11 @@ impl From<&Progress> for PyProgress {
 #[pyo3(signature = (points, *, units = None, objective = None, knots = None, knot_segments = None,
         max_deviation_mm = None, total_time = None,
     velocity = None, acceleration = None, jerk = None, torque = None, robot = None,
-    machine = None, starts = 8, seed = 1, progress = None),
+    machine = None, shaper = None, starts = 8, seed = 1, progress = None),
     text_signature = "(points, *, units='mm', objective='min-max-jerk', knots='fixed', knot_segments=None, \
             max_deviation_mm=None, total_time=5.0, \
         velocity=0.5, acceleration=1.2, jerk=5.0, torque=10.0, robot=None, machine=None, \
-        starts=8, seed=1, progress=None)")]
+        shaper=None, starts=8, seed=1, progress=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -372,6 +455,7 @@ pub fn plan(
     torque: Option<f64>,
     robot: Option<Bound<'_, PyRobot>>,
     machine: Option<Bound<'_, PyMachine>>,
+    shaper: Option<Bound<'_, PyAny>>,
     starts: usize,
     seed: u64,
     progress: Option<Bound<'_, PyAny>>,
@@ -389,6 +473,7 @@ pub fn plan(
         torque,
         robot: robot.as_ref(),
         machine: machine.as_ref(),
+        shaper: shaper.as_ref(),
     };
     if !(1..=triquint_planner::MAX_STARTS).contains(&starts) {
         return Err(PyValueError::new_err(format!(

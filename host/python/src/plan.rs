@@ -189,6 +189,24 @@ impl PyPlan {
         crate::limits_dict(py, &self.plan.limits)
     }
 
+    /// The input shaper the plan was shaped with, as a dict (type,
+    /// frequency_hz, damping, duration_s: the time it adds), or None.
+    #[getter]
+    fn shaper<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(s) = &self.plan.shaping else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("type", s.shaper.shaper.name())?;
+        d.set_item("frequency_hz", s.shaper.frequency_hz)?;
+        d.set_item("damping", s.shaper.damping)?;
+        d.set_item(
+            "duration_s",
+            self.plan.total_time_s - s.unshaped.total_time_s,
+        )?;
+        Ok(Some(d))
+    }
+
     /// Via-points (n, 3), metres.
     #[getter]
     fn via_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {

@@ -197,3 +197,39 @@ def test_knot_segments_and_the_deviation_bound():
     with pytest.raises(triquint.InvalidJobError) as e:
         triquint.plan(move, objective="min-time", max_deviation_mm=float("nan"))
     assert e.value.field == "path.max_deviation_mm"
+
+
+P2P = [[-60, 40, 560], [60, -40, 640]]
+
+
+def test_a_shaped_plan_records_its_shaper_and_its_cost():
+    # docs/input-shaping.md: EI at 25.6 Hz adds one period of the mode.
+    unshaped = triquint.plan(P2P, objective="min-time")
+    p = triquint.plan(P2P, objective="min-time", shaper="ei:25.6:0.062")
+    assert unshaped.shaper is None
+    s = p.shaper
+    assert (s["type"], s["frequency_hz"], s["damping"]) == ("ei", 25.6, 0.062)
+    assert s["duration_s"] == pytest.approx(p.duration - unshaped.duration, abs=1e-9)
+    assert s["duration_s"] == pytest.approx(1 / 25.6, abs=2e-3)
+    # Every row holds but streaming: this move's shaped segments are too short
+    # for the drives' queues (docs/input-shaping.md).
+    failed = [row["what"] for row in p.check() if not row["ok"]]
+    assert all(w.startswith("streaming") for w in failed), failed
+    # The dict form, as the job file's [shaper]; Klipper's damping 0.1 by default.
+    j = triquint.Job(P2P, objective="min-time", shaper={"type": "zvd", "frequency_hz": 25.6})
+    assert triquint.plan(j).shaper["damping"] == 0.1
+    assert triquint.plan(P2P, objective="min-time", shaper="none").shaper is None
+
+
+@pytest.mark.parametrize("bad", ["ei", "wobble:25", "ei:abc", "ei:25:0.1:9", "ei:0",
+                                 {"type": "ei"}, {"frequency_hz": 25}, {"type": "ei",
+                                 "frequency_hz": 25, "phase": 1}])
+def test_a_bad_shaper_names_the_field(bad):
+    with pytest.raises(triquint.InvalidJobError) as e:
+        triquint.Job(P2P, objective="min-time", shaper=bad)
+    assert e.value.field == "shaper"
+
+
+def test_a_shaper_of_the_wrong_type_is_a_type_error():
+    with pytest.raises(TypeError):
+        triquint.Job(P2P, shaper=25.6)

@@ -1,7 +1,10 @@
-//! `triquint resonance [--at X,Y,Z | --across] [--json]`: the flexible
-//! plant's modes from the machine file's `[vibration]`, at a pose or across
-//! the workspace, and the input shaper that keeps the lowest modes' residual
-//! smallest for the least time (docs/vibration.md).
+//! `triquint resonance [--at X,Y,Z] [--plot DIR] [--json]`: each axis of the
+//! simulated flexible machine (the machine file's `[vibration]`) swept
+//! within its ceilings, its resonances measured from the accelerometer, and
+//! the input shaper that keeps the lowest one's residual smallest for the
+//! least time, as Klipper's TEST_RESONANCES and calibrate_shaper do;
+//! `--model` (or `--across`) prints the linearised model's modes instead
+//! (docs/input-shaping.md, docs/vibration.md).
 
 use clap::Args;
 use nalgebra::Vector3;
@@ -12,6 +15,7 @@ use triquint_shared::kinematics::Pose;
 use triquint_shared::machine::Machine;
 use triquint_sim::flex::{FlexError, FlexParams, FlexPlant, Mode};
 use triquint_sim::plant::PlantConfig;
+use triquint_sim::resonance::{AxisResponse, Sweep};
 
 use crate::exit::{CliError, CliResult};
 
@@ -27,9 +31,27 @@ pub struct ResonanceArgs {
     /// Platform position (mm) [default: the machine's reference pose, 0,0,600].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub at: Option<String>,
-    /// Also every pose of a ±120 mm grid at that height inside the travel.
+    /// The model's modes, not a measurement: with `--across`, also every
+    /// pose of a ±120 mm grid at that height inside the travel.
+    #[arg(long)]
+    pub model: bool,
+    /// `--model` across a ±120 mm grid.
     #[arg(long)]
     pub across: bool,
+    /// The sweep's lowest and highest frequency (Hz).
+    #[arg(long, default_value_t = Sweep::default().from_hz)]
+    pub from_hz: f64,
+    #[arg(long, default_value_t = Sweep::default().to_hz)]
+    pub to_hz: f64,
+    /// How long each axis is swept (s).
+    #[arg(long, default_value_t = Sweep::default().duration_s)]
+    pub sweep_s: f64,
+    /// Acceleration amplitude per Hz (m/s² per Hz; Klipper's 0.075), cut to the ceilings.
+    #[arg(long, default_value_t = Sweep::default().accel_per_hz)]
+    pub accel_per_hz: f64,
+    /// Write the measured response as response.svg here.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<std::path::PathBuf>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -174,6 +196,196 @@ fn suggestion(rows: &[ShaperRow]) -> Option<&ShaperRow> {
         })
 }
 
+/// The shaper's targets from a measurement: each axis's peaks within
+/// [`TARGET_BAND`] of the lowest, the lowest at its ring-down damping.
+fn measured_targets(axes: &[AxisResponse]) -> Vec<(f64, f64)> {
+    let lowest = axes
+        .iter()
+        .flat_map(|a| a.modes.first())
+        .map(|m| m.hz)
+        .fold(f64::INFINITY, f64::min);
+    axes.iter()
+        .flat_map(|a| {
+            a.modes.iter().enumerate().filter_map(move |(k, m)| {
+                let damping = match (k, a.ringdown_damping) {
+                    (0, Some(d)) => d,
+                    _ => m.damping,
+                };
+                (m.hz <= TARGET_BAND * lowest).then_some((m.hz, damping))
+            })
+        })
+        .collect()
+}
+
+/// The response of each axis, with its peaks and the shaper's frequency.
+fn response_chart(axes: &[AxisResponse], suggested: Option<&ShaperRow>) -> triquint_plot::Chart {
+    let mut chart = triquint_plot::Chart::new(
+        "Measured response: platform acceleration per rigid-body acceleration",
+    )
+    .x_label("frequency (Hz)")
+    .y_label("|H|");
+    for a in axes {
+        let points = a
+            .magnitude
+            .iter()
+            .enumerate()
+            .map(|(k, m)| (a.from_hz + a.step_hz * k as f64, *m))
+            .collect();
+        chart = chart.line(triquint_plot::Line::joint(
+            a.axis,
+            format!("axis {}", a.axis),
+            points,
+        ));
+    }
+    // One mark per peak, the axes' peaks at one frequency marked once.
+    let mut marked: Vec<String> = Vec::new();
+    for m in axes.iter().flat_map(|a| &a.modes) {
+        let label = format!("{:.1} Hz", m.hz);
+        if !marked.contains(&label) {
+            chart = chart.knot(m.hz, label.clone());
+            marked.push(label);
+        }
+    }
+    if let Some(s) = suggested {
+        chart = chart.note(format!(
+            "suggested {} at {:.1} Hz, ζ {:.3}: adds {:.1} ms, leaves {:.1} %",
+            s.shaper.name(),
+            s.frequency_hz,
+            s.damping,
+            s.duration_ms,
+            s.worst_residual * 100.0
+        ));
+    }
+    chart
+}
+
+/// Sweeps each axis at `centre` (mm) and prints what it found.
+fn run_measured(args: &ResonanceArgs, machine: &Machine, centre: [f64; 3]) -> CliResult {
+    let sweep = Sweep {
+        from_hz: args.from_hz,
+        to_hz: args.to_hz,
+        duration_s: args.sweep_s,
+        accel_per_hz: args.accel_per_hz,
+    };
+    // The pose first, so that a bad one is named as `--model` names it.
+    let model = modes(machine, &[centre]).map_err(|e| CliError::bad_input(e.to_string()))?;
+    let axes = triquint_sim::resonance::measure(machine, Vector3::from(centre) * 1e-3, &sweep)
+        .map_err(|e| CliError::bad_input(e.to_string()))?;
+    let targets = measured_targets(&axes);
+    if targets.is_empty() {
+        return Err(CliError::bad_input(format!(
+            "no resonance found between {} and {} Hz",
+            sweep.from_hz, sweep.to_hz
+        )));
+    }
+    let rows = shapers(&targets);
+    let suggested = suggestion(&rows);
+    if let Some(dir) = &args.plot {
+        let svg = response_chart(&axes, suggested)
+            .to_svg()
+            .map_err(|e| CliError::bad_input(format!("plot: {e}")))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| CliError::bad_input(format!("{}: {e}", dir.display())))?;
+        let path = dir.join("response.svg");
+        std::fs::write(&path, svg)
+            .map_err(|e| CliError::bad_input(format!("{}: {e}", path.display())))?;
+    }
+    if args.json {
+        outln!(
+            "{:#}",
+            serde_json::json!({
+                "position_mm": centre,
+                "sweep": sweep,
+                "axes": axes,
+                "model": model[0].modes,
+                "shapers": rows,
+                "suggested": suggested,
+                "target_residual": TARGET_RESIDUAL,
+            })
+        )?;
+        return Ok(());
+    }
+    outln!(
+        "sweep {:.0}–{:.0} Hz over {:.0} s per axis, {:.0} mm/s² per Hz within the ceilings, at ({:.1}, {:.1}, {:.1}) mm (simulated flexible plant)",
+        sweep.from_hz,
+        sweep.to_hz,
+        sweep.duration_s,
+        sweep.accel_per_hz * 1e3,
+        centre[0],
+        centre[1],
+        centre[2]
+    )?;
+    for a in &axes {
+        let peaks: Vec<String> = a
+            .modes
+            .iter()
+            .map(|m| format!("{:.2} Hz ζ {:.3} (×{:.1})", m.hz, m.damping, m.peak))
+            .collect();
+        outln!(
+            "axis {}: peaks {}; ring-down ζ {}; sweep peak {:.2} m/s², {:.0} m/s³, {:.3} N·m, following error {:.1} µm",
+            a.axis,
+            if peaks.is_empty() {
+                "none".to_string()
+            } else {
+                peaks.join(", ")
+            },
+            a.ringdown_damping
+                .map_or("—".to_string(), |d| format!("{d:.3}")),
+            a.peak_accel_m_s2,
+            a.peak_jerk_m_s3,
+            a.peak_torque_nm,
+            a.max_following_error_m * 1e6
+        )?;
+    }
+    if axes.iter().any(|a| a.ringdown_damping.is_none()) {
+        outln!(
+            "warning: a ring-down was lost in the accelerometer's {:.1} mg counts: that axis's damping is the sweep's fit, unreliable at this amplitude (the ceilings bound it)",
+            triquint_sim::resonance::ACCEL_COUNT_M_S2 / 9.80665 * 1e3
+        )?;
+    }
+    let m: Vec<String> = model[0]
+        .modes
+        .iter()
+        .take(3)
+        .map(|m| format!("{:.2} Hz ζ {:.3}", m.hz, m.damping))
+        .collect();
+    outln!("model (motors held): {}", m.join(", "))?;
+    print_shapers(&rows, suggested)
+}
+
+fn print_shapers(rows: &[ShaperRow], suggested: Option<&ShaperRow>) -> CliResult {
+    outln!(
+        "{:<9} {:>8} {:>7} {:>10} {:>14}",
+        "shaper",
+        "Hz",
+        "ζ",
+        "adds (ms)",
+        "worst residual"
+    )?;
+    for r in rows {
+        outln!(
+            "{:<9} {:>8.1} {:>7.3} {:>10.1} {:>13.1} %",
+            r.shaper.name(),
+            r.frequency_hz,
+            r.damping,
+            r.duration_ms,
+            r.worst_residual * 100.0
+        )?;
+    }
+    if let Some(s) = suggested {
+        outln!(
+            "suggested: [shaper] type = \"{}\", frequency_hz = {:.1}, damping = {:.3}  (triquint plan --shaper {}:{:.1}:{:.3})",
+            s.shaper.name(),
+            s.frequency_hz,
+            s.damping,
+            s.shaper.name(),
+            s.frequency_hz,
+            s.damping
+        )?;
+    }
+    Ok(())
+}
+
 pub fn run(args: &ResonanceArgs, machine: &Machine) -> CliResult {
     let centre: [f64; 3] = match &args.at {
         Some(text) => triquint_cli_common::parse::parse_triple("--at", text)?.into(),
@@ -181,6 +393,9 @@ pub fn run(args: &ResonanceArgs, machine: &Machine) -> CliResult {
             .reference_pose
             .map(|x| x * 1e3),
     };
+    if !(args.model || args.across) {
+        return run_measured(args, machine, centre);
+    }
     let mut poses = vec![centre];
     if args.across {
         for x in ACROSS_MM {
@@ -243,36 +458,7 @@ pub fn run(args: &ResonanceArgs, machine: &Machine) -> CliResult {
         found.len(),
         if found.len() == 1 { "" } else { "s" }
     )?;
-    outln!(
-        "{:<9} {:>8} {:>7} {:>10} {:>14}",
-        "shaper",
-        "Hz",
-        "ζ",
-        "adds (ms)",
-        "worst residual"
-    )?;
-    for r in &rows {
-        outln!(
-            "{:<9} {:>8.1} {:>7.3} {:>10.1} {:>13.1} %",
-            r.shaper.name(),
-            r.frequency_hz,
-            r.damping,
-            r.duration_ms,
-            r.worst_residual * 100.0
-        )?;
-    }
-    if let Some(s) = suggested {
-        outln!(
-            "suggested: [shaper] type = \"{}\", frequency_hz = {:.1}, damping = {:.3}  (triquint plan --shaper {}:{:.1}:{:.3})",
-            s.shaper.name(),
-            s.frequency_hz,
-            s.damping,
-            s.shaper.name(),
-            s.frequency_hz,
-            s.damping
-        )?;
-    }
-    Ok(())
+    print_shapers(&rows, suggested)
 }
 
 #[cfg(test)]
