@@ -76,7 +76,7 @@ pub enum ResonanceError {
         to_hz: f64,
         duration_s: f64,
     },
-    #[error("axis {axis}: {reason}")]
+    #[error("axis {}: {reason}", axis + 1)]
     Axis { axis: usize, reason: String },
 }
 

@@ -235,6 +235,8 @@ pub struct Chart {
     markers: Vec<Markers>,
     limits: Vec<(f64, String)>,
     knots: Vec<(f64, String)>,
+    /// The legend's name for the vertical markers.
+    knots_name: String,
     equal_aspect: bool,
     x_range: Option<(f64, f64)>,
     size: (u32, u32),
@@ -251,6 +253,7 @@ impl Chart {
             markers: Vec::new(),
             limits: Vec::new(),
             knots: Vec::new(),
+            knots_name: "knot".into(),
             equal_aspect: false,
             x_range: None,
             size: (900, 480),
@@ -286,6 +289,12 @@ impl Chart {
     /// A dotted vertical marker at `x` (a knot), labelled above the plot.
     pub fn knot(mut self, x: f64, label: impl Into<String>) -> Self {
         self.knots.push((x, label.into()));
+        self
+    }
+    /// The legend's name for the [`Chart::knot`] markers ("knot" unless
+    /// they mark something else, such as a resonance).
+    pub fn knots_name(mut self, name: impl Into<String>) -> Self {
+        self.knots_name = name.into();
         self
     }
     /// Same scale on both axes (projections of a path).
@@ -341,7 +350,7 @@ impl Chart {
         }
         if !self.knots.is_empty() {
             out.push(LegendEntry {
-                name: "knot".into(),
+                name: self.knots_name.clone(),
                 colour: KNOT_COLOUR,
                 kind: LegendKind::Dotted,
             });

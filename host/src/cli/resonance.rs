@@ -233,7 +233,7 @@ fn response_chart(axes: &[AxisResponse], suggested: Option<&ShaperRow>) -> triqu
             .collect();
         chart = chart.line(triquint_plot::Line::joint(
             a.axis,
-            format!("axis {}", a.axis),
+            format!("axis {}", a.axis + 1),
             points,
         ));
     }
@@ -242,7 +242,7 @@ fn response_chart(axes: &[AxisResponse], suggested: Option<&ShaperRow>) -> triqu
     for m in axes.iter().flat_map(|a| &a.modes) {
         let label = format!("{:.1} Hz", m.hz);
         if !marked.contains(&label) {
-            chart = chart.knot(m.hz, label.clone());
+            chart = chart.knot(m.hz, label.clone()).knots_name("mode");
             marked.push(label);
         }
     }
@@ -323,7 +323,7 @@ fn run_measured(args: &ResonanceArgs, machine: &Machine, centre: [f64; 3]) -> Cl
             .collect();
         outln!(
             "axis {}: peaks {}; ring-down ζ {}; sweep peak {:.2} m/s², {:.0} m/s³, {:.3} N·m, following error {:.1} µm",
-            a.axis,
+            a.axis + 1,
             if peaks.is_empty() {
                 "none".to_string()
             } else {
