@@ -6,7 +6,7 @@
 
 use crate::inner::Method;
 use crate::lp::{Lp, LpFailure};
-use crate::problem::{Problem, Solution};
+use crate::problem::{Cut, Problem, Solution};
 use crate::program::add_new_cuts;
 
 /// Cutting-plane rounds of a trust-region step's program, and when judging
@@ -81,7 +81,8 @@ impl Problem {
             // at the current point's extrema promises what holds only there:
             // steps are rejected, the region collapses and the search crawls
             // (docs/planner-speed.md), so the step program has its own rounds.
-            let rounds = self.step_rounds(&cur, delta, |_| {});
+            let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
+            let rounds = self.step_rounds(&cur, delta, &mut cuts, STEP_ROUNDS, |_| {});
             solves += rounds.solves;
             let Some(StepPoint {
                 sol,
@@ -153,20 +154,27 @@ impl Problem {
     }
 
     /// The step program at `cur` (h moving by at most Δ·h_k), shaped by
-    /// `shape`, in cutting-plane rounds as in the inner loop: each round's
-    /// point is checked exactly and its new extrema cut, so the step does
-    /// not promise what is only true at the old extrema. With jerk alone
-    /// there are no cuts: one round. Ends at the first round that adds no
-    /// cut, at [`STEP_ROUNDS`], or at a failed solve.
-    fn step_rounds(&self, cur: &Solution, delta: f64, shape: impl Fn(&mut Lp)) -> StepRounds {
-        let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
+    /// `shape`, in cutting-plane rounds as in the inner loop from the cuts
+    /// `cuts`: each round's point is checked exactly and its new extrema
+    /// cut (appended to `cuts`), so the step does not promise what is only
+    /// true at the old extrema. With jerk alone there are no cuts: one
+    /// round. Ends at the first round that adds no cut, at `max_rounds`, or
+    /// at a failed solve.
+    fn step_rounds(
+        &self,
+        cur: &Solution,
+        delta: f64,
+        cuts: &mut Vec<Cut>,
+        max_rounds: usize,
+        shape: impl Fn(&mut Lp),
+    ) -> StepRounds {
         let mut out = StepRounds {
             last: None,
             solves: 0,
             failed: None,
         };
-        for _ in 0..STEP_ROUNDS {
-            let mut lp = self.build(&cur.h, &cur.x, &cuts, Some(delta), cur.jerk);
+        for _ in 0..max_rounds {
+            let mut lp = self.build(&cur.h, &cur.x, cuts, Some(delta), cur.jerk);
             // A step only needs to be good, not exact: it is judged exactly
             // (so no iterative refinement of the KKT solves either).
             lp.tolerance = 1e-8;
@@ -182,10 +190,7 @@ impl Problem {
             };
             let (h, x) = self.step_point(&cur.h, &sol);
             let before = cuts.len();
-            add_new_cuts(
-                &mut cuts,
-                &self.evaluation(&h, &x, self.torque_samples).cuts,
-            );
+            add_new_cuts(cuts, &self.evaluation(&h, &x, self.torque_samples).cuts);
             let settled = cuts.len() == before;
             out.last = Some(StepPoint { sol, h, x });
             if settled {
@@ -214,15 +219,22 @@ impl Problem {
     /// `cur`: the LP linearised in h at `cur` (h moving by at most Δ·h_k),
     /// minimising Σh with the jerk capped at its limit and every limit
     /// elastic; returns the new intervals, the LP's knot derivatives
-    /// projected onto C3 there.
-    pub(crate) fn time_step(&self, cur: &Solution, delta: f64) -> Result<TimeStep, LpFailure> {
+    /// projected onto C3 there. Its program starts from `cuts` and runs at
+    /// most `max_rounds` rounds; the cuts they find are appended to `cuts`.
+    pub(crate) fn time_step(
+        &self,
+        cur: &Solution,
+        delta: f64,
+        cuts: &mut Vec<Cut>,
+        max_rounds: usize,
+    ) -> Result<TimeStep, LpFailure> {
         let nv = self.nv();
         let nseg = self.nseg();
         let (dh0, s_col) = (3 * nv, 3 * nv + nseg);
         let sigma = s_col + 1;
         let t: f64 = cur.h.iter().sum();
         let jerk = self.limits.jerk;
-        let rounds = self.step_rounds(cur, delta, |lp| {
+        let rounds = self.step_rounds(cur, delta, cuts, max_rounds, |lp| {
             // Relative time against relative violation: making up a
             // violation ν by time-scaling costs about ν/2 of the time, so
             // 1e3 keeps σ at 0 whenever the linearisation allows it.
@@ -279,7 +291,8 @@ mod tests {
             .inner(&h, &p.zero_x(), Method::ViaRelaxation, ROUNDS)
             .unwrap();
         let delta = 0.05;
-        let step = p.time_step(&cur, delta).unwrap();
+        let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
+        let step = p.time_step(&cur, delta, &mut cuts, STEP_ROUNDS).unwrap();
         let before: f64 = cur.h.iter().sum();
         let after: f64 = step.h.iter().sum();
         assert!(after < before, "{after} ≥ {before}");

@@ -6,14 +6,21 @@
 //! at which it meets every limit exactly ([`shortest_scaling`]). The scaling
 //! absorbs the second-order error that stalls a plain SLP on Σh
 //! (docs/planner-speed.md), and the step is accepted on that exact time.
+//! The cuts a step's rounds find start the next step's program: the
+//! extrema move little from step to step, so fewer rounds place them.
 
-use crate::problem::{Problem, Solution};
+use crate::problem::{Cut, Problem, Solution};
+use crate::program::add_new_cuts;
 use crate::time_scaling::shortest_scaling;
 
 /// Steps at most.
 const MAX_STEPS: usize = 80;
 /// A step promising less than this share of the time ends the descent.
 const PROMISE_FLOOR: f64 = 1e-6;
+/// Cutting-plane rounds of a descent step's program. Each step starts
+/// from the cuts the step before found, so three rounds place them as well
+/// as six from the current point's cuts alone did (docs/planner-speed.md).
+const DESCENT_ROUNDS: usize = 3;
 /// Consecutive steps gaining less than this (relative) end the descent.
 const STALL_GAIN: f64 = 1e-7;
 
@@ -24,11 +31,19 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
     let mut delta: f64 = 0.05;
     let mut solves = 0;
     let mut stalled = 0;
+    // The cuts the last step's rounds found, at extrema of points near the
+    // next step's: they start its program beside the current point's own.
+    let mut carried: Vec<Cut> = Vec::new();
     for _ in 0..MAX_STEPS {
         let t_cur: f64 = cur.h.iter().sum();
         let mut p = template.clone();
         p.total_time = t_cur;
-        let Ok(step) = p.time_step(&cur, delta) else {
+        let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
+        add_new_cuts(&mut cuts, &carried);
+        let initial = cuts.len();
+        let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS);
+        carried = cuts.split_off(initial);
+        let Ok(step) = step else {
             delta *= 0.25;
             if delta < 1e-7 {
                 break;
