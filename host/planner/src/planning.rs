@@ -10,7 +10,7 @@ use triquint_shared::Travel;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::plan::{
-    Objective, PLAN_FORMAT, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
+    Objective, PLAN_FORMAT, PLAN_FORMAT_BOUNDED, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
 };
 
 use crate::check::max_abs;
@@ -110,6 +110,11 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         return Err(e);
     }
     streams(&plan)?;
+    if let Some(limit) = job.max_deviation_m() {
+        // Recorded, so that `check` proves it without being told.
+        plan.format = PLAN_FORMAT_BOUNDED.to_string();
+        plan.max_deviation_m = Some(limit);
+    }
     plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
         .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
     let progress = state.progress();
@@ -556,6 +561,7 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
         via_points_m: job.points_m().to_vec(),
         knots_m: p.knots.q.clone(),
         free_knots: Vec::new(),
+        max_deviation_m: None,
         intervals_s: s.h.clone(),
         total_time_s: s.h.iter().sum(),
         segments,

@@ -191,6 +191,11 @@ def test_knot_segments_and_the_deviation_bound():
     bounded = triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=0.5)
     assert bounded.path_deviation["max"] <= 0.5e-3 < triquint.plan(move, objective="min-time", knots="free").path_deviation["max"]
     assert all(row["ok"] for row in bounded.check())
+    # The bound is recorded (format 6), shown beside the deviation, proved by check.
+    d = bounded.path_deviation
+    assert bounded.format == "triquint-plan/6" and d["limit"] == 0.5e-3 and d["bound"] <= d["limit"]
+    assert any(row["what"].startswith("path deviation") and row["ok"] for row in bounded.check())
+    assert triquint.plan(move, objective="min-time", knots="free").path_deviation["limit"] is None
     with pytest.raises(triquint.InfeasibleError) as e:
         triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=1e-3)
     assert e.value.limit == "max_deviation_mm" and e.value.reached > 1e-3
