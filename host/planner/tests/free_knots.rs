@@ -138,16 +138,15 @@ fn where_torque_binds_free_knots_are_never_worse_than_fixed() {
 }
 
 #[test]
-fn free_knots_need_a_point_to_point_min_time_job() {
+fn free_knots_need_a_point_to_point_min_time_job_or_min_max_jerk() {
     let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
     assert!(job(m, KnotPlacement::Free).is_ok());
-    let e = Job::builder()
-        .knots(KnotPlacement::Free)
-        .points_mm(m)
-        .build()
-        .unwrap_err();
+    // Min-max-jerk takes free knots, but no segment count.
+    let mmj = Job::builder().knots(KnotPlacement::Free).points_mm(m);
+    assert!(mmj.clone().build().is_ok());
+    let e = mmj.knot_segments(7).build().unwrap_err();
     assert!(
-        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots"),
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots.segments"),
         "{e:?}"
     );
     let e = Job::builder()

@@ -165,8 +165,12 @@ def test_knots_keyword():
     assert triquint.plan(move, objective="min-time").duration == free.duration
     assert "triquint-plan/4" in repr(free)
     with pytest.raises(triquint.InvalidJobError) as e:
-        triquint.plan(move, knots="free")  # min-max-jerk
+        triquint.plan([*move, [0, 0, 600]], objective="min-time", knots="free")
     assert e.value.field == "knots"
+    # Min-max-jerk: a knot added a segment, never a higher jerk than fixed.
+    mmj, mmj_fixed = (triquint.plan(move, total_time=2.0, knots=k) for k in ("free", "fixed"))
+    assert max(mmj.max_abs["jerk"]) <= max(mmj_fixed.max_abs["jerk"])
+    assert all(row["ok"] for row in mmj.check())
     with pytest.raises(triquint.InvalidJobError) as e:
         triquint.Job(move, knots="loose")
     assert e.value.field == "knots"
