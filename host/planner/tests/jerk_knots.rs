@@ -74,17 +74,21 @@ fn free_knots_never_raise_the_max_jerk() {
                 ]
             })
             .collect();
-        let builder = Job::builder().points_mm(points).total_time(2.0);
+        let builder = Job::builder().points_mm(points).total_time(4.0);
         let fixed = plan(
             &builder.clone().knots(KnotPlacement::Fixed).build().unwrap(),
             &Options::default(),
-        )
-        .unwrap();
+        );
         let free = plan(
             &builder.knots(KnotPlacement::Free).build().unwrap(),
             &Options::default(),
-        )
-        .unwrap();
+        );
+        // No plan at fixed knots: the free knots start from none either.
+        let Ok(fixed) = fixed else {
+            assert_eq!(free, fixed, "path {i}");
+            continue;
+        };
+        let free = free.unwrap();
         assert!(check(&free).unwrap().iter().all(|r| r.ok), "path {i}");
         let (a, b) = (max_jerk(&fixed), max_jerk(&free));
         assert!(b <= a, "path {i}: {b} against {a}");
