@@ -123,6 +123,7 @@ def check_ruckig(binary, work, name, like, traj):
                 intervals_s=[p[1] for p in pieces], total_time_s=sum(p[1] for p in pieces),
                 segments=[dict(t0_s=p[0], duration_s=p[1], coeffs=p[2]) for p in pieces])
     plan.pop("free_knots")
+    plan.pop("max_deviation_m", None)
     out = work / f"{name}.json"
     rows = None
     for _ in range(2):  # the second pass with the maxima `check` found recorded

@@ -147,6 +147,7 @@ pub fn plan_through(
         via_points_m: points.to_vec(),
         knots_m: knots.iter().map(|k| [k[0], k[1], k[2]]).collect(),
         free_knots: Vec::new(),
+        max_deviation_m: None,
         intervals_s: h.clone(),
         total_time_s: t0,
         segments,

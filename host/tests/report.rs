@@ -55,6 +55,7 @@ fn rest_to_rest_plan(points_mm: &[[f64; 3]], h: &[f64]) -> Plan {
         via_points_m: via,
         knots_m: knots,
         free_knots: Vec::new(),
+        max_deviation_m: None,
         intervals_s: h.to_vec(),
         total_time_s: t0,
         segments,

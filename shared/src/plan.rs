@@ -1,4 +1,5 @@
-//! The plan file (`triquint-plan/3`, 4 with free knots, 5 shaped; docs/plan-format.md): what the planner
+//! The plan file (`triquint-plan/3`, 4 with free knots, 5 shaped, 6 with a
+//! deviation bound; docs/plan-format.md): what the planner
 //! writes and every other tool (check, report, simulate, upload) reads, and
 //! its evaluation at a plan time ([`Plan::at`], [`Plan::sample`]; the
 //! conventions are in [`eval`]). Format 1 and 2 plans still load,
@@ -35,6 +36,11 @@ pub const PLAN_FORMAT_FREE_KNOTS: &str = "triquint-plan/4";
 /// A shaped plan, with `shaping` (its shaper and the unshaped plan, whose
 /// free knots it keeps): written for every plan a job shapes.
 pub const PLAN_FORMAT_SHAPED: &str = "triquint-plan/5";
+/// A plan whose job bounded the platform's distance from the straight
+/// segments between the via-points, with `max_deviation_m` (and
+/// `free_knots` when the planner chose some): written for every unshaped
+/// plan of such a job.
+pub const PLAN_FORMAT_BOUNDED: &str = "triquint-plan/6";
 
 /// The most segments a plan may have: the wire numbers them from 0 in 16
 /// bits, and a number that wrapped would break the host's credit and
@@ -121,6 +127,11 @@ pub struct Plan {
     /// planner chose (format 4; empty, and absent from the file, otherwise).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub free_knots: Vec<usize>,
+    /// The job's bound on the platform's distance from the straight
+    /// segments between the via-points (m), which `check` proves (format 6;
+    /// absent otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_deviation_m: Option<f64>,
     pub intervals_s: Vec<f64>,
     pub total_time_s: f64,
     pub segments: Vec<Segment>,
@@ -139,7 +150,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], max_deviation_m: None, intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// assert_eq!(plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]).duration(), 2.0);
@@ -158,7 +169,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], max_deviation_m: None, intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let seg = |t0_s, duration_s| Segment { t0_s, duration_s, coeffs: [[0.3, 0.0, 0.0, 0.0, 0.0, 0.0]; 3] };
     /// let p = plan(vec![seg(0.0, 1.5), seg(1.5, 0.5)]);
@@ -182,7 +193,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], max_deviation_m: None, intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// // Every joint: q = 0.3 + 0.1 t² for 1 s, then on at 0.2 m/s.
     /// let p = plan(vec![
@@ -213,7 +224,7 @@ impl Plan {
     /// # use triquint_shared::plan::*;
     /// # fn plan(segments: Vec<Segment>) -> Plan { Plan { format: PLAN_FORMAT.into(),
     /// #     objective: Objective::MinMaxJerk, robot: Default::default(), limits: Default::default(), travel: Default::default(), ceilings: Default::default(),
-    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], intervals_s: vec![], total_time_s: 0.0,
+    /// #     via_points_m: vec![], knots_m: vec![], free_knots: vec![], max_deviation_m: None, intervals_s: vec![], total_time_s: 0.0,
     /// #     segments, max_abs: Default::default(), solver: Default::default(), shaping: None } }
     /// let p = plan(vec![Segment { t0_s: 0.0, duration_s: 1.0, coeffs: [[0.3, 0.1, 0.0, 0.0, 0.0, 0.0]; 3] }]);
     /// let samples: Vec<(f64, JointState)> = p.sample(0.4)?.collect();
@@ -281,6 +292,7 @@ mod tests {
             via_points_m: Vec::new(),
             knots_m: Vec::new(),
             free_knots: Vec::new(),
+            max_deviation_m: None,
             intervals_s: Vec::new(),
             total_time_s: 0.0,
             segments: (0..n).map(seg).collect(),

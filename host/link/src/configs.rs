@@ -166,6 +166,7 @@ mod tests {
             via_points_m: vec![],
             knots_m: vec![],
             free_knots: vec![],
+            max_deviation_m: None,
             intervals_s: vec![1.0],
             total_time_s: 1.0,
             segments: vec![Segment {

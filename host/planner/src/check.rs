@@ -2,7 +2,8 @@
 //! at both ends, and every limit in continuous time — velocity,
 //! acceleration and jerk exactly, by Sturm sequences ([`crate::sturm`], a
 //! method the search does not use); torque on a fine grid; the sliders'
-//! travel from the exact position extremes; and every figure the plan
+//! travel from the exact position extremes; a recorded deviation bound by
+//! its certificate; and every figure the plan
 //! records (`max_abs`) against its recomputation, so no reader of the plan
 //! trusts a summary that does not match the segments.
 
@@ -230,14 +231,17 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
         );
         row("via-point deviation of shaping (m)", deviation, bound);
     }
+    if let Some(limit) = plan.max_deviation_m {
+        rows.push(deviation_row(plan, limit)?);
+    }
     Ok(rows)
 }
 
-/// The check of a job's `path.max_deviation_mm` (`limit_m`, m), which the
-/// plan file does not record: the certified bound on the platform's
-/// distance from the straight segments between the via-points
+/// The check of a bound `limit_m` (m) on the platform's distance from the
+/// straight segments between the via-points: the certified bound
 /// ([`PathDeviation`](crate::stats::PathDeviation): samples, and a bound
-/// on ‖∂r/∂q‖ over each interval between them) against it.
+/// on ‖∂r/∂q‖ over each interval between them) against it. [`check`] does
+/// it for the bound a plan records (format 6); this one proves any other.
 ///
 /// ```
 /// use triquint_planner::{Job, KnotPlacement, Objective, Options, check_deviation, plan};
@@ -253,6 +257,11 @@ pub fn check(plan: &Plan) -> Result<Vec<CheckRow>, LoadError> {
 /// ```
 pub fn check_deviation(plan: &Plan, limit_m: f64) -> Result<CheckRow, LoadError> {
     validate_plan(plan)?;
+    deviation_row(plan, limit_m)
+}
+
+/// [`check_deviation`] of a validated plan.
+fn deviation_row(plan: &Plan, limit_m: f64) -> Result<CheckRow, LoadError> {
     let d = path_deviation_within(plan, limit_m).map_err(|e| LoadError::Invalid(e.to_string()))?;
     Ok(CheckRow {
         what: "path deviation, certified (m)".to_string(),

@@ -60,7 +60,9 @@ pub enum KnotPlacement {
     /// Min-time between two via-points: the planner also chooses the
     /// interior knots' number, times and joint positions, on the straight
     /// line in joint space (the path leaves the Cartesian segment; the plan
-    /// reports by how much).
+    /// reports by how much). Min-max-jerk (any via-points): a knot added
+    /// inside every segment, its time and joint position chosen to lower
+    /// the max jerk, kept only where it does.
     Free,
 }
 
@@ -267,14 +269,21 @@ impl JobBuilder {
             None if FREE_KNOTS_BY_DEFAULT && point_to_point => KnotPlacement::Free,
             None => KnotPlacement::Fixed,
         };
-        if knots == KnotPlacement::Free && !point_to_point {
+        let min_time = self.objective == Objective::MinTime;
+        if knots == KnotPlacement::Free && min_time && !point_to_point {
             return Err(PlanError::invalid(
                 "knots",
-                "free knots need objective = \"min-time\" and exactly 2 via-points",
+                "free knots for min-time need exactly 2 via-points (min-max-jerk takes any)",
             ));
         }
         if let Some(n) = self.knot_segments {
             let (lo, hi) = KNOT_SEGMENTS;
+            if !min_time {
+                return Err(PlanError::invalid(
+                    "knots.segments",
+                    "a segment count needs objective = \"min-time\" (min-max-jerk adds a knot a segment)",
+                ));
+            }
             if knots != KnotPlacement::Free {
                 return Err(PlanError::invalid(
                     "knots.segments",

@@ -2,7 +2,8 @@
 //!
 //! ```toml
 //! objective = "min-max-jerk"        # or "min-time"
-//! knots = "fixed"                    # or "free" (min-time, two via-points),
+//! knots = "fixed"                    # or "free" (min-time: two via-points;
+//!                                    # min-max-jerk: knots added),
 //!                                    # or { placement = "free", segments = 7 }
 //! [robot]                            # optional; defaults = paper Table 1
 //! [limits]                           # defaults = paper Table 3

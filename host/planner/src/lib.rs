@@ -57,6 +57,7 @@ mod extrema;
 mod free_knots;
 mod holding;
 mod inner;
+mod jerk_knots;
 mod jerk_only;
 mod job;
 #[cfg(feature = "toml")]

@@ -4,13 +4,13 @@
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 use triquint_shared::plan::{
-    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, PLAN_FORMAT_FREE_KNOTS,
-    PLAN_FORMAT_SHAPED, Plan,
+    MAX_SEGMENTS, PLAN_FORMAT, PLAN_FORMAT_1, PLAN_FORMAT_2, PLAN_FORMAT_BOUNDED,
+    PLAN_FORMAT_FREE_KNOTS, PLAN_FORMAT_SHAPED, Plan,
 };
 use triquint_shared::protocol::segment::MAX_DURATION_US;
 use triquint_shared::readable::readable;
 
-use crate::job::LIMIT_RANGE;
+use crate::job::{LIMIT_RANGE, MAX_DEVIATION_MM};
 use crate::shaper::Impulses;
 
 /// Why a text is not a usable plan.
@@ -22,7 +22,7 @@ pub enum LoadError {
     Json(String),
     /// Another format or version than this library reads.
     #[error(
-        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_SHAPED}`, `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
+        "format is `{found}`, expected `{PLAN_FORMAT}` (or `{PLAN_FORMAT_FREE_KNOTS}`, `{PLAN_FORMAT_SHAPED}`, `{PLAN_FORMAT_BOUNDED}`, `{PLAN_FORMAT_2}`, `{PLAN_FORMAT_1}`)"
     )]
     Format { found: String },
     /// Plan JSON whose contents do not fit together.
@@ -46,6 +46,7 @@ pub fn parse_plan(text: &str) -> Result<Plan, LoadError> {
         let records: &[&str] = match f {
             PLAN_FORMAT | PLAN_FORMAT_FREE_KNOTS => &["travel", "ceilings"],
             PLAN_FORMAT_SHAPED => &["travel", "ceilings", "shaping"],
+            PLAN_FORMAT_BOUNDED => &["travel", "ceilings", "max_deviation_m"],
             PLAN_FORMAT_2 => &["travel"],
             PLAN_FORMAT_1 => &[],
             _ => return Err(LoadError::Format { found: one_line(f) }),
@@ -178,7 +179,37 @@ pub fn validate_plan(plan: &Plan) -> Result<(), LoadError> {
     }
     via_points_are_knots(plan)?;
     free_knots_valid(plan)?;
+    bound_valid(plan)?;
     shaping_valid(plan)
+}
+
+/// A deviation bound only in format 6, and there always, in the range a
+/// job's `path.max_deviation_mm` is held to.
+fn bound_valid(plan: &Plan) -> Result<(), LoadError> {
+    let bounded = plan.format == PLAN_FORMAT_BOUNDED;
+    match plan.max_deviation_m {
+        None if bounded => Err(LoadError::Invalid(format!(
+            "a `{PLAN_FORMAT_BOUNDED}` plan records its `max_deviation_m`; this one has none"
+        ))),
+        Some(_) if !bounded => Err(LoadError::Invalid(format!(
+            "a `{}` plan has no `max_deviation_m` (only `{PLAN_FORMAT_BOUNDED}` records one)",
+            one_line(&plan.format)
+        ))),
+        Some(m) => {
+            let (lo, hi) = MAX_DEVIATION_MM;
+            if (lo..=hi).contains(&(m * 1e3)) {
+                Ok(())
+            } else {
+                Err(LoadError::Invalid(format!(
+                    "max_deviation_m is {}, not in {}..{} m",
+                    exact(m),
+                    readable(lo * 1e-3),
+                    readable(hi * 1e-3)
+                )))
+            }
+        }
+        None => Ok(()),
+    }
 }
 
 /// A shaping record only in format 5, with a shaper the planner makes and
@@ -247,18 +278,21 @@ fn known_format(f: &str) -> bool {
         PLAN_FORMAT,
         PLAN_FORMAT_FREE_KNOTS,
         PLAN_FORMAT_SHAPED,
+        PLAN_FORMAT_BOUNDED,
         PLAN_FORMAT_2,
         PLAN_FORMAT_1,
     ]
     .contains(&f)
 }
 
-/// Free knots only in format 4 (and there at least one): interior knots, in
-/// increasing order.
+/// Free knots only in format 4 (and there at least one) and 6 (any):
+/// interior knots, in increasing order.
 fn free_knots_valid(plan: &Plan) -> Result<(), LoadError> {
     let free = &plan.free_knots;
     let bad = |m: String| Err(LoadError::Invalid(m));
-    if (plan.format == PLAN_FORMAT_FREE_KNOTS) == free.is_empty() {
+    if plan.format != PLAN_FORMAT_BOUNDED
+        && (plan.format == PLAN_FORMAT_FREE_KNOTS) == free.is_empty()
+    {
         return bad(format!(
             "a `{}` plan {} free knots",
             plan.format,
@@ -368,6 +402,7 @@ mod tests {
             via_points_m: vec![p, p],
             knots_m: vec![q; n + 1],
             free_knots: Vec::new(),
+            max_deviation_m: None,
             intervals_s: vec![1e-3; n],
             total_time_s: t,
             segments,

@@ -10,12 +10,13 @@ use triquint_shared::Travel;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::plan::{
-    Objective, PLAN_FORMAT, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
+    Objective, PLAN_FORMAT, PLAN_FORMAT_BOUNDED, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
 };
 
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
 use crate::free_knots::{FreeShape, free_knots, toward_straight};
+use crate::jerk_knots::jerk_knots;
 use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
@@ -110,6 +111,11 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         return Err(e);
     }
     streams(&plan)?;
+    if let Some(limit) = job.max_deviation_m() {
+        // Recorded, so that `check` proves it without being told.
+        plan.format = PLAN_FORMAT_BOUNDED.to_string();
+        plan.max_deviation_m = Some(limit);
+    }
     plan.max_abs = max_abs(&plan, FINAL_TORQUE_SAMPLES)
         .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?;
     let progress = state.progress();
@@ -152,7 +158,22 @@ fn planned(
     opts: &Options,
     state: &Arc<RunState>,
 ) -> Result<(Plan, usize), PlanError> {
+    let mut added = None;
     let (p, free, r) = match job.knot_placement() {
+        KnotPlacement::Free if job.objective() == Objective::MinMaxJerk => {
+            let f = solve(job, fixed, opts);
+            let better = f.as_ref().ok().and_then(|(s, starts)| {
+                let (q, sol, knots) = jerk_knots(fixed, s, job.limits().total_time)?;
+                (sol.jerk < s.jerk).then_some((q, sol, knots, *starts))
+            });
+            match better {
+                Some((q, sol, knots, starts)) => {
+                    added = Some(knots);
+                    (q, true, Ok((sol, starts)))
+                }
+                None => (fixed.clone(), false, f),
+            }
+        }
         KnotPlacement::Free => match solve_free(job, fixed, opts)? {
             Some((p, r, false)) => (p, true, r),
             // Torque bound the free shape, which is only time-scaled for
@@ -180,21 +201,36 @@ fn planned(
     let mut plan = assemble(job, &p, &sol);
     if free {
         plan.format = PLAN_FORMAT_FREE_KNOTS.to_string();
-        plan.free_knots = (1..p.knots.len() - 1).collect();
+        plan.free_knots = added.unwrap_or_else(|| (1..p.knots.len() - 1).collect());
     }
     if free && job.knot_segments().is_some() {
         // A segment count the job asks for is kept, or refused: falling
         // back to other knots would not be what it asked.
         streams(&plan)?;
     }
-    if free && (!passes_check(&plan)? || shortfall(&plan).is_some()) {
+    // Min-max-jerk's added knots are not moved toward the straight
+    // segment: over the bound, the fixed knots' plan is the one to try.
+    let over_bound = |plan: &Plan| -> Result<bool, PlanError> {
+        Ok(match job.max_deviation_m() {
+            Some(limit) if job.objective() == Objective::MinMaxJerk => {
+                path_deviation_within(plan, limit)
+                    .map_err(|e| PlanError::Solver(format!("the plan leaves the workspace: {e}")))?
+                    .bound_m
+                    > limit
+            }
+            _ => false,
+        })
+    };
+    if free && (!passes_check(&plan)? || shortfall(&plan).is_some() || over_bound(&plan)?) {
         // Nothing the planner writes fails the check or the streaming
         // rule: the fixed knots then (fewer, longer segments).
         let (sol, _) = solve(job, fixed, opts)?;
         let plan = assemble(job, fixed, &sol);
         return within_deviation(job, fixed, opts, plan, None).map(|p| (p, starts));
     }
-    let free = free.then_some(&p);
+    // The bound moves a point-to-point move's free knots toward the
+    // straight segment; min-max-jerk's falls back to the fixed knots.
+    let free = (free && job.objective() == Objective::MinTime).then_some(&p);
     within_deviation(job, fixed, opts, plan, free).map(|p| (p, starts))
 }
 
@@ -556,6 +592,7 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
         via_points_m: job.points_m().to_vec(),
         knots_m: p.knots.q.clone(),
         free_knots: Vec::new(),
+        max_deviation_m: None,
         intervals_s: s.h.clone(),
         total_time_s: s.h.iter().sum(),
         segments,

@@ -47,6 +47,8 @@ pub fn shape(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
         .chain([end])
         .collect();
     shaped.free_knots = Vec::new();
+    // The bound is the unshaped path's: shaping leaves the via-points.
+    shaped.max_deviation_m = None;
     shaped.segments = segments;
     if let (Some(a), Some(b)) = (plan.via_points_m.first(), plan.via_points_m.last()) {
         shaped.via_points_m = vec![*a, *b];

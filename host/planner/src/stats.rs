@@ -103,6 +103,9 @@ pub struct PathDeviation {
     pub bound_m: f64,
     /// Longest time between two samples (s), at most [`DEVIATION_STEP_S`].
     pub step_s: f64,
+    /// The bound the plan records (m, format 6), which `check` proves
+    /// `bound_m` within; None when it records none.
+    pub limit_m: Option<f64>,
 }
 
 /// How many times an interval whose bound is above the target is halved.
@@ -175,6 +178,16 @@ fn via_of_segments(plan: &Plan, model: &Model<f64>) -> Vec<usize> {
 /// The path's deviation of a (validated) plan ([`PathDeviation`]).
 pub fn path_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
     path_deviation_within(plan, f64::INFINITY)
+}
+
+/// [`path_deviation`] with the bound the plan records, certified against
+/// it as `check` does.
+pub fn recorded_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
+    let limit = plan.max_deviation_m;
+    Ok(PathDeviation {
+        limit_m: limit,
+        ..path_deviation_within(plan, limit.unwrap_or(f64::INFINITY))?
+    })
 }
 
 /// [`path_deviation`], with every sample interval whose bound is above
@@ -289,7 +302,7 @@ pub fn plan_stats(plan: &Plan) -> Result<PlanStats, StatsError> {
         jerk: Quantity::default(),
         torque: Quantity::default(),
         segments: Vec::with_capacity(plan.segments.len()),
-        path_deviation: path_deviation(plan)?,
+        path_deviation: recorded_deviation(plan)?,
     };
     let mut integrals = [[0.0f64; 3]; 4];
     for (i, seg) in plan.segments.iter().enumerate() {

@@ -138,16 +138,15 @@ fn where_torque_binds_free_knots_are_never_worse_than_fixed() {
 }
 
 #[test]
-fn free_knots_need_a_point_to_point_min_time_job() {
+fn free_knots_need_a_point_to_point_min_time_job_or_min_max_jerk() {
     let m = [[0.0, 0.0, 600.0], [20.0, 0.0, 600.0]];
     assert!(job(m, KnotPlacement::Free).is_ok());
-    let e = Job::builder()
-        .knots(KnotPlacement::Free)
-        .points_mm(m)
-        .build()
-        .unwrap_err();
+    // Min-max-jerk takes free knots, but no segment count.
+    let mmj = Job::builder().knots(KnotPlacement::Free).points_mm(m);
+    assert!(mmj.clone().build().is_ok());
+    let e = mmj.knot_segments(7).build().unwrap_err();
     assert!(
-        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots"),
+        matches!(&e, PlanError::InvalidJob { field, .. } if field == "knots.segments"),
         "{e:?}"
     );
     let e = Job::builder()
@@ -465,5 +464,84 @@ fn an_unmeetable_deviation_bound_says_how_close_the_plan_came() {
     assert!(
         matches!(&e, PlanError::InvalidJob { field, .. } if field == "path.max_deviation_mm"),
         "{e:?}"
+    );
+}
+
+/// A bounded job's plan records its bound (format 6), which `check` proves
+/// without being told; a tampered bound fails the check (below the
+/// certificate) or is refused by the loader (out of range, in another
+/// format, missing).
+#[test]
+fn a_recorded_deviation_bound_is_proved_and_tampering_is_caught() {
+    let m = [[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]];
+    let j = job(m, KnotPlacement::Free)
+        .unwrap()
+        .to_builder()
+        .max_deviation_mm(0.5)
+        .build()
+        .unwrap();
+    let p = plan(&j, &Options::default()).unwrap();
+    assert_eq!(p.format, "triquint-plan/6");
+    assert_eq!(p.max_deviation_m, Some(0.5e-3));
+    let rows = check(&p).unwrap();
+    let row = |rows: &[triquint_planner::CheckRow]| {
+        rows.iter()
+            .find(|r| r.what.starts_with("path deviation"))
+            .cloned()
+            .expect("a deviation row")
+    };
+    let proved = row(&rows);
+    assert!(
+        rows.iter().all(|r| r.ok) && proved.bound == 0.5e-3,
+        "{proved:?}"
+    );
+    let stats = triquint_planner::stats::plan_stats(&p).unwrap();
+    assert_eq!(stats.path_deviation.limit_m, Some(0.5e-3));
+    assert!(stats.path_deviation.bound_m <= 0.5e-3);
+
+    let mut v: serde_json::Value = serde_json::to_value(&p).unwrap();
+    let load = |v: &serde_json::Value| parse_plan(&v.to_string());
+    assert_eq!(load(&v).unwrap(), p);
+    // A bound below what the path certifies loads, and fails its row.
+    let tight = proved.value * 0.5;
+    v["max_deviation_m"] = tight.into();
+    let tampered = load(&v).unwrap();
+    let r = row(&check(&tampered).unwrap());
+    assert!(!r.ok && r.bound == tight, "{r:?}");
+    for (bad, says) in [
+        (serde_json::json!(0.0), "not in"),
+        (serde_json::json!(-1e-3), "not in"),
+        (serde_json::json!(2.0), "not in"),
+        (serde_json::Value::Null, "records its `max_deviation_m`"),
+    ] {
+        v["max_deviation_m"] = bad.clone();
+        let e = load(&v).unwrap_err().to_string();
+        assert!(e.contains(says), "{bad}: {e}");
+    }
+    v.as_object_mut().unwrap().remove("max_deviation_m");
+    assert!(
+        load(&v)
+            .unwrap_err()
+            .to_string()
+            .contains("max_deviation_m")
+    );
+    // A bound in an earlier format is refused, not ignored.
+    v["max_deviation_m"] = 0.5e-3.into();
+    let knots_format = if p.free_knots.is_empty() {
+        "triquint-plan/3"
+    } else {
+        "triquint-plan/4"
+    };
+    v["format"] = knots_format.into();
+    let e = load(&v).unwrap_err().to_string();
+    assert!(e.contains("has no `max_deviation_m`"), "{e}");
+    // An unbounded job's plan records none.
+    let free = plan(&job(m, KnotPlacement::Free).unwrap(), &Options::default()).unwrap();
+    assert_eq!(free.max_deviation_m, None);
+    assert!(
+        check(&free)
+            .unwrap()
+            .iter()
+            .all(|r| !r.what.starts_with("path deviation"))
     );
 }

@@ -44,6 +44,7 @@ const LAYERS: &[&str] = &[
     "min_time",     // the shortest total time
     "rounding",     // whole microseconds
     "free_knots",   // a point-to-point move's knots chosen by the planner
+    "jerk_knots",   // min-max-jerk knots added and chosen by the planner
     "planning",     // the entry point, `plan`
     "evolution",    // differential evolution, the search's independent check
 ];

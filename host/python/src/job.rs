@@ -25,8 +25,9 @@ use crate::units::Units;
 /// (m/s²), jerk (m/s³), torque (N·m), total_time (s, an upper bound; the
 /// plan's duration for min-max-jerk). `objective` is 'min-max-jerk' (the
 /// smallest maximum |jerk| within total_time) or 'min-time' (the shortest
-/// time that meets every limit). `knots` is 'fixed' or, for min-time
-/// between two via-points, 'free' (the planner chooses the knots);
+/// time that meets every limit). `knots` is 'fixed' or 'free' (min-time
+/// between two via-points: the planner chooses the knots; min-max-jerk: it
+/// adds a knot inside each segment, kept only where the jerk falls);
 /// `knot_segments` sets a free-knot move's segment count (3..64), and
 /// `max_deviation_mm` bounds the platform's distance from the straight
 /// segments between via-points (the planner meets it or raises

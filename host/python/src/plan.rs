@@ -231,16 +231,18 @@ impl PyPlan {
     /// The platform's largest distance from the straight segment between
     /// the via-points it travels between: a dict of 'max' (m, sampled),
     /// 'at' (s, where), 'bound' (m, at most this anywhere: a Lipschitz bound
-    /// between samples) and 'step' (s, between samples).
+    /// between samples), 'step' (s, between samples) and 'limit' (m, the
+    /// job's `max_deviation_mm` the plan records and `check` proves, or None).
     #[getter]
     fn path_deviation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = triquint_planner::stats::path_deviation(&self.plan)
+        let d = triquint_planner::stats::recorded_deviation(&self.plan)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let out = PyDict::new(py);
         out.set_item("max", d.max_m)?;
         out.set_item("at", d.at_s)?;
         out.set_item("bound", d.bound_m)?;
         out.set_item("step", d.step_s)?;
+        out.set_item("limit", d.limit_m)?;
         Ok(out)
     }
 

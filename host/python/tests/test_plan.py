@@ -165,8 +165,12 @@ def test_knots_keyword():
     assert triquint.plan(move, objective="min-time").duration == free.duration
     assert "triquint-plan/4" in repr(free)
     with pytest.raises(triquint.InvalidJobError) as e:
-        triquint.plan(move, knots="free")  # min-max-jerk
+        triquint.plan([*move, [0, 0, 600]], objective="min-time", knots="free")
     assert e.value.field == "knots"
+    # Min-max-jerk: a knot added a segment, never a higher jerk than fixed.
+    mmj, mmj_fixed = (triquint.plan(move, total_time=2.0, knots=k) for k in ("free", "fixed"))
+    assert max(mmj.max_abs["jerk"]) <= max(mmj_fixed.max_abs["jerk"])
+    assert all(row["ok"] for row in mmj.check())
     with pytest.raises(triquint.InvalidJobError) as e:
         triquint.Job(move, knots="loose")
     assert e.value.field == "knots"
@@ -191,6 +195,11 @@ def test_knot_segments_and_the_deviation_bound():
     bounded = triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=0.5)
     assert bounded.path_deviation["max"] <= 0.5e-3 < triquint.plan(move, objective="min-time", knots="free").path_deviation["max"]
     assert all(row["ok"] for row in bounded.check())
+    # The bound is recorded (format 6), shown beside the deviation, proved by check.
+    d = bounded.path_deviation
+    assert bounded.format == "triquint-plan/6" and d["limit"] == 0.5e-3 and d["bound"] <= d["limit"]
+    assert any(row["what"].startswith("path deviation") and row["ok"] for row in bounded.check())
+    assert triquint.plan(move, objective="min-time", knots="free").path_deviation["limit"] is None
     with pytest.raises(triquint.InfeasibleError) as e:
         triquint.plan(move, objective="min-time", knots="free", max_deviation_mm=1e-3)
     assert e.value.limit == "max_deviation_mm" and e.value.reached > 1e-3

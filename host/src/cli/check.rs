@@ -18,9 +18,10 @@ pub struct CheckArgs {
     /// Print the checks as JSON: `{"ok", "checks": [{"check", "value", "bound", "ok"}]}`.
     #[arg(long)]
     pub json: bool,
-    /// Also prove the job's `path.max_deviation_mm` (the plan file does not
-    /// record it): the certified bound on the platform's distance from the
-    /// straight segments between the via-points.
+    /// Also prove a bound on the platform's distance from the straight
+    /// segments between the via-points: the certified bound against it (a
+    /// plan of a job with `path.max_deviation_mm` records its own, which
+    /// `check` proves without this).
     #[arg(long, value_name = "MM")]
     pub max_deviation_mm: Option<f64>,
     #[command(flatten)]

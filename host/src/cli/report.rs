@@ -62,6 +62,12 @@ pub fn run(args: &ReportArgs) -> CliResult {
             d.step_s * 1e3,
             d.at_s
         )?;
+        if let Some(limit) = d.limit_m {
+            outln!(
+                "path bound: {:.3} mm (the job's path.max_deviation_mm, which `check` proves)",
+                limit * 1e3
+            )?;
+        }
     }
     for path in written {
         triquint_cli_common::errln!("wrote {}", path.display());
