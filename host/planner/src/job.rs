@@ -44,8 +44,8 @@ pub const KNOT_SEGMENTS: (usize, usize) = (3, 64);
 pub const MAX_DEVIATION_MM: (f64, f64) = (1e-3, 1e3);
 /// Where a job does not say `knots`, does a point-to-point min-time move
 /// get free knots? The one switch of the default; `move-to` follows it.
-/// Off while a free move's 15 segments outrun the drives' queue
-/// (docs/planner.md, Free knots).
+/// A free plan that would not stream or check falls back to the fixed
+/// knots (docs/planner.md, Free knots).
 pub const FREE_KNOTS_BY_DEFAULT: bool = true;
 
 /// How the planner places the knots between the via-points.
