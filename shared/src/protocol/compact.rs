@@ -33,23 +33,77 @@
 use super::Frame;
 use super::crc::Crc32;
 use super::messages::Reject;
-use super::segment::{COEFF_SCALE, FLAG_LAST, WireSegment};
+use super::segment::{COEFF_SCALE, FLAG_FIRST, FLAG_LAST, WireSegment};
 use super::wire::{Addr, FieldDef, I48_MAX, MessageDef, WireType};
 
 /// Body length (bytes).
 pub const COMPACT_LEN: usize = 35;
-/// Offset of the CRC in the body; it covers the predecessor's CRC and bytes 0..COMPACT_CRC_OFFSET.
-pub const COMPACT_CRC_OFFSET: usize = COMPACT_LEN - 4;
 /// Body bytes per classic part frame.
 pub const CLASSIC_CHUNK: usize = 7;
-/// Classic part frames per compact segment.
-pub const CLASSIC_PARTS: usize = COMPACT_LEN.div_ceil(CLASSIC_CHUNK);
 /// Payload length of the CAN-FD frame (a valid CAN-FD length ≥ 1 + body).
 pub const FD_LEN: usize = 48;
 
-/// Part frames per compact segment: 5 classic, 1 CAN-FD.
-pub const fn compact_parts(fd: bool) -> usize {
-    if fd { 1 } else { CLASSIC_PARTS }
+/// Bits below a unit ([`COEFF_SCALE`]) of the coefficients a chain
+/// continues from: the start of a continuation is rebuilt from its
+/// predecessor's end in these finer units, so a short segment's end
+/// (jerk to 6 units / h³ in its own units) does not fix its successor's
+/// start only to that (magnified by (h/h')³ there).
+pub const FINE_BITS: u32 = 8;
+
+/// A segment as a receiver holds it once taken in, and what a continuation
+/// of it is rebuilt from: its coefficients in units of 2⁻⁸ of
+/// [`COEFF_SCALE`] (those of a full segment are its own, exactly; those of
+/// a continuation as rebuilt, before rounding to the wire's units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Held {
+    pub segment: WireSegment,
+    fine: [[i64; 6]; 3],
+}
+
+impl From<WireSegment> for Held {
+    fn from(segment: WireSegment) -> Self {
+        Self {
+            segment,
+            fine: segment.coeffs.map(|r| r.map(|x| x << FINE_BITS)),
+        }
+    }
+}
+
+/// x / 2^FINE_BITS rounded half away from zero.
+fn unfine(x: i64) -> i64 {
+    let half = 1i64 << (FINE_BITS - 1);
+    if x < 0 {
+        -((-x + half) >> FINE_BITS)
+    } else {
+        (x + half) >> FINE_BITS
+    }
+}
+
+/// Flag: the segment starts at rest at `pose` (a plan's first segment):
+/// it continues no predecessor, its CRC chains on 0.
+pub const FLAG_AT_REST: u8 = 1;
+/// The longest body (a plan's first segment): 7 + 24 + 18 + 4 bytes.
+pub const COMPACT_MAX: usize = 53;
+/// Payload length of a CAN-FD frame carrying a body longer than 47 bytes.
+pub const FD_LEN_MAX: usize = 64;
+
+/// Body length of a compact segment with `flags`: the continuation's
+/// 35 bytes, plus the start pose (3 × i48) when it starts at rest.
+pub const fn body_len(flags: u8) -> usize {
+    if flags & FLAG_AT_REST != 0 {
+        COMPACT_LEN + 18
+    } else {
+        COMPACT_LEN
+    }
+}
+
+/// Part frames of a compact segment with `flags`: 5 or 8 classic, 1 CAN-FD.
+pub const fn compact_parts(flags: u8, fd: bool) -> usize {
+    if fd {
+        1
+    } else {
+        body_len(flags).div_ceil(CLASSIC_CHUNK)
+    }
 }
 
 /// Classic compact part (DLC 8).
@@ -216,6 +270,8 @@ pub struct Compact {
     pub flags: u8,
     /// b_j4, b_j5 (m).
     pub b45: [[f32; 2]; 3],
+    /// b_j0 (units of [`COEFF_SCALE`]); sent only with [`FLAG_AT_REST`].
+    pub pose: [i64; 3],
     pub crc: u32,
 }
 
@@ -244,20 +300,20 @@ fn scale_round(x: i128, h: i128, d: i128) -> Option<i128> {
     n.checked_add(half)?.checked_div(d)
 }
 
-/// An f32 coefficient (m) in units of [`COEFF_SCALE`] (2⁻⁴⁰ m), rounded half
-/// away from zero; `None` if not finite or outside the i48 range. From the
+/// An f32 coefficient (m) in fine units (2⁻⁴⁸ m), rounded half away from
+/// zero; `None` if not finite or outside the i48 range of units. From the
 /// bits, without floating point: the same on every receiver.
-fn f32_units(x: f32) -> Option<i64> {
+fn f32_fine(x: f32) -> Option<i64> {
     let bits = x.to_bits();
     let exp = ((bits >> 23) & 0xFF) as i32;
     if exp == 0xFF {
         return None;
     }
     let mant = (bits & 0x7F_FFFF) as i64 | if exp == 0 { 0 } else { 1 << 23 };
-    // x = mant · 2^(e − 150) (e = 1 for subnormals), in units × 2⁴⁰.
-    let shift = exp.max(1) - 150 + 40;
+    // x = mant · 2^(e − 150) (e = 1 for subnormals), in fine units × 2⁴⁸.
+    let shift = exp.max(1) - 150 + 40 + FINE_BITS as i32;
     let mag = if shift >= 0 {
-        if shift > 23 {
+        if shift > 31 {
             return None;
         }
         mant << shift
@@ -267,42 +323,44 @@ fn f32_units(x: f32) -> Option<i64> {
         0
     };
     let v = if bits >> 31 != 0 { -mag } else { mag };
-    (v.abs() <= I48_MAX).then_some(v)
+    (unfine(v.abs()) <= I48_MAX).then_some(v)
 }
 
-/// The chained CRC of a body (bytes 0..COMPACT_CRC_OFFSET) after predecessor CRC `pred_crc`.
+/// The chained CRC of a body (all but its last 4 bytes) after predecessor CRC `pred_crc`.
 fn chained_crc(pred_crc: u32, body: &[u8]) -> u32 {
     let mut c = Crc32::new();
     c.update(&pred_crc.to_le_bytes());
-    c.update(body.get(..COMPACT_CRC_OFFSET).unwrap_or(&[]));
+    c.update(body.get(..body.len().saturating_sub(4)).unwrap_or(&[]));
     c.finish()
 }
 
 /// Choosing one axis's b_4, b_5 (host side): the rebuilt segment's end,
-/// in units, against the end it should have.
+/// in fine units, against the end it should have.
 struct EndFit {
-    /// The plan's b_4, b_5 (units).
+    /// The plan's b_4, b_5 (fine units).
     plan45: [i64; 2],
     /// Target end minus the rebuilt end with the plan's b_4, b_5: the
-    /// Taylor coefficients of order m = 0..3 (units, `next`'s normalisation).
+    /// Taylor coefficients of order m = 0..3 (fine units, `next`'s normalisation).
     gap: [f64; 4],
     /// Weight of order m: the longer segment's normalisation, f^m.
     weight: [f64; 4],
 }
 
 impl EndFit {
+    /// `start`: the rebuilt b_0..b_3 (fine units); the rest in fine units too.
     fn new(start: &[i64; 4], next: &WireSegment, after: Option<&WireSegment>, j: usize) -> Self {
-        let p = &next.coeffs[j];
+        let fine = (1i64 << FINE_BITS) as f64;
+        let p = next.coeffs[j].map(|x| x << FINE_BITS);
         // Where the rebuilt segment should end, relative to where the plan's
-        // segment ends (units): the successor's start scaled into this
-        // segment's normalisation, less this segment's end (both < 2⁵³,
-        // exact in f64 before the division).
+        // segment ends (fine units): the successor's start scaled into this
+        // segment's normalisation, less this segment's end (both < 2⁵³ in
+        // units, exact in f64 before the scaling).
         let (rho, target) = match after {
             Some(a) => {
                 let rho = a.duration_us as f64 / next.duration_us as f64;
                 (
                     rho,
-                    core::array::from_fn(|m| a.coeffs[j][m] as f64 / powi(rho, m)),
+                    core::array::from_fn(|m| a.coeffs[j][m] as f64 * fine / powi(rho, m)),
                 )
             }
             None => (1.0, [0.0; 4]),
@@ -325,7 +383,7 @@ impl EndFit {
         }
     }
 
-    /// The weighted squared distance of the end with b_4, b_5 = the plan's + `d` (units).
+    /// The weighted squared distance of the end with b_4, b_5 = the plan's + `d` (fine units).
     fn cost(&self, d: [f64; 2]) -> f64 {
         (0..4)
             .map(|m| {
@@ -356,15 +414,16 @@ impl EndFit {
         } else {
             [0.0; 2]
         };
-        // Whole units either side where an f32 step is finer than a unit,
-        // f32 steps either side where it is coarser.
+        // Whole fine units either side where an f32 step is finer than
+        // one, f32 steps either side where it is coarser.
+        let unit = COEFF_SCALE / (1u32 << FINE_BITS) as f64;
         let near = |k: usize| {
             let u = libm::round(self.plan45[k] as f64 + d[k]);
-            let x = (u * COEFF_SCALE) as f32;
+            let x = (u * unit) as f32;
             [
-                ((u - 1.0) * COEFF_SCALE) as f32,
+                ((u - 1.0) * unit) as f32,
                 x,
-                ((u + 1.0) * COEFF_SCALE) as f32,
+                ((u + 1.0) * unit) as f32,
                 f32_step(x, -1),
                 f32_step(x, 1),
             ]
@@ -373,7 +432,7 @@ impl EndFit {
         let mut best: Option<(f64, [f32; 2])> = None;
         for &x4 in &c4 {
             for &x5 in &c5 {
-                let (Some(u4), Some(u5)) = (f32_units(x4), f32_units(x5)) else {
+                let (Some(u4), Some(u5)) = (f32_fine(x4), f32_fine(x5)) else {
                     continue;
                 };
                 let cost = self.cost([(u4 - self.plan45[0]) as f64, (u5 - self.plan45[1]) as f64]);
@@ -410,51 +469,68 @@ fn f32_step(x: f32, steps: i32) -> f32 {
 
 impl Compact {
     /// The start of a segment of `duration_us` continuing `pred`: b_0..b_3
-    /// in units, each scaled by h/h' m times with rounding after each step
-    /// (integers only: a drive's receive side uses no f64).
-    fn start(pred: &WireSegment, duration_us: u32) -> Option<[[i64; 4]; 3]> {
-        let (h, hp) = (duration_us as i128, pred.duration_us as i128);
+    /// in fine units, each scaled by h/h' m times with rounding after each
+    /// step (integers only: a drive's receive side uses no f64).
+    fn start(pred: &Held, duration_us: u32) -> Option<[[i64; 4]; 3]> {
+        let (h, hp) = (duration_us as i128, pred.segment.duration_us as i128);
         if hp == 0 {
             return None;
         }
+        let limit = (I48_MAX as u128) << (FINE_BITS + 8);
         let mut out = [[0i64; 4]; 3];
-        for (o, row) in out.iter_mut().zip(&pred.coeffs) {
+        for (o, row) in out.iter_mut().zip(&pred.fine) {
             for (m, (b, binom)) in o.iter_mut().zip(&BINOMIAL).enumerate() {
-                // Exact: |b'_k| < 2⁴⁷ and Σ C(k, m) ≤ 20, so S_m < 2⁵².
+                // Exact: |b'_k| < 2⁵⁵ and Σ C(k, m) ≤ 20, so S_m < 2⁶⁰.
                 let mut x: i128 = row.iter().zip(binom).map(|(x, c)| (x * c) as i128).sum();
                 for _ in 0..m {
                     x = scale_round(x, h, hp)?;
-                    if x.unsigned_abs() > (I48_MAX as u128) << 8 {
+                    if x.unsigned_abs() > limit {
                         return None;
                     }
                 }
-                *b = i64::try_from(x).ok().filter(|v| v.abs() <= I48_MAX)?;
+                *b = i64::try_from(x)
+                    .ok()
+                    .filter(|v| unfine(v.abs()) <= I48_MAX)?;
             }
         }
         Some(out)
     }
 
-    /// The full segment this continuation of `pred` stands for.
-    fn rebuild(&self, pred: &WireSegment) -> Option<WireSegment> {
-        let start = Self::start(pred, self.duration_us)?;
-        let mut coeffs = [[0i64; 6]; 3];
-        for ((row, s), b45) in coeffs.iter_mut().zip(&start).zip(&self.b45) {
+    /// The full segment this compact one stands for, as held: continuing
+    /// `pred`, or from rest at its pose ([`FLAG_AT_REST`], no `pred`).
+    fn rebuild(&self, pred: Option<&Held>) -> Option<Held> {
+        let start = if self.flags & FLAG_AT_REST != 0 {
+            if self.pose.iter().any(|p| p.abs() > I48_MAX) {
+                return None;
+            }
+            self.pose.map(|p| [p << FINE_BITS, 0, 0, 0])
+        } else {
+            Self::start(pred?, self.duration_us)?
+        };
+        let mut fine = [[0i64; 6]; 3];
+        for ((row, s), b45) in fine.iter_mut().zip(&start).zip(&self.b45) {
             row[..4].copy_from_slice(s);
-            row[4] = f32_units(b45[0])?;
-            row[5] = f32_units(b45[1])?;
+            row[4] = f32_fine(b45[0])?;
+            row[5] = f32_fine(b45[1])?;
+            if row.iter().any(|x| unfine(x.abs()) > I48_MAX) {
+                return None;
+            }
         }
-        Some(WireSegment {
-            seq: self.seq,
-            duration_us: self.duration_us,
-            flags: (self.flags as u16) & FLAG_LAST,
-            coeffs,
+        Some(Held {
+            segment: WireSegment {
+                seq: self.seq,
+                duration_us: self.duration_us,
+                flags: (self.flags as u16) & (FLAG_FIRST | FLAG_LAST),
+                coeffs: fine.map(|r| r.map(unfine)),
+            },
+            fine,
         })
     }
 
     /// Host side: `next` (the plan's segment) as a continuation of `pred`
     /// (the segment the receivers hold before it, as they hold it), and the
-    /// segment they will rebuild from it; `None` if that would deviate from
-    /// `next` beyond `bound` (send `next` in full).
+    /// segment they will hold once they rebuilt it; `None` if that would
+    /// deviate from `next` beyond `bound` (send `next` in full).
     ///
     /// b_4, b_5 are not the plan's rounded to f32 but the f32 values whose
     /// rebuilt segment ends closest to where the plan's successor `after`
@@ -465,15 +541,43 @@ impl Compact {
     /// the normalisation of the longer of the two segments: a jerk error
     /// that a short segment leaves is the longer one's to carry.
     pub fn continuing(
-        pred: &WireSegment,
+        pred: &Held,
         next: &WireSegment,
         after: Option<&WireSegment>,
         bound: &DeviationBound,
-    ) -> Option<(Self, WireSegment)> {
-        if next.seq != pred.seq.wrapping_add(1) || next.seq == 0 {
+    ) -> Option<(Self, Held)> {
+        if next.seq != pred.segment.seq.wrapping_add(1) || next.seq == 0 {
             return None;
         }
         let start = Self::start(pred, next.duration_us)?;
+        Self::choose(Some(pred), start, [0; 3], next, after, bound)
+    }
+
+    /// Host side: `next`, a plan's first segment, sent from rest at its
+    /// start pose; `None` if it does not start at rest within `bound`.
+    pub fn first(
+        next: &WireSegment,
+        after: Option<&WireSegment>,
+        bound: &DeviationBound,
+    ) -> Option<(Self, Held)> {
+        if next.seq != 0 {
+            return None;
+        }
+        let pose = next.coeffs.map(|r| r[0]);
+        let start = pose.map(|p| [p << FINE_BITS, 0, 0, 0]);
+        Self::choose(None, start, pose, next, after, bound)
+    }
+
+    /// The form within `bound`: the fitted b_4, b_5, else the plan's own
+    /// rounded to f32.
+    fn choose(
+        pred: Option<&Held>,
+        start: [[i64; 4]; 3],
+        pose: [i64; 3],
+        next: &WireSegment,
+        after: Option<&WireSegment>,
+        bound: &DeviationBound,
+    ) -> Option<(Self, Held)> {
         let after = after.filter(|a| a.seq == next.seq.wrapping_add(1) && a.duration_us > 0);
         let mut fitted = [[0.0f32; 2]; 3];
         for (j, pair) in fitted.iter_mut().enumerate() {
@@ -487,75 +591,134 @@ impl Compact {
                 (r[5] as f64 * COEFF_SCALE) as f32,
             ]
         });
+        let base = (next.flags & FLAG_LAST) as u8 | if pred.is_none() { FLAG_AT_REST } else { 0 };
+        let pred_crc = pred.map_or(0, |p| p.segment.body_crc());
         [fitted, rounded].into_iter().find_map(|b45| {
+            let flags = base;
             let mut c = Self {
                 seq: next.seq,
                 duration_us: next.duration_us,
-                flags: (next.flags & FLAG_LAST) as u8,
+                flags,
                 b45,
+                pose: if flags & FLAG_AT_REST != 0 {
+                    pose
+                } else {
+                    [0; 3]
+                },
                 crc: 0,
             };
             let rebuilt = c.rebuild(pred)?;
-            if !DeviationBound::between(&rebuilt, next).within(bound) {
+            if !DeviationBound::between(&rebuilt.segment, next).within(bound) {
                 return None;
             }
-            c.crc = chained_crc(pred.body_crc(), &c.encode_body());
+            let (body, len) = c.encode_body();
+            c.crc = chained_crc(pred_crc, &body[..len]);
             Some((c, rebuilt))
         })
     }
 
     /// Receiver side: the full segment, if `pred` (with body CRC `pred_crc`)
     /// is the predecessor the host built this continuation on.
-    pub fn reconstruct(&self, pred: &WireSegment, pred_crc: u32) -> Result<WireSegment, Reject> {
-        if pred.seq.wrapping_add(1) != self.seq
-            || chained_crc(pred_crc, &self.encode_body()) != self.crc
+    pub fn reconstruct(&self, pred: &Held, pred_crc: u32) -> Result<Held, Reject> {
+        let (body, len) = self.encode_body();
+        if self.flags & FLAG_AT_REST != 0
+            || pred.segment.seq.wrapping_add(1) != self.seq
+            || chained_crc(pred_crc, &body[..len]) != self.crc
         {
             return Err(Reject::NoPredecessor);
         }
-        self.rebuild(pred).ok_or(Reject::Invalid)
+        self.rebuild(Some(pred)).ok_or(Reject::Invalid)
     }
 
-    /// The 35-byte body (with the CRC as it stands).
-    pub fn encode_body(&self) -> [u8; COMPACT_LEN] {
-        let mut b = [0u8; COMPACT_LEN];
+    /// Receiver side: a segment that starts at rest ([`FLAG_AT_REST`]),
+    /// which continues nothing; `BadCrc` if its CRC fails.
+    pub fn from_rest(&self) -> Result<Held, Reject> {
+        let (body, len) = self.encode_body();
+        if self.flags & FLAG_AT_REST == 0 || self.seq != 0 {
+            return Err(Reject::Invalid);
+        }
+        if chained_crc(0, &body[..len]) != self.crc {
+            return Err(Reject::BadCrc);
+        }
+        self.rebuild(None).ok_or(Reject::Invalid)
+    }
+
+    /// Starts at rest: needs no predecessor.
+    pub fn is_at_rest(&self) -> bool {
+        self.flags & FLAG_AT_REST != 0
+    }
+
+    /// The body (with the CRC as it stands) and its length: header,
+    /// b_4, b_5, the pose if it starts at rest, CRC.
+    pub fn encode_body(&self) -> ([u8; COMPACT_MAX], usize) {
+        let mut b = [0u8; COMPACT_MAX];
         b[0..2].copy_from_slice(&self.seq.to_le_bytes());
         b[2..6].copy_from_slice(&self.duration_us.to_le_bytes());
         b[6] = self.flags;
-        for (j, pair) in self.b45.iter().enumerate() {
-            for (k, x) in pair.iter().enumerate() {
-                let o = 7 + 8 * j + 4 * k;
-                b[o..o + 4].copy_from_slice(&x.to_le_bytes());
+        let mut o = 7;
+        for x in self.b45.iter().flatten() {
+            b[o..o + 4].copy_from_slice(&x.to_le_bytes());
+            o += 4;
+        }
+        if self.flags & FLAG_AT_REST != 0 {
+            for p in &self.pose {
+                b[o..o + 6].copy_from_slice(&p.to_le_bytes()[..6]);
+                o += 6;
             }
         }
-        b[COMPACT_CRC_OFFSET..].copy_from_slice(&self.crc.to_le_bytes());
-        b
+        b[o..o + 4].copy_from_slice(&self.crc.to_le_bytes());
+        (b, o + 4)
     }
 
-    /// Decodes a body (its CRC is checked by [`Compact::reconstruct`]).
-    pub fn decode_body(b: &[u8; COMPACT_LEN]) -> Self {
+    /// Decodes a body (its CRC is checked by [`Compact::reconstruct`] or
+    /// [`Compact::from_rest`]); its length follows from its flags.
+    pub fn decode_body(b: &[u8; COMPACT_MAX]) -> Self {
         let f = |o: usize| f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
+        let flags = b[6];
+        let mut o = 7;
+        let mut b45 = [[0.0f32; 2]; 3];
+        for pair in &mut b45 {
+            *pair = [f(o), f(o + 4)];
+            o += 8;
+        }
+        let mut pose = [0i64; 3];
+        if flags & FLAG_AT_REST != 0 {
+            for p in &mut pose {
+                let mut w = [0u8; 8];
+                w[..6].copy_from_slice(&b[o..o + 6]);
+                // Sign-extend the i48.
+                *p = i64::from_le_bytes(w) << 16 >> 16;
+                o += 6;
+            }
+        }
         Self {
             seq: u16::from_le_bytes([b[0], b[1]]),
             duration_us: u32::from_le_bytes([b[2], b[3], b[4], b[5]]),
-            flags: b[6],
-            b45: [[f(7), f(11)], [f(15), f(19)], [f(23), f(27)]],
-            crc: u32::from_le_bytes([b[31], b[32], b[33], b[34]]),
+            flags,
+            b45,
+            pose,
+            crc: u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]),
         }
     }
 
     /// All part frames of this segment, in order.
     pub fn frames(&self, fd: bool) -> impl Iterator<Item = Frame> {
-        let body = self.encode_body();
-        (0..compact_parts(fd)).map(move |p| {
+        let (body, len) = self.encode_body();
+        (0..compact_parts(self.flags, fd)).map(move |p| {
             let (def, chunk) = if fd {
-                (&SEGMENT_COMPACT_FD, COMPACT_LEN)
+                (&SEGMENT_COMPACT_FD, COMPACT_MAX)
             } else {
                 (&SEGMENT_COMPACT, CLASSIC_CHUNK)
             };
-            let mut f = Frame::new(def.addr.id(0), def.len, fd);
+            let dlc = if fd && 1 + len > def.len {
+                FD_LEN_MAX
+            } else {
+                def.len
+            };
+            let mut f = Frame::new(def.addr.id(0), dlc, fd);
             f.data[0] = p as u8;
-            let start = (p * chunk).min(COMPACT_LEN);
-            let end = ((p + 1) * chunk).min(COMPACT_LEN);
+            let start = (p * chunk).min(len);
+            let end = ((p + 1) * chunk).min(len);
             f.data[1..1 + end - start].copy_from_slice(&body[start..end]);
             f
         })
@@ -597,29 +760,30 @@ impl Outgoing {
 #[derive(Clone, Debug, Default)]
 pub struct Chain {
     /// The last segment sent, as receivers hold it.
-    last: Option<WireSegment>,
+    last: Option<Held>,
 }
 
 impl Chain {
     /// How `seg` goes on the bus now (it becomes the last segment sent);
     /// `after` is the plan's segment after it (`None` for the last).
     pub fn next(&mut self, seg: &WireSegment, after: Option<&WireSegment>) -> Outgoing {
-        let out = match self
-            .last
-            .as_ref()
-            .and_then(|p| Compact::continuing(p, seg, after, &DeviationBound::DEFAULT))
-        {
-            Some((c, held)) => Outgoing::Compact(c, held),
-            None => Outgoing::Full(*seg),
+        let bound = &DeviationBound::DEFAULT;
+        let compact = match &self.last {
+            Some(p) => Compact::continuing(p, seg, after, bound),
+            None => Compact::first(seg, after, bound),
         };
-        self.last = Some(*out.held());
+        let (out, held) = match compact {
+            Some((c, held)) => (Outgoing::Compact(c, held.segment), held),
+            None => (Outgoing::Full(*seg), Held::from(*seg)),
+        };
+        self.last = Some(held);
         out
     }
 
     /// `seg` in full (a resend: receivers may hold another version of its
     /// predecessor than the one sent last).
     pub fn full(&mut self, seg: &WireSegment) -> Outgoing {
-        self.last = Some(*seg);
+        self.last = Some(Held::from(*seg));
         Outgoing::Full(*seg)
     }
 }
@@ -640,14 +804,14 @@ pub enum CompactEvent {
 /// Reassembles the classic parts of one compact segment (a CAN-FD one is whole).
 #[derive(Clone, Debug)]
 pub struct CompactAssembler {
-    body: [u8; COMPACT_LEN],
+    body: [u8; COMPACT_MAX],
     next_part: usize,
 }
 
 impl Default for CompactAssembler {
     fn default() -> Self {
         Self {
-            body: [0; COMPACT_LEN],
+            body: [0; COMPACT_MAX],
             next_part: 0,
         }
     }
@@ -665,17 +829,27 @@ impl CompactAssembler {
 
     /// Feeds one part frame (payload of a SegmentCompact or SegmentCompactFd).
     pub fn push(&mut self, data: &[u8], fd: bool) -> CompactEvent {
-        let chunk = if fd { COMPACT_LEN } else { CLASSIC_CHUNK };
         let Some(&part) = data.first() else {
             return CompactEvent::Ignored(Reject::Invalid);
         };
         let part = part as usize;
+        // The body's length, from its flags (in part 0, or stored).
+        let flags = if part == 0 {
+            data.get(7).copied()
+        } else {
+            Some(self.body[6])
+        };
+        let Some(flags) = flags else {
+            return CompactEvent::Ignored(Reject::Invalid);
+        };
+        let total = body_len(flags);
+        let chunk = if fd { total } else { CLASSIC_CHUNK };
         let start = part * chunk;
-        let len = chunk.min(COMPACT_LEN.saturating_sub(start));
+        let len = chunk.min(total.saturating_sub(start));
         let Some(bytes) = data.get(1..1 + len) else {
             return CompactEvent::Ignored(Reject::Invalid);
         };
-        if part >= compact_parts(fd) {
+        if part >= compact_parts(flags, fd) {
             return CompactEvent::Ignored(Reject::Invalid);
         }
         if part == 0 {
@@ -701,7 +875,7 @@ impl CompactAssembler {
         }
         self.store(start, bytes);
         self.next_part = part + 1;
-        if self.next_part < compact_parts(fd) {
+        if self.next_part < compact_parts(flags, fd) {
             return CompactEvent::Pending;
         }
         self.clear();
@@ -758,10 +932,11 @@ mod tests {
     fn a_continuation_rebuilds_its_segment_within_the_bound() {
         for (h0, h1) in [(0.25, 0.5), (0.002, 0.05), (0.6, 0.002), (0.1, 0.1)] {
             let (a, b) = pair(h0, h1);
-            let (c, rebuilt) = Compact::continuing(&a, &b, None, &DeviationBound::DEFAULT)
+            let (c, rebuilt) = Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT)
                 .unwrap_or_else(|| panic!("{h0} {h1}: sent in full"));
-            let got = c.reconstruct(&a, a.body_crc()).unwrap();
+            let got = c.reconstruct(&a.into(), a.body_crc()).unwrap();
             assert_eq!(got, rebuilt);
+            let got = got.segment;
             let d = DeviationBound::between(&got, &b);
             assert!(d.within(&DeviationBound::DEFAULT), "{d:?}");
             // Positions agree with the plan's to the bound (checked pointwise).
@@ -820,9 +995,11 @@ mod tests {
             &[0.05][..],
             &[0.05, 0.05, 0.05, 0.002],
             &[0.03, 0.08, 0.011, 0.06],
+            // 111 times longer before and after the short one.
+            &[0.222, 0.222, 0.002],
         ] {
             let segs = chain_of(600, h);
-            let mut held = segs[0];
+            let mut held = Held::from(segs[0]);
             let mut worst = DeviationBound {
                 position: 0.0,
                 velocity: 0.0,
@@ -833,8 +1010,8 @@ mod tests {
                 let (c, rebuilt) =
                     Compact::continuing(&held, next, segs.get(i + 1), &DeviationBound::DEFAULT)
                         .unwrap_or_else(|| panic!("{h:?}: segment {i} sent in full"));
-                assert_eq!(c.reconstruct(&held, held.body_crc()), Ok(rebuilt));
-                let d = DeviationBound::between(&rebuilt, next);
+                assert_eq!(c.reconstruct(&held, held.segment.body_crc()), Ok(rebuilt));
+                let d = DeviationBound::between(&rebuilt.segment, next);
                 worst = DeviationBound {
                     position: worst.position.max(d.position),
                     velocity: worst.velocity.max(d.velocity),
@@ -869,13 +1046,14 @@ mod tests {
     }
 
     #[test]
-    fn f32_coefficients_convert_to_units_exactly() {
+    fn f32_coefficients_convert_to_fine_units_exactly() {
         let mut x = 1.234_567e-9f32;
         while x < 200.0 {
             for v in [x, -x, x * 1.37, f32::from_bits(x.to_bits() + 1)] {
-                let want = libm::round(v as f64 / COEFF_SCALE);
-                let got = f32_units(v);
-                if want.abs() <= I48_MAX as f64 {
+                let fine = (1u32 << FINE_BITS) as f64;
+                let want = libm::round(v as f64 / COEFF_SCALE * fine);
+                let got = f32_fine(v);
+                if libm::round(want.abs() / fine) <= I48_MAX as f64 {
                     assert_eq!(got, Some(want as i64), "{v:e}");
                 } else {
                     assert_eq!(got, None, "{v:e}");
@@ -883,10 +1061,10 @@ mod tests {
             }
             x *= 1.9;
         }
-        assert_eq!(f32_units(0.0), Some(0));
-        assert_eq!(f32_units(f32::NAN), None);
-        assert_eq!(f32_units(f32::INFINITY), None);
-        assert_eq!(f32_units(1e-30), Some(0));
+        assert_eq!(f32_fine(0.0), Some(0));
+        assert_eq!(f32_fine(f32::NAN), None);
+        assert_eq!(f32_fine(f32::INFINITY), None);
+        assert_eq!(f32_fine(1e-30), Some(0));
     }
 
     #[test]
@@ -907,48 +1085,136 @@ mod tests {
     #[test]
     fn another_predecessor_is_refused() {
         let (a, b) = pair(0.25, 0.5);
-        let (c, _) = Compact::continuing(&a, &b, None, &DeviationBound::DEFAULT).unwrap();
+        let (c, _) = Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT).unwrap();
         let mut other = a;
         other.coeffs[1][3] += 1;
         assert_eq!(
-            c.reconstruct(&other, other.body_crc()),
+            c.reconstruct(&other.into(), other.body_crc()),
             Err(Reject::NoPredecessor)
         );
         let mut earlier = a;
         earlier.seq = 3;
         assert_eq!(
-            c.reconstruct(&earlier, a.body_crc()),
+            c.reconstruct(&earlier.into(), a.body_crc()),
             Err(Reject::NoPredecessor)
         );
         // A flipped bit in the body is refused the same way.
         let mut bad = c;
         bad.b45[2][1] = f32::from_bits(bad.b45[2][1].to_bits() ^ 1);
         assert_eq!(
-            bad.reconstruct(&a, a.body_crc()),
+            bad.reconstruct(&a.into(), a.body_crc()),
             Err(Reject::NoPredecessor)
         );
     }
 
     #[test]
     fn a_segment_beyond_the_bound_is_sent_in_full() {
-        // A long segment after a very short one: the short one's integer
-        // coefficients fix its end jerk only to about 3e-4 m/s³, which over
-        // the next 0.3 s moves the position by about 1.5 µm.
+        // A long segment after a very short one sent in full: the short
+        // one's integer coefficients fix its end jerk only to about
+        // 3e-4 m/s³, which over the next 0.3 s moves the position by about
+        // 1.5 µm. (After a short continuation the finer units fix it.)
         let (a, b) = pair(0.002, 0.3);
-        assert!(Compact::continuing(&a, &b, None, &DeviationBound::DEFAULT).is_none());
+        assert!(Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT).is_none());
         let (a, mut b) = pair(0.25, 0.5);
         // A kink: the next segment does not start where `a` ends.
         b.coeffs[0][1] += 1_000_000;
-        assert!(Compact::continuing(&a, &b, None, &DeviationBound::DEFAULT).is_none());
+        assert!(Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT).is_none());
+    }
+
+    /// A move from rest to rest on two segments: the first starts with
+    /// velocity, acceleration and jerk 0, the second ends with velocity
+    /// and acceleration 0.
+    fn rest_to_rest() -> (WireSegment, WireSegment) {
+        let (h0, h1) = (0.3f64, 0.2f64);
+        // x(τ) on the first: x0 + b4 τ⁴ + b5 τ⁵ (normalised).
+        let p0 = [0.31, 0.2, 0.35];
+        let a45 = [[0.004, -0.0015], [-0.002, 0.0009], [0.001, 0.0]];
+        let a: [[f64; 6]; 3] =
+            core::array::from_fn(|j| [p0[j], 0.0, 0.0, 0.0, a45[j][0], a45[j][1]]);
+        // The second continues it (its Taylor coefficients at the end, in
+        // its normalisation) and ends with velocity and acceleration 0.
+        let r = h1 / h0;
+        let b: [[f64; 6]; 3] = core::array::from_fn(|j| {
+            let mut c = [0.0; 6];
+            for (m, cm) in c.iter_mut().take(4).enumerate() {
+                *cm = (m..6).map(|k| choose(k, m) * a[j][k]).sum::<f64>() * r.powi(m as i32);
+            }
+            let v = c[1] + 2.0 * c[2] + 3.0 * c[3];
+            let acc = 2.0 * c[2] + 6.0 * c[3];
+            c[5] = (3.0 * v - acc) / 5.0;
+            c[4] = (-v - 5.0 * c[5]) / 4.0;
+            c
+        });
+        let quintic = |n: [[f64; 6]; 3], h: f64| Quintic {
+            coeffs: n.map(|row| core::array::from_fn(|k| row[k] / h.powi(k as i32))),
+            duration: h,
+        };
+        (
+            WireSegment::from_quintic(0, &quintic(a, h0), FLAG_FIRST).unwrap(),
+            WireSegment::from_quintic(1, &quintic(b, h1), FLAG_LAST).unwrap(),
+        )
+    }
+
+    #[test]
+    fn a_plan_s_first_segment_from_rest_is_sent_in_eight_classic_frames() {
+        let (a, b) = rest_to_rest();
+        for fd in [false, true] {
+            let mut chain = Chain::default();
+            let first = chain.next(&a, Some(&b));
+            let last = chain.next(&b, None);
+            let (f0, f1) = (first.frames(fd), last.frames(fd));
+            assert_eq!(
+                (f0.len(), f1.len()),
+                if fd { (1, 1) } else { (8, 5) },
+                "fd {fd}"
+            );
+            let mut rx = crate::protocol::SegmentRx::default();
+            let mut got = std::vec::Vec::new();
+            for f in f0.iter().chain(&f1) {
+                let (msg, _) = crate::protocol::decode(f).unwrap();
+                match rx.push(msg.kind(), f.payload()).unwrap() {
+                    crate::protocol::SegmentEvent::Pending => {}
+                    crate::protocol::SegmentEvent::Complete {
+                        segment, pred_crc, ..
+                    } => got.push((segment, pred_crc)),
+                    e => panic!("{e:?}"),
+                }
+            }
+            // The first is an anchor (no predecessor), the second continues it.
+            assert_eq!(
+                got,
+                [
+                    (*first.held(), None),
+                    (*last.held(), Some(first.held().body_crc()))
+                ]
+            );
+            for (held, plan) in [(first.held(), &a), (last.held(), &b)] {
+                let d = DeviationBound::between(held, plan);
+                assert!(d.within(&DeviationBound::DEFAULT), "{d:?}");
+            }
+            assert!(first.held().coeffs.iter().all(|r| r[1..4] == [0, 0, 0]));
+        }
+        // Not at rest: the first goes in full.
+        let (c, d) = pair(0.25, 0.5);
+        let mut c0 = c;
+        c0.seq = 0;
+        let mut d0 = d;
+        d0.seq = 1;
+        assert!(!Chain::default().next(&c0, Some(&d0)).is_compact());
+        // A corrupted pose fails the CRC.
+        let (mut x, _) = Compact::first(&a, Some(&b), &DeviationBound::DEFAULT).unwrap();
+        x.pose[1] += 1;
+        assert_eq!(x.from_rest(), Err(Reject::BadCrc));
     }
 
     #[test]
     fn parts_round_trip() {
         let (a, b) = pair(0.25, 0.5);
-        let (c, _) = Compact::continuing(&a, &b, None, &DeviationBound::DEFAULT).unwrap();
+        let (c, _) = Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT).unwrap();
         for fd in [false, true] {
             let frames: heapless::Vec<Frame, 8> = c.frames(fd).collect();
             assert_eq!(frames.len(), if fd { 1 } else { 5 });
+            assert_eq!(frames[0].payload().len(), if fd { FD_LEN } else { 8 });
             let mut r = CompactAssembler::default();
             let mut out = None;
             for (i, f) in frames.iter().enumerate() {

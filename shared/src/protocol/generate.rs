@@ -596,16 +596,19 @@ pub fn golden_continuation() -> (Compact, WireSegment) {
         duration: 0.2,
     };
     let next = WireSegment::from_quintic(seg.seq.wrapping_add(1), &q, FLAG_LAST).unwrap_or(seg);
-    Compact::continuing(&seg, &next, None, &DeviationBound::DEFAULT).unwrap_or((
-        Compact {
-            seq: 0,
-            duration_us: 0,
-            flags: 0,
-            b45: [[0.0; 2]; 3],
-            crc: 0,
-        },
-        seg,
-    ))
+    Compact::continuing(&seg.into(), &next, None, &DeviationBound::DEFAULT)
+        .map(|(c, held)| (c, held.segment))
+        .unwrap_or((
+            Compact {
+                seq: 0,
+                duration_us: 0,
+                flags: 0,
+                b45: [[0.0; 2]; 3],
+                pose: [0; 3],
+                crc: 0,
+            },
+            seg,
+        ))
 }
 
 /// The golden vector file: one frame per line, `label | id | fd | hex payload`.
@@ -650,7 +653,10 @@ pub const FRAMES_PER_SEGMENT: [(usize, usize); 2] = [
         segment::parts_per_segment(false),
         segment::parts_per_segment(true),
     ),
-    (compact::compact_parts(false), compact::compact_parts(true)),
+    (
+        compact::compact_parts(0, false),
+        compact::compact_parts(0, true),
+    ),
 ];
 
 #[cfg(test)]

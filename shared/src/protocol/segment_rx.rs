@@ -3,7 +3,7 @@
 //! receiver completed. Drives, simulators and monitors use it alike. No
 //! allocation.
 
-use super::compact::{Compact, CompactAssembler, CompactEvent};
+use super::compact::{Compact, CompactAssembler, CompactEvent, Held};
 use super::segment::{PartEvent, Reassembler, WireSegment};
 use super::{MsgKind, Reject};
 
@@ -32,7 +32,7 @@ pub struct SegmentRx {
     full: Reassembler,
     compact: CompactAssembler,
     /// The last segment completed and its body CRC.
-    last: Option<(WireSegment, u32)>,
+    last: Option<(Held, u32)>,
 }
 
 impl SegmentRx {
@@ -53,7 +53,7 @@ impl SegmentRx {
                     PartEvent::Rejected { seq, reason } => SegmentEvent::Rejected { seq, reason },
                     PartEvent::Complete(segment) => {
                         let crc = segment.body_crc();
-                        self.last = Some((segment, crc));
+                        self.last = Some((Held::from(segment), crc));
                         SegmentEvent::Complete {
                             segment,
                             crc,
@@ -80,18 +80,21 @@ impl SegmentRx {
     }
 
     fn continuation(&mut self, c: &Compact) -> SegmentEvent {
+        // One starting at rest continues nothing: an anchor, as a full one.
         let rebuilt = match &self.last {
-            Some((pred, pred_crc)) => c.reconstruct(pred, *pred_crc).map(|s| (s, *pred_crc)),
+            _ if c.is_at_rest() => c.from_rest().map(|s| (s, None)),
+            Some((pred, pred_crc)) => c.reconstruct(pred, *pred_crc).map(|s| (s, Some(*pred_crc))),
             None => Err(Reject::NoPredecessor),
         };
         match rebuilt {
-            Ok((segment, pred_crc)) => {
+            Ok((held, pred_crc)) => {
+                let segment = held.segment;
                 let crc = segment.body_crc();
-                self.last = Some((segment, crc));
+                self.last = Some((held, crc));
                 SegmentEvent::Complete {
                     segment,
                     crc,
-                    pred_crc: Some(pred_crc),
+                    pred_crc,
                 }
             }
             Err(reason) => SegmentEvent::Rejected {
@@ -145,7 +148,7 @@ mod tests {
     fn continuations_need_the_predecessor_they_were_built_on() {
         let [a, b, c] = segs();
         let bound = DeviationBound::DEFAULT;
-        let (cb, rb) = Compact::continuing(&a, &b, Some(&c), &bound).unwrap();
+        let (cb, rb) = Compact::continuing(&a.into(), &b, Some(&c), &bound).unwrap();
         let (cc, _) = Compact::continuing(&rb, &c, None, &bound).unwrap();
         let mut rx = SegmentRx::default();
         // Without a predecessor.
@@ -171,8 +174,8 @@ mod tests {
         assert_eq!(
             feed(&mut rx, cb.frames(true)),
             SegmentEvent::Complete {
-                segment: rb,
-                crc: rb.body_crc(),
+                segment: rb.segment,
+                crc: rb.segment.body_crc(),
                 pred_crc: Some(a.body_crc())
             }
         );

@@ -3,6 +3,11 @@
 //! acknowledged by every node within `retransmit_timeout_us` is sent again
 //! (at most `max_retransmits` times), and one a node rejected as corrupt,
 //! out of order or incomplete is resent at once without using up a try.
+//! A timeout uses up a try only of a segment some node still needs next
+//! and did not answer: one queued behind a missing segment cannot be
+//! taken, and one a node refused as damaged reached a live node (a
+//! reordered or corrupted copy). Those resends are bounded too
+//! ([`RESENDS_PER_TRY`] times the tries).
 //! Segments go compact when the segment sent just before is their
 //! predecessor (`protocol::compact`), in full otherwise; a resend always
 //! goes in full (a node may hold another version of its predecessor than
@@ -25,15 +30,23 @@ const RESEND_GUARD_US: u64 = 15_000;
 /// The transmit queue is not filled beyond this many frames.
 const OUTBOX_LIMIT: usize = 64;
 
+/// Transmissions of one segment that use up no try, per try allowed: a
+/// node that refuses every copy still ends the upload.
+pub(crate) const RESENDS_PER_TRY: u32 = 4;
+
 /// A segment sent and not yet acknowledged by every node.
 #[derive(Clone, Debug)]
 struct InFlight {
     seq: usize,
     sent_at: u64,
     tries: u32,
+    /// Transmissions, tried or not.
+    sends: u32,
     acked: [bool; AXES],
     /// Resend requested by a rejection (not counted as a try).
     early: bool,
+    /// A node refused this segment as damaged since it was last sent.
+    refused: bool,
 }
 
 #[derive(Debug)]
@@ -107,6 +120,9 @@ impl Stream {
                 Reject::BadCrc | Reject::OutOfOrder | Reject::Incomplete | Reject::NoPredecessor,
             ) => {
                 self.rejects_seen += 1;
+                if let Some(f) = self.in_flight.iter_mut().find(|f| f.seq == a.seq as usize) {
+                    f.refused = true;
+                }
                 // Resend at once the segment this node needs next (the
                 // rejected one may only be queued behind a lost one),
                 // unless it went out moments ago and may be on its way.
@@ -172,22 +188,29 @@ impl Stream {
             if now.saturating_sub(f.sent_at) > opts.retransmit_timeout_us
                 && out.len() < OUTBOX_LIMIT
             {
-                if f.tries > opts.max_retransmits {
+                // A node that needs this segment next and did not refuse
+                // it: the copy was lost (or the node is gone).
+                let lost = (0..AXES).any(|i| !f.acked[i] && nodes.0[i].next_seq == f.seq as u16)
+                    && !f.refused;
+                let tries = f.tries + u32::from(lost && !f.early);
+                if tries > opts.max_retransmits
+                    || f.sends > RESENDS_PER_TRY * (opts.max_retransmits + 1)
+                {
                     let node = (0..AXES)
                         .find(|&i| !f.acked[i])
                         .map_or(nodes.id(0), |i| nodes.id(i));
                     return Err(UploadError::Retransmits {
                         node,
                         seq: f.seq,
-                        tries: f.tries,
+                        tries: f.sends,
                     });
                 }
                 let seq = f.seq;
                 let f = &mut self.in_flight[k];
-                if !f.early {
-                    f.tries += 1;
-                }
+                f.tries = tries;
+                f.sends += 1;
                 f.early = false;
+                f.refused = false;
                 f.sent_at = now;
                 self.retransmits += 1;
                 self.queue(seq, true, out);
@@ -208,8 +231,10 @@ impl Stream {
                 seq,
                 sent_at: now,
                 tries: 1,
+                sends: 1,
                 acked: [false; AXES],
                 early: false,
+                refused: false,
             });
             self.next_to_send += 1;
         }
