@@ -46,6 +46,11 @@ step "plans (on the host: the guest computes ~11x slower)"
 for c in 1 2; do
     "$BIN/triquint" plan "examples/paper-case$c.toml" -o "$OUT/plans/paper-case$c.json" --quiet
 done
+# Issue 35's streaming fixtures (test_streaming.py), each through `check`.
+nice cargo run --release --locked -q -p triquint-sim --example streaming_fixtures -- "$OUT/plans"
+for f in "$OUT"/plans/stream-*.json; do
+    "$BIN/triquint" check "$f" >/dev/null
+done
 
 # The guest sees the host's root file system read-only, with PATH reset:
 # everything by absolute path; only $OUT is written back.
@@ -84,6 +89,12 @@ for c in 1 2; do
     for fd in "" --fd; do
         "$BIN/triquint" simulate "$OUT/plans/paper-case$c.json" $fd --json \
             > "$OUT/inproc-case$c${fd:+-fd}.json" || true
+    done
+done
+for f in "$OUT"/plans/stream-*.json; do
+    for fd in "" --fd; do
+        "$BIN/triquint" simulate "$f" $fd --json \
+            > "$OUT/inproc-$(basename "$f" .json)${fd:+-fd}.json" || true
     done
 done
 "$PY" scripts/hil_figures.py "$OUT" || true

@@ -1,12 +1,15 @@
-//! Plans for tests and demos that do not need the planner: a C2 piecewise
+//! Plans for tests and demos that do not need the planner: a piecewise
 //! quintic (Hermite in position, velocity and acceleration at every knot)
-//! through the IK images of Cartesian via-points, with finite-difference knot
+//! through the IK images of Cartesian via-points, with spline knot
 //! velocities and accelerations and rest at both ends. Not optimal; smooth,
-//! realistic and cheap.
+//! realistic and cheap. The streaming fixtures ([`point_to_point`],
+//! [`helix`]) are built with [`Ends::Still`] and pass `triquint check`, so
+//! `triquint upload` takes them as files.
 
 use nalgebra::Vector3;
 use triquint_firmware::QUEUE_CAPACITY;
 use triquint_shared::kinematics::{KinematicsError, Pose};
+use triquint_shared::plan::figures::kinematics;
 use triquint_shared::plan::{MaxAbs, Objective, PLAN_FORMAT, Plan, Segment, SolverStats};
 use triquint_shared::{Limits, Robot, dynamics};
 
@@ -46,10 +49,24 @@ fn basis(hs: f64) -> [[f64; 4]; 6] {
     out
 }
 
-/// Knot velocities and accelerations of the C4 quintic spline through `q`
-/// (jerk and snap continuous at interior knots; rest at both ends): the
-/// interpolant with the least integral of squared jerk. One dense solve per joint.
-fn quintic_spline_derivatives(q: &[f64], h: &[f64]) -> (Vec<f64>, Vec<f64>) {
+/// How a plan through points ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ends {
+    /// v = a = 0 at both ends, jerk and snap continuous at every interior
+    /// knot (C4); the end jerk is what it comes to.
+    Rest,
+    /// v = a = jerk = 0 at both ends (what `triquint check` asks of a
+    /// plan): the snap continuity at the second and the second-to-last knot
+    /// gives way to the end jerk, so the plan is C3. Needs four points or
+    /// more (with fewer the end jerk stays as [`Ends::Rest`] leaves it).
+    Still,
+}
+
+/// Knot velocities and accelerations of the quintic spline through `q`
+/// (jerk and snap continuous at interior knots; rest at both ends, and with
+/// [`Ends::Still`] zero end jerk instead of two snap continuities). One
+/// dense solve per joint.
+fn quintic_spline_derivatives(q: &[f64], h: &[f64], ends: Ends) -> (Vec<f64>, Vec<f64>) {
     let n = q.len();
     let mut v = vec![0.0; n];
     let mut a = vec![0.0; n];
@@ -60,27 +77,67 @@ fn quintic_spline_derivatives(q: &[f64], h: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let mut mat = nalgebra::DMatrix::<f64>::zeros(m, m);
     let mut rhs = nalgebra::DVector::<f64>::zeros(m);
     let idx = |i: usize, k: usize| 2 * (i - 1) + k;
+    // A segment's end jerk and snap depend on its knots' positions only
+    // through their difference (b[0] = −b[3]): with `Ends::Still` taken as
+    // such, so the 1/h³ and 1/h⁴ factors of a short segment do not cancel
+    // large terms (`Ends::Rest` keeps the form its committed plans came from).
+    let mut add = |row: usize, seg: usize, quantity: usize, sign: f64| {
+        let b = basis(h[seg]);
+        if ends == Ends::Still {
+            rhs[row] -= sign * b[3][quantity] * (q[seg + 1] - q[seg]);
+        } else {
+            rhs[row] -= sign * b[0][quantity] * q[seg];
+            rhs[row] -= sign * b[3][quantity] * q[seg + 1];
+        }
+        for (knot, base) in [(seg, 0usize), (seg + 1, 3)] {
+            if knot > 0 && knot < n - 1 {
+                mat[(row, idx(knot, 0))] += sign * b[base + 1][quantity];
+                mat[(row, idx(knot, 1))] += sign * b[base + 2][quantity];
+            }
+        }
+    };
+    let still = ends == Ends::Still && n >= 4;
     for i in 1..n - 1 {
-        // Segment i−1 ends at knot i (its inputs 3..6), segment i starts there (0..3).
-        let (left, right) = (basis(h[i - 1]), basis(h[i]));
+        // Segment i−1 ends at knot i (its end quantities 2, 3), segment i
+        // starts there (0, 1): jerk (eq 0) and snap (eq 1) continuous.
         for (eq, le, re) in [(0, 2, 0), (1, 3, 1)] {
             let row = idx(i, eq);
-            let terms = [
-                (i - 1, 0usize, &left, le, 1.0),
-                (i, 3, &left, le, 1.0),
-                (i, 0, &right, re, -1.0),
-                (i + 1, 3, &right, re, -1.0),
-            ];
-            for (knot, base, b, quantity, sign) in terms {
-                rhs[row] -= sign * b[base][quantity] * q[knot];
-                if knot > 0 && knot < n - 1 {
-                    mat[(row, idx(knot, 0))] += sign * b[base + 1][quantity];
-                    mat[(row, idx(knot, 1))] += sign * b[base + 2][quantity];
-                }
+            if still && eq == 1 && i == 1 {
+                // Jerk at t = 0 of the first segment instead.
+                add(row, 0, 0, 1.0);
+            } else if still && eq == 1 && i == n - 2 {
+                // Jerk at the end of the last segment instead.
+                add(row, n - 2, 2, 1.0);
+            } else {
+                add(row, i - 1, le, 1.0);
+                add(row, i, re, -1.0);
             }
         }
     }
-    if let Some(sol) = mat.lu().solve(&rhs) {
+    let sol = if ends == Ends::Still {
+        // Rows scaled to unit size (a 2 ms segment's rows are 10⁵ times a
+        // long one's), then the solution refined against its residual, for
+        // the check's 10⁻⁹ on jerk continuity.
+        for r in 0..m {
+            let scale = mat.row(r).amax();
+            if scale > 0.0 {
+                mat.row_mut(r).unscale_mut(scale);
+                rhs[r] /= scale;
+            }
+        }
+        let lu = mat.clone().lu();
+        lu.solve(&rhs).map(|mut x| {
+            for _ in 0..2 {
+                if let Some(dx) = lu.solve(&(&rhs - &mat * &x)) {
+                    x += dx;
+                }
+            }
+            x
+        })
+    } else {
+        mat.lu().solve(&rhs)
+    };
+    if let Some(sol) = sol {
         for i in 1..n - 1 {
             v[i] = sol[idx(i, 0)];
             a[i] = sol[idx(i, 1)];
@@ -89,12 +146,46 @@ fn quintic_spline_derivatives(q: &[f64], h: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (v, a)
 }
 
-/// A plan through `points` (m) with the given intervals (s, rounded to whole µs).
+/// A plan through `points` (m) with the given intervals (s, rounded to
+/// whole µs), C4 with rest at both ends ([`Ends::Rest`]); its `max_abs`
+/// sampled.
 pub fn plan_through(
     robot: &Robot,
     limits: &Limits,
     points: &[[f64; 3]],
     intervals: &[f64],
+) -> Result<Plan, KinematicsError> {
+    let mut plan = spline_through(robot, limits, points, intervals, Ends::Rest)?;
+    plan.max_abs = sampled_max_abs(&plan)?;
+    Ok(plan)
+}
+
+/// A plan through `points` (m) with the given intervals that passes
+/// `triquint check` (four points or more): [`Ends::Still`], its `max_abs`
+/// exact in v, a and jerk ([`kinematics`]), torque sampled on the check's grid.
+pub fn checked_plan_through(
+    robot: &Robot,
+    limits: &Limits,
+    points: &[[f64; 3]],
+    intervals: &[f64],
+) -> Result<Plan, KinematicsError> {
+    let mut plan = spline_through(robot, limits, points, intervals, Ends::Still)?;
+    let k = kinematics(&plan.segments);
+    plan.max_abs = MaxAbs {
+        velocity: k.velocity,
+        acceleration: k.acceleration,
+        jerk: k.jerk,
+        torque: sampled_max_abs(&plan)?.torque,
+    };
+    Ok(plan)
+}
+
+fn spline_through(
+    robot: &Robot,
+    limits: &Limits,
+    points: &[[f64; 3]],
+    intervals: &[f64],
+    ends: Ends,
 ) -> Result<Plan, KinematicsError> {
     let m = robot.model::<f64>();
     let knots: Vec<Vector3<f64>> = points
@@ -110,7 +201,7 @@ pub fn plan_through(
     let mut a = vec![Vector3::zeros(); n];
     for j in 0..3 {
         let q: Vec<f64> = knots.iter().map(|k| k[j]).collect();
-        let (vj, aj) = quintic_spline_derivatives(&q, &h);
+        let (vj, aj) = quintic_spline_derivatives(&q, &h, ends);
         for i in 0..n {
             v[i][j] = vj[i];
             a[i][j] = aj[i];
@@ -137,7 +228,7 @@ pub fn plan_through(
         });
         t0 += h[i];
     }
-    let mut plan = Plan {
+    Ok(Plan {
         format: PLAN_FORMAT.to_string(),
         objective: Objective::MinMaxJerk,
         robot: robot.clone(),
@@ -154,9 +245,7 @@ pub fn plan_through(
         max_abs: MaxAbs::default(),
         solver: SolverStats::default(),
         shaping: None,
-    };
-    plan.max_abs = sampled_max_abs(&plan)?;
-    Ok(plan)
+    })
 }
 
 /// Maxima of |v|, |a|, |jerk|, |τ| per joint, sampled (400 points per segment).
@@ -296,7 +385,7 @@ pub fn point_to_point(n: usize, t: f64, d: f64) -> Result<Plan, KinematicsError>
         })
         .collect();
     let h = vec![t / n as f64; n];
-    plan_through(&Robot::default(), &Limits::default(), &pts, &h)
+    checked_plan_through(&Robot::default(), &Limits::default(), &pts, &h)
 }
 
 /// A 3-turn helix of radius 80 mm rising from 560 to 680 mm, rest to rest
@@ -304,9 +393,23 @@ pub fn point_to_point(n: usize, t: f64, d: f64) -> Result<Plan, KinematicsError>
 /// every tenth segment `short` s long (the others share the rest): with
 /// `short` a stand-in for a shaped plan's millisecond segments.
 pub fn helix(n: usize, t: f64, short: Option<f64>) -> Result<Plan, KinematicsError> {
+    helix_turns(3.0, n, t, short)
+}
+
+/// [`helix`] of `turns` turns. A slow one passes `triquint check` with
+/// 2 ms segments: their jerk at the ends is a sum of terms of size v/h²
+/// (v the speed, h the duration), and the check holds its continuity to
+/// 10⁻⁹ m/s³, near the rounding of those terms at 0.2 m/s.
+pub fn helix_turns(
+    turns: f64,
+    n: usize,
+    t: f64,
+    short: Option<f64>,
+) -> Result<Plan, KinematicsError> {
     let shorts = if short.is_some() { n / 10 } else { 0 };
     let s = short.unwrap_or(0.0);
-    let long = (t - s * shorts as f64) / (n - shorts) as f64;
+    // Whole µs, as the plan holds them, so its total is the limit's.
+    let long = ((t - s * shorts as f64) / (n - shorts) as f64 * 1e6).round() * 1e-6;
     let h: Vec<f64> = (0..n)
         .map(|i| {
             if short.is_some() && i % 10 == 9 {
@@ -323,17 +426,34 @@ pub fn helix(n: usize, t: f64, short: Option<f64>) -> Result<Plan, KinematicsErr
     let pts: Vec<[f64; 3]> = knot_t
         .iter()
         .map(|&tk| {
-            let v = (tk / t).clamp(0.0, 1.0);
+            let v = (tk / knot_t[n]).clamp(0.0, 1.0);
             let u = v * v * v * (10.0 - 15.0 * v + 6.0 * v * v);
-            let th = 2.0 * std::f64::consts::PI * 3.0 * u;
+            let th = 2.0 * std::f64::consts::PI * turns * u;
             [0.08 * th.cos(), 0.08 * th.sin(), 0.56 + 0.12 * u]
         })
         .collect();
     let limits = Limits {
-        total_time: t,
+        total_time: knot_t[n],
         ..Limits::default()
     };
-    plan_through(&Robot::default(), &limits, &pts, &h)
+    checked_plan_through(&Robot::default(), &limits, &pts, &h)
+}
+
+/// Issue 35's fixtures as the VM suite runs them (hil-sim/python/
+/// test_streaming.py, files written by the `streaming_fixtures` example),
+/// by file stem: 15 segments in 0.9 s; a 2 ms segment every tenth (a slow
+/// helix, [`helix_turns`]); 2 000 segments of 25 ms, the shortest the
+/// streaming rule allows at the default settings, so the emulated guest
+/// runs it in 50 s.
+pub fn streaming_fixtures() -> Result<Vec<(&'static str, Plan)>, KinematicsError> {
+    Ok(vec![
+        ("stream-15-segments", point_to_point(15, 0.9, 0.03)?),
+        (
+            "stream-2ms-every-tenth",
+            helix_turns(1.0, 100, 12.0, Some(0.002))?,
+        ),
+        ("stream-2000-segments", helix(2000, 50.0, None)?),
+    ])
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
 //! Soak: seeded random fault schedules over both paper plans on the
-//! in-process virtual hardware (1 kHz control). Prints a table per fault
-//! kind: trials, outcome counts, worst stop time; fails (exit 1) on any
-//! corrupted execution, unsafe ending or panic.
+//! in-process virtual hardware (1 kHz control); the last kind runs a
+//! longer plan ([`late_plan`]) whose first segment above the velocity
+//! ceiling arrives after Start. Prints a table per fault kind: trials,
+//! outcome counts, worst stop time; fails (exit 1) on any corrupted
+//! execution, unsafe ending or panic, or a late refusal before Start.
 //!
 //! `cargo run --release -p triquint-host --example fault_soak -- [SCHEDULES] [THREADS] [SEED]`
 
@@ -13,13 +15,15 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_host::inprocess::fault_run::{AboveCeiling, BadSegment, Miswired, Scenario, run};
 use triquint_shared::plan::Plan;
+use triquint_shared::plan::figures::kinematics;
+use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 use triquint_sim::report::{Ending, RunReport};
 use triquint_sim::{Fault, FaultWindow, testplan};
 
 const MS: u64 = 1_000_000;
 
 /// The fault kinds of the soak, with the range their parameter is drawn from.
-const KINDS: [(&str, &str); 23] = [
+const KINDS: [(&str, &str); 24] = [
     ("loss", "0.1-3 % of frames"),
     ("corrupt", "0.1-3 % of parts"),
     ("duplicate", "1-20 % of frames"),
@@ -46,7 +50,42 @@ const KINDS: [(&str, &str); 23] = [
         "ceilings 1.0-1.1 × the plan's maxima",
     ),
     ("stop ramp short", "ceilings at the limits, ramps ×0.01-0.3"),
+    (
+        "above a ceiling while running",
+        "48-segment move, v ceiling 0.92-0.98 × its peak",
+    ),
 ];
+
+/// The kind whose refusal comes while Running, on [`late_plan`].
+const LATE: usize = 23;
+/// Its velocity ceiling's range, as a fraction of the plan's peak.
+const LATE_RANGE: core::ops::Range<f64> = 0.92..0.98;
+
+/// A rest-to-rest move of 100 mm in 48 segments over 6 s: its speed peaks
+/// mid-plan, so the first segment above a velocity ceiling near the peak
+/// is far past the first queue fill ([`first_above`]). Its velocity limit
+/// is its peak: the override cap the host sizes from the limits is then
+/// about 1, or every segment scaled to it would be above the ceiling and
+/// refused before Start (the "override above ceilings" row).
+fn late_plan() -> Plan {
+    let mut p = testplan::point_to_point(48, 6.0, 0.1).expect("late plan");
+    let peak = kinematics(&p.segments)
+        .velocity
+        .into_iter()
+        .fold(0.0, f64::max);
+    p.limits.velocity = peak * 1.001;
+    p
+}
+
+/// The first segment of `plan` whose exact peak joint speed is above `f`
+/// times the plan's.
+fn first_above(plan: &Plan, f: f64) -> Option<usize> {
+    let top = |x: [f64; 3]| x.into_iter().fold(0.0, f64::max);
+    let peak = top(kinematics(&plan.segments).velocity);
+    plan.segments
+        .iter()
+        .position(|s| top(kinematics(std::slice::from_ref(s)).velocity) > f * peak)
+}
 
 fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
     let t = |rng: &mut ChaCha8Rng, a: f64, b: f64| (rng.random_range(a..b) * 1e9) as u64;
@@ -166,7 +205,8 @@ fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
             ))
         }
         21 => sc.above_ceiling = Some(AboveCeiling::OverrideCap(rng.random_range(1.0..1.1))),
-        _ => sc.above_ceiling = Some(AboveCeiling::StopRamp(rng.random_range(0.01..0.3))),
+        22 => sc.above_ceiling = Some(AboveCeiling::StopRamp(rng.random_range(0.01..0.3))),
+        _ => sc.above_ceiling = Some(AboveCeiling::Segment(0, rng.random_range(LATE_RANGE))),
     }
     sc
 }
@@ -191,13 +231,22 @@ fn main() {
         testplan::paper_case1().expect("case I"),
         testplan::paper_case2().expect("case II"),
     ];
+    let late = late_plan();
+    // Every late ceiling refuses a segment the first queue fill does not hold.
+    let late_first = [LATE_RANGE.start, LATE_RANGE.end].map(|f| first_above(&late, f));
+    assert!(
+        late_first
+            .iter()
+            .all(|k| k.is_some_and(|k| k >= QUEUE_CAPACITY)),
+        "{late_first:?}"
+    );
     let started = Instant::now();
     // Hide the panic messages of caught panics from the table.
     std::panic::set_hook(Box::new(|_| {}));
     let results: Vec<(usize, Option<RunReport>)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
             .map(|th| {
-                let plans = &plans;
+                let (plans, late) = (&plans, &late);
                 s.spawn(move || {
                     let mut out = Vec::new();
                     for i in (th..n).step_by(threads) {
@@ -206,7 +255,11 @@ fn main() {
                         );
                         let k = i % KINDS.len();
                         let sc = schedule(k, &mut rng);
-                        let plan = &plans[(i / KINDS.len()) % 2];
+                        let plan = if k == LATE {
+                            late
+                        } else {
+                            &plans[(i / KINDS.len()) % 2]
+                        };
                         let r = catch_unwind(AssertUnwindSafe(|| run(plan, &sc))).ok();
                         match r.as_ref().and_then(|x| x.fault_run.as_ref()) {
                             Some(f) if f.ending != Ending::Unsafe => {}
@@ -259,6 +312,10 @@ fn main() {
     for (k, row) in rows.iter().enumerate() {
         let e = |x: Ending| row.endings.get(&x).copied().unwrap_or(0);
         bad += e(Ending::Unsafe) as usize + row.panics as usize + row.corrupted;
+        // The late refusal is the point of its row: it must come while Running.
+        if k == LATE {
+            bad += (e(Ending::NotStarted) + e(Ending::Completed)) as usize;
+        }
         let mut name = KINDS[k].0.to_string();
         if k == 7 && row.worst_lost_sync_ns > 0 {
             name = format!(
@@ -288,6 +345,13 @@ fn main() {
             },
         );
     }
+    println!(
+        "\n{}: first segment above the ceiling {}–{} of {} (queue {QUEUE_CAPACITY}), from the exact maxima",
+        KINDS[LATE].0,
+        late_first[0].map_or(0, |k| k + 1),
+        late_first[1].map_or(0, |k| k + 1),
+        late.segments.len()
+    );
     if bad > 0 {
         eprintln!("fault soak: {bad} unsafe endings, panics or corrupted executions");
         std::process::exit(1);

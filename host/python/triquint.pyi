@@ -54,14 +54,35 @@ class OutsideWorkspaceError(TriquintError, ValueError):
 class InfeasibleError(TriquintError):
     """A valid job that no plan satisfies."""
 
-    limit: Literal["velocity", "acceleration", "jerk", "torque", "total_time"]
+    limit: Literal[
+        "velocity", "acceleration", "jerk", "torque", "total_time", "max_deviation_mm", "travel"
+    ]
     """The binding limit."""
     unit: str
     limit_value: float
     reached: float
-    """Best value of the binding quantity found (SI, above ``limit_value``)."""
+    """Best value of the binding quantity found (in ``unit``: SI, mm for the last two)."""
     shortest_total_time: Optional[float]
     """Shortest total time (s) that meets every limit, or None."""
+    segment: int
+    """With ``limit == 'travel'`` only: the 0-based segment that leaves the travel."""
+    axis: int
+    """With ``limit == 'travel'`` only: the 0-based slider."""
+
+class UnstreamableError(TriquintError):
+    """A plan within every limit that would not stream to the default drives
+    (docs/protocol.md, Streamability): use fewer points or a longer total time."""
+
+    first: int
+    """0-based first segment of the run too short to stream."""
+    last: int
+    """0-based last segment of that run (a queue's worth less one)."""
+    run_s: float
+    """How long the run lasts (s)."""
+    need_s: float
+    """The look-ahead plus refill delay the drives must hold ahead (s)."""
+    capacity: int
+    """The drives' queue capacity (segments)."""
 
 class CancelledError(TriquintError):
     """The progress callable returned False (``reason == 'observer'``)."""

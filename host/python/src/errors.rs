@@ -22,6 +22,7 @@ pub struct Errors {
     pub job_file: Py<PyType>,
     pub outside: Py<PyType>,
     pub infeasible: Py<PyType>,
+    pub unstreamable: Py<PyType>,
     pub cancelled: Py<PyType>,
     pub solver: Py<PyType>,
     pub plan_file: Py<PyType>,
@@ -90,7 +91,19 @@ pub fn errors(py: Python<'_>) -> PyResult<&Errors> {
                  `limit_value` is its value and `reached` its value in the planner's \
                  closest plan (SI; when the total time is too short, the shortest plan \
                  time-scaled to it); `shortest_total_time` (s) is the shortest total \
-                 time that meets every limit, or None.",
+                 time that meets every limit, or None. Also 'max_deviation_mm' (mm), \
+                 and 'travel' (mm: a slider's travel limit and how far the closest \
+                 plan takes it, with `segment` and `axis`, 0-based).",
+            )?,
+            unstreamable: make_type(
+                py,
+                "UnstreamableError",
+                &[&b],
+                "A plan that meets every limit but would not stream to the default \
+                 drives (docs/protocol.md, Streamability): segments `first` to `last` \
+                 (0-based, a queue's worth less one) last `run_s` s together, less than \
+                 the `need_s` s that drives queueing `capacity` segments must hold \
+                 ahead. Fewer points or a longer total time stream.",
             )?,
             cancelled: make_type(
                 py,
@@ -232,6 +245,37 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             inst.setattr("shortest_total_time", py.None())?;
             inst
         }
+        PlanError::LeavesTravel {
+            segment,
+            axis,
+            joint_m,
+            limit_m,
+        } => {
+            let inst = new_error(py, &errs.infeasible, &msg)?;
+            inst.setattr("limit", "travel")?;
+            inst.setattr("unit", "mm")?;
+            inst.setattr("limit_value", limit_m * 1e3)?;
+            inst.setattr("reached", joint_m * 1e3)?;
+            inst.setattr("shortest_total_time", py.None())?;
+            inst.setattr("segment", *segment)?;
+            inst.setattr("axis", *axis)?;
+            inst
+        }
+        PlanError::Unstreamable {
+            first,
+            last,
+            run_s,
+            need_s,
+            capacity,
+        } => {
+            let inst = new_error(py, &errs.unstreamable, &msg)?;
+            inst.setattr("first", *first)?;
+            inst.setattr("last", *last)?;
+            inst.setattr("run_s", *run_s)?;
+            inst.setattr("need_s", *need_s)?;
+            inst.setattr("capacity", *capacity)?;
+            inst
+        }
         PlanError::Cancelled { reason } => {
             let inst = new_error(py, &errs.cancelled, &msg)?;
             let reason = match reason {
@@ -256,6 +300,8 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             inst.setattr("reason", &msg)?;
             inst
         }
+        // A variant added to the planner after this map: the base class
+        // until it gets its own (tests/test_errors.py names every one).
         _ => new_error(py, &errs.base, &msg)?,
     };
     Ok(PyErr::from_value(inst))

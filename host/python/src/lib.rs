@@ -82,6 +82,7 @@ fn triquint(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("JobFileError", e.job_file.bind(py))?;
     m.add("OutsideWorkspaceError", e.outside.bind(py))?;
     m.add("InfeasibleError", e.infeasible.bind(py))?;
+    m.add("UnstreamableError", e.unstreamable.bind(py))?;
     m.add("CancelledError", e.cancelled.bind(py))?;
     m.add("SolverError", e.solver.bind(py))?;
     m.add("PlanFileError", e.plan_file.bind(py))?;
@@ -111,6 +112,7 @@ const PUBLIC: &[&str] = &[
     "JobFileError",
     "OutsideWorkspaceError",
     "InfeasibleError",
+    "UnstreamableError",
     "CancelledError",
     "SolverError",
     "PlanFileError",

@@ -15,14 +15,15 @@ def test_hierarchy():
     base = triquint.TriquintError
     assert issubclass(base, Exception)
     for e in (triquint.InvalidJobError, triquint.JobFileError, triquint.OutsideWorkspaceError,
-              triquint.InfeasibleError, triquint.CancelledError, triquint.SolverError,
-              triquint.PlanFileError, triquint.InternalError):
+              triquint.InfeasibleError, triquint.UnstreamableError, triquint.CancelledError,
+              triquint.SolverError, triquint.PlanFileError, triquint.InternalError):
         assert issubclass(e, base), e
         assert e.__module__ == "triquint"
         assert e.__doc__
     assert issubclass(triquint.InvalidJobError, ValueError)
     assert issubclass(triquint.OutsideWorkspaceError, ValueError)
     assert not issubclass(triquint.InfeasibleError, ValueError)
+    assert not issubclass(triquint.UnstreamableError, (ValueError, triquint.InfeasibleError))
 
 
 def test_invalid_job_names_the_field():
@@ -61,6 +62,20 @@ def test_outside_workspace_has_index_and_point():
     with pytest.raises(triquint.OutsideWorkspaceError) as e:
         triquint.plan([[0, 0, 0.6], [0.9, 0, 0.6]], units="m")
     assert e.value.index == 1 and e.value.point == (0.9, 0.0, 0.6)  # the caller's units
+
+
+def test_unstreamable_is_its_own_error_with_the_run():
+    # 20 points 2 mm apart as fast as the limits allow: 19 segments of a
+    # few tens of ms, far less than a queue's worth of look-ahead.
+    pts = [[2.0 * i, 0, 600] for i in range(20)]
+    with pytest.raises(triquint.UnstreamableError) as e:
+        triquint.plan(pts, objective="min-time")
+    err = e.value
+    assert type(err) is triquint.UnstreamableError
+    assert err.capacity >= 2 and err.last - err.first + 1 == err.capacity - 1
+    assert 0 < err.run_s < err.need_s
+    assert str(err).startswith("unstreamable: segments "), str(err)
+    assert f"segments {err.first + 1}–{err.last + 1}" in str(err)
 
 
 def test_infeasible_has_limit_reached_and_shortest_time():

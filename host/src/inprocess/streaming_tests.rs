@@ -278,3 +278,16 @@ fn an_unstreamable_plan_is_refused_before_anything_moves() {
         other => panic!("not refused: {:?}", other.map(|r| r.run.completed)),
     }
 }
+
+#[test]
+fn the_vm_suites_fixtures_pass_the_check_and_the_streaming_rule() {
+    for (name, plan) in testplan::streaming_fixtures().unwrap() {
+        let failed: Vec<_> = triquint_planner::check(&plan)
+            .unwrap()
+            .into_iter()
+            .filter(|r| !r.ok)
+            .collect();
+        assert!(failed.is_empty(), "{name}: {failed:?}");
+        assert_eq!(rule(&plan).check(&durations(&plan)), Ok(()), "{name}");
+    }
+}
