@@ -1,17 +1,17 @@
 //! The machine's ceilings, held by the drive from its own configuration
 //! whatever the host sends (docs/protocol.md, "Ceilings"): a segment whose
 //! exact maxima exceed them, whose maxima scaled to the override cap would,
-//! or on which a stop or hold ramp would exceed the stop budget, is refused
-//! on the receive side with a code naming which.
+//! or for which no stop ramp within the drive's longest keeps a stop within
+//! the budget its jerk ceiling allows, is refused on the receive side with
+//! a code naming which.
 
-use triquint_shared::protocol::config::{SMOOTHSTEP_MAX_D1, SMOOTHSTEP_MAX_D2};
 use triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN;
+use triquint_shared::protocol::segment_maxima::maxima;
+use triquint_shared::protocol::stop_ramp::segment_ramps;
 use triquint_shared::protocol::{DriveConfig, Reject};
 
+use crate::f32_cast::ramp_us;
 use crate::segment::Seg;
-
-/// Bisection steps on u ∈ [0, 1]: f32's 24-bit mantissa.
-const BISECT_STEPS: usize = 24;
 
 /// Largest |q′|, |q″|, |q‴| over the three joints of a segment (m/s,
 /// m/s², m/s³), exact up to f32 rounding.
@@ -22,95 +22,36 @@ pub struct Maxima {
     pub j: f32,
 }
 
-/// Σ c_k u^k by Horner's rule (`c` lowest power first).
-fn poly(c: &[f32], u: f32) -> f32 {
-    c.iter().rev().fold(0.0, |acc, x| acc * u + x)
-}
-
-/// The root of `c` in (lo, hi) where it changes sign there (monotone on
-/// it: at most one), by bisection.
-fn root_in(c: &[f32], lo: f32, hi: f32) -> Option<f32> {
-    let (mut lo, mut hi) = (lo, hi);
-    let (flo, fhi) = (poly(c, lo), poly(c, hi));
-    if flo == 0.0 || fhi == 0.0 || (flo < 0.0) == (fhi < 0.0) {
-        return None;
-    }
-    for _ in 0..BISECT_STEPS {
-        let mid = 0.5 * (lo + hi);
-        if (poly(c, mid) < 0.0) == (flo < 0.0) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Some(0.5 * (lo + hi))
-}
-
-/// The roots in (0, 1) of `c`, given the points (sorted, 0 and 1
-/// included) between which it is monotone, sorted and with 0 and 1: the
-/// points between which its antiderivative is monotone. Returns how many.
-fn roots(c: &[f32], pieces: &[f32], out: &mut [f32; 6]) -> usize {
-    let inner = pieces.windows(2).filter_map(|w| match *w {
-        [lo, hi] => root_in(c, lo, hi),
-        _ => None,
-    });
-    let mut n = 0;
-    for x in core::iter::once(0.0)
-        .chain(inner)
-        .chain(core::iter::once(1.0))
-    {
-        if let Some(slot) = out.get_mut(n) {
-            *slot = x;
-            n += 1;
-        }
-    }
-    n
-}
-
-/// Largest |c(u)| over the points.
-fn largest(c: &[f32], points: &[f32]) -> f32 {
-    points.iter().fold(0.0f32, |m, u| m.max(poly(c, *u).abs()))
-}
-
 impl Maxima {
-    /// Of a queued segment, in normalised time u = t/h: q‴ is a quadratic,
-    /// so q″ is monotone between q⁗'s root and the ends, q′ between q‴'s
-    /// roots; each derivative peaks at an end or at a root of the next.
+    /// Of a queued segment (`segment_maxima::maxima`, the host's too).
     pub fn of(seg: &Seg) -> Self {
-        let ih = seg.inv_h;
-        let mut m = [0.0f32; 3];
-        for b in &seg.b {
-            let d1 = [b[1], 2.0 * b[2], 3.0 * b[3], 4.0 * b[4], 5.0 * b[5]];
-            let d2 = [2.0 * b[2], 6.0 * b[3], 12.0 * b[4], 20.0 * b[5]];
-            let d3 = [6.0 * b[3], 24.0 * b[4], 60.0 * b[5]];
-            let d4 = [24.0 * b[4], 120.0 * b[5]];
-            let (mut p4, mut p3, mut p2) = ([0.0; 6], [0.0; 6], [0.0; 6]);
-            // `get` rather than slicing: no panic path on the receive side.
-            let n4 = roots(&d4, &[0.0, 1.0], &mut p4);
-            let p4 = p4.get(..n4).unwrap_or(&[]);
-            let n3 = roots(&d3, p4, &mut p3);
-            let p3 = p3.get(..n3).unwrap_or(&[]);
-            let n2 = roots(&d2, p3, &mut p2);
-            let p2 = p2.get(..n2).unwrap_or(&[]);
-            m[0] = m[0].max(largest(&d1, p2));
-            m[1] = m[1].max(largest(&d2, p3));
-            m[2] = m[2].max(largest(&d3, p4));
-        }
-        Self {
-            v: m[0] * ih,
-            a: m[1] * ih * ih,
-            j: m[2] * ih * ih * ih,
-        }
+        let [v, a, j] = maxima(&seg.b, seg.inv_h);
+        Self { v, a, j }
+    }
+
+    /// The drive's own stop ramps for this segment (controlled, quick; µs,
+    /// as the configured ramps are rounded): within
+    /// the stop budgets of `cfg`'s jerk limit held to its jerk ceiling, at
+    /// its override cap (`stop_ramp::segment_ramps`). None within the
+    /// longest ramp: `StopAboveCeiling`.
+    pub fn ramps_us(&self, cfg: &DriveConfig) -> Result<(u32, u32), Reject> {
+        let (s, q) = segment_ramps(
+            self.v,
+            self.a,
+            self.j,
+            cfg.max_jerk,
+            cfg.ceiling_jerk,
+            cfg.override_cap,
+        )
+        .ok_or(Reject::StopAboveCeiling)?;
+        Ok((ramp_us(s), ramp_us(q)))
     }
 
     /// Held to `cfg`'s ceilings (with [`RELATIVE_LIMIT_MARGIN`]):
     /// - the segment itself: v, a, j;
     /// - at the override cap σ: σv, σ²a, σ³j;
-    /// - its stop ramps T (controlled T_s, quick T_q) at the cap: the
-    ///   time-scaling's own jerk terms, v·max|S″|/T² and 3a·σ·max|S′|/T,
-    ///   each within the share of the stop budget the host's sizing gives
-    ///   it (`stop_ramp::stop_time`; docs/protocol.md, "Ceilings"):
-    ///   1.5 and 3 × `ceiling_jerk` for T_s, 3 and 6 × for T_q.
+    ///
+    /// Its stop ramps are the drive's own ([`Maxima::ramps_us`]).
     ///
     /// NaN anywhere fails.
     pub fn check(&self, cfg: &DriveConfig) -> Result<(), Reject> {
@@ -135,15 +76,6 @@ impl Maxima {
         {
             return Err(Reject::OverrideAboveCeiling);
         }
-        let d1 = SMOOTHSTEP_MAX_D1 as f32;
-        let d2 = SMOOTHSTEP_MAX_D2 as f32;
-        let ramp_ok = |t: f32, share: f32| {
-            within(self.v * d2, share * cj * t * t)
-                && within(3.0 * self.a * s * d1, 2.0 * share * cj * t)
-        };
-        if !(ramp_ok(cfg.stop_time, 1.5) && ramp_ok(cfg.quick_stop_time, 3.0)) {
-            return Err(Reject::StopAboveCeiling);
-        }
         Ok(())
     }
 }
@@ -166,6 +98,7 @@ mod tests {
             first: true,
             last: false,
             crc: 0,
+            ramps_us: (0, 0),
         }
     }
 
@@ -230,7 +163,7 @@ mod tests {
         let m = Maxima::of(&cubic());
         assert_eq!(m.check(&config()), Ok(()));
         type Change = fn(&mut DriveConfig);
-        let cases: [(Change, Reject); 6] = [
+        let cases: [(Change, Reject); 4] = [
             (|c| c.ceiling_velocity *= 0.98, Reject::AboveVelocityCeiling),
             (
                 |c| c.ceiling_acceleration *= 0.98,
@@ -239,9 +172,6 @@ mod tests {
             (|c| c.ceiling_jerk *= 0.98, Reject::AboveJerkCeiling),
             // At σ = 1.1 the velocity would be 0.55 > 0.5·1.01.
             (|c| c.override_cap = 1.1, Reject::OverrideAboveCeiling),
-            // A 10 ms controlled stop: v·5.77/T² = 28 900 ≫ 1.5 m/s³.
-            (|c| c.stop_time = 0.01, Reject::StopAboveCeiling),
-            (|c| c.quick_stop_time = 0.01, Reject::StopAboveCeiling),
         ];
         for (f, want) in cases {
             let mut c = config();
@@ -251,5 +181,20 @@ mod tests {
         let mut c = config();
         c.ceiling_velocity = f32::NAN;
         assert_eq!(m.check(&c), Err(Reject::AboveVelocityCeiling));
+    }
+
+    #[test]
+    fn a_segment_at_the_jerk_ceiling_has_no_stop_ramp_and_is_refused() {
+        let m = Maxima::of(&cubic());
+        // Its own jerk, 1, is the ceiling: no room left for a stop.
+        assert_eq!(m.ramps_us(&config()), Err(Reject::StopAboveCeiling));
+        // A host's stop time plays no part.
+        let mut c = config();
+        c.stop_time = 10.0;
+        assert_eq!(m.ramps_us(&c), Err(Reject::StopAboveCeiling));
+        // Twice the ceiling: a ramp, within the longest.
+        c.ceiling_jerk = 2.0;
+        let (s, q) = m.ramps_us(&c).unwrap();
+        assert!(s >= q && q >= 50_000 && s <= 4_000_000, "{s} {q}");
     }
 }

@@ -4,7 +4,7 @@
 
 use triquint_shared::protocol::DriveConfig;
 
-use crate::f32_cast::to_i64;
+use crate::f32_cast::{ramp_us, to_i64};
 
 /// What is derived once from a configuration (by the receive side, when it
 /// prepares a commit). Small on purpose: the tick copies it; the
@@ -43,7 +43,7 @@ impl DerivedConfig {
         let wc = 2.0 * core::f32::consts::PI * cfg.velocity_filter * dt;
         // Whole microseconds (validated > 0; saturating far beyond any use).
         let us = |s: f32| to_i64(s * 1e6).max(0) as u64;
-        let ns = |s: f32| (us(s) as i64).saturating_mul(1000);
+        let ns = |s: f32| (ramp_us(s) as i64).saturating_mul(1000);
         Self {
             crc,
             axis: (cfg.axis as usize).min(2),

@@ -94,6 +94,9 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     flushes: u32,
     next_seq: u16,
     queued_end_ns: i64,
+    /// The largest of the queued segments' own stop ramps, controlled and
+    /// quick (µs): the drive's floor under the configured ones.
+    queue_ramps_us: (u32, u32),
     /// End motion (q, q', q'', q''') of the last accepted segment.
     prev_end: Option<JointMotion<f32>>,
     /// Body CRC of the last accepted segment (valid with `prev_end`).
@@ -191,6 +194,7 @@ impl<const Q: usize> Drive<Q> {
             flushes: 0,
             next_seq: 0,
             queued_end_ns: 0,
+            queue_ramps_us: (0, 0),
             prev_end: None,
             prev_crc: 0,
             sync: SyncEstimator::default(),
@@ -256,7 +260,37 @@ impl<const Q: usize> Drive<Q> {
             may_rebase: matches!(self.state, State::Idle | State::Fault),
             scaling: self.scaling,
             override_q16: self.override_q16,
+            ramps_ns: self.active.map(|a| self.ramps_ns(&a)),
         }
+    }
+
+    /// The stop ramps every transition runs with, controlled and quick
+    /// (ns): the configured ones, never shorter than the queued segments'
+    /// own (docs/protocol.md, "Stop ramp").
+    pub fn ramps_ns(&self, a: &DerivedConfig) -> (i64, i64) {
+        let (s, q) = self.queue_ramps_us;
+        (
+            a.stop_ns.max(s as i64 * 1000),
+            a.quick_stop_ns.max(q as i64 * 1000),
+        )
+    }
+
+    /// The largest of the queued segments' own stop ramps, controlled and
+    /// quick (ns).
+    pub fn queue_ramps_ns(&self) -> (i64, i64) {
+        let (s, q) = self.queue_ramps_us;
+        (s as i64 * 1000, q as i64 * 1000)
+    }
+
+    /// The largest of the queued segments' own ramps, again (after the
+    /// front left the queue).
+    // Cold, out of line: once a segment, and not the tick's own code.
+    #[cold]
+    #[inline(never)]
+    fn recompute_queue_ramps(&mut self) {
+        self.queue_ramps_us = self.queue.iter().fold((0, 0), |m, s| {
+            (m.0.max(s.ramps_us.0), m.1.max(s.ramps_us.1))
+        });
     }
     /// Is the axis position absolute?
     pub fn is_homed(&self) -> bool {
@@ -428,6 +462,7 @@ impl<const Q: usize> Drive<Q> {
         self.flushes = self.flushes.wrapping_add(1);
         self.next_seq = 0;
         self.queued_end_ns = 0;
+        self.queue_ramps_us = (0, 0);
         self.prev_end = None;
         self.start_ns = None;
         self.stop_reason = None;
@@ -518,7 +553,8 @@ impl<const Q: usize> Drive<Q> {
             return;
         };
         if self.state == State::Running {
-            let ramp = if quick { a.quick_stop_ns } else { a.stop_ns };
+            let (stop, quick_ns) = self.ramps_ns(&a);
+            let ramp = if quick { quick_ns } else { stop };
             self.scaling.retarget_ready(t, 0, ramp, ready);
             self.stop_reason = Some(reason);
             if reason != StopReason::Hold {

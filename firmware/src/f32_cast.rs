@@ -40,6 +40,12 @@ pub fn to_i64(x: f32) -> i64 {
     }
 }
 
+/// A ramp of `s` seconds in whole µs, as the drive runs it (the host's
+/// and the drive's own ramps rounded alike; saturating).
+pub fn ramp_us(s: f32) -> u32 {
+    to_i64(s * 1e6).clamp(0, u32::MAX as i64) as u32
+}
+
 #[cfg(test)]
 mod tests {
     use super::{to_f32, to_i64};

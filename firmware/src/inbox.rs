@@ -50,6 +50,9 @@ pub struct TickSnapshot {
     /// transition ahead of the tick ([`Retarget`]).
     pub scaling: TimeScaling,
     pub override_q16: u32,
+    /// The stop ramps the tick runs transitions with, controlled and quick
+    /// (ns; `Drive::ramps_ns`), while configured.
+    pub ramps_ns: Option<(i64, i64)>,
 }
 
 impl TickSnapshot {
@@ -60,6 +63,7 @@ impl TickSnapshot {
         may_rebase: true,
         scaling: TimeScaling::nominal(0, 0),
         override_q16: UNIT_Q16,
+        ramps_ns: None,
     };
 }
 

@@ -169,16 +169,9 @@ impl Receiver {
         }
     }
 
-    /// Stop and quick-stop ramps (ns) of the running configuration.
+    /// Stop and quick-stop ramps (ns) the tick runs transitions with.
     fn ramps(&self, snapshot: &TickSnapshot) -> Option<(i64, i64)> {
-        let crc = snapshot.config_crc;
-        let (_, cfg) = self
-            .configs
-            .iter()
-            .flatten()
-            .find(|(c, _)| *c == crc && crc != 0)?;
-        let a = DerivedConfig::new(cfg, crc);
-        Some((a.stop_ns, a.quick_stop_ns))
+        snapshot.ramps_ns
     }
 
     /// A commit of the written values if their CRC is `want`: every parameter
@@ -220,7 +213,7 @@ impl Receiver {
     /// not: conversion, limit checks at 65 points, the ceilings on its
     /// exact maxima, start and end motion.
     fn check(&self, w: &WireSegment, pred_crc: Option<u32>, active_crc: u32) -> CheckedSegment {
-        let seg = Seg::from_wire(w, 0);
+        let mut seg = Seg::from_wire(w, 0);
         let cfg = self
             .configs
             .iter()
@@ -235,8 +228,11 @@ impl Receiver {
             }
             Some((_, cfg)) => {
                 // The ceilings first: a refusal names which was exceeded.
-                Maxima::of(&seg)
-                    .check(cfg)
+                // Then the drive's own stop ramps for it.
+                let m = Maxima::of(&seg);
+                m.check(cfg)
+                    .and_then(|()| m.ramps_us(cfg))
+                    .map(|r| seg.ramps_us = r)
                     .and_then(|()| within_limits(&seg, cfg))
             }
         };

@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 use crate::f32_cast::to_f32;
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
+use triquint_shared::protocol::segment_maxima::inv_h;
 use triquint_shared::quintic::{JointMotion, eval_poly};
 
 /// One queued segment.
@@ -13,7 +14,7 @@ pub struct Seg {
     pub seq: u16,
     /// Plan time at the segment start (ns).
     pub start_ns: i64,
-    /// Duration h (µs): 96 bytes a queue slot, not 112 with h in ns and
+    /// Duration h (µs): 104 bytes a queue slot, not 120 with h in ns and
     /// 1/h² and 1/h³ stored.
     pub duration_us: u32,
     /// 1/h (s⁻¹).
@@ -24,21 +25,23 @@ pub struct Seg {
     pub last: bool,
     /// CRC-32 of the received body: which segment, bit for bit, this is.
     pub crc: u32,
+    /// The drive's own stop ramps for it, controlled and quick (µs;
+    /// `Maxima::ramps_us`, set on the receive side).
+    pub ramps_us: (u32, u32),
 }
 
 impl Seg {
     pub fn from_wire(w: &WireSegment, start_ns: i64) -> Self {
-        let h = w.duration_us as f32 * 1e-6;
-        let ih = if h > 0.0 { 1.0 / h } else { 0.0 };
         Self {
             seq: w.seq,
             start_ns,
             duration_us: w.duration_us,
-            inv_h: ih,
+            inv_h: inv_h(w.duration_us),
             b: w.normalised_f32(),
             first: w.flags & FLAG_FIRST != 0,
             last: w.flags & FLAG_LAST != 0,
             crc: w.body_crc(),
+            ramps_us: (0, 0),
         }
     }
 
@@ -99,7 +102,7 @@ pub fn scale(m: &JointMotion<f32>, sigma: f32, sigma_d: f32, sigma_dd: f32) -> J
 #[cfg(test)]
 mod tests {
     #[test]
-    fn a_queue_slot_is_96_bytes() {
-        assert_eq!(core::mem::size_of::<super::Seg>(), 96);
+    fn a_queue_slot_is_104_bytes() {
+        assert_eq!(core::mem::size_of::<super::Seg>(), 104);
     }
 }

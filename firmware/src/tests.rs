@@ -537,6 +537,42 @@ fn underrun_stops_along_the_path_with_bounded_jerk() {
     );
 }
 
+/// A host that configures a stop ramp far too short for the plan (50 ms)
+/// cannot make the stop harder: the drive runs its own ramp for the
+/// segments it holds, and the stop's joint jerk stays within its jerk
+/// ceiling.
+#[test]
+fn a_too_short_configured_stop_ramp_cannot_make_the_stop_harder() {
+    let h = 0.8;
+    let segs = segments(8, h);
+    let mut r = Rig::with_stop_time(0.05);
+    let ceiling = 6.0f32;
+    (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, ceiling);
+    let mut r = Rig::loaded_with(r, &segs[..3]);
+    let (own, _) = r.node.drive.queue_ramps_ns();
+    assert!(own > 200_000_000, "the drive's own ramp: {own} ns");
+    r.start();
+    for _ in 0..20_000 {
+        r.tick();
+        if r.node.state() == State::Fault {
+            break;
+        }
+    }
+    assert_eq!(r.node.fault(), FaultCode::Underrun);
+    assert_eq!(r.node.scaling_phase(), Phase::Rest);
+    std::eprintln!(
+        "configured 50 ms, drive's own ramp {:.3} s, max jerk during the stop {:.3} m/s³ (ceiling {ceiling})",
+        own as f64 * 1e-9,
+        r.max_stop_jerk
+    );
+    assert!(r.max_stop_jerk > 0.0);
+    assert!(
+        r.max_stop_jerk <= ceiling * 1.001,
+        "stop jerk {} > {ceiling}",
+        r.max_stop_jerk
+    );
+}
+
 #[test]
 fn commanded_stop_feed_hold_resume_and_emergencies() {
     let segs = segments(4, 0.3);

@@ -67,7 +67,8 @@ impl<const Q: usize> Drive<Q> {
                         if quick {
                             let t = self.apply_ns(c.arg, local_us);
                             let r = data.retarget();
-                            self.scaling.retarget_ready(t, 0, a.quick_stop_ns, r);
+                            let quick_ns = self.ramps_ns(&a).1;
+                            self.scaling.retarget_ready(t, 0, quick_ns, r);
                         }
                         FaultCode::None
                     }
@@ -121,7 +122,8 @@ impl<const Q: usize> Drive<Q> {
                     if self.stop_reason == Some(StopReason::Hold) {
                         let t = self.apply_ns(c.arg, local_us);
                         let (k, r) = (self.override_q16, data.retarget());
-                        self.scaling.retarget_ready(t, k, a.stop_ns, r);
+                        let stop = self.ramps_ns(&a).0;
+                        self.scaling.retarget_ready(t, k, stop, r);
                         self.stop_reason = None;
                     }
                     FaultCode::None
@@ -144,7 +146,8 @@ impl<const Q: usize> Drive<Q> {
                     {
                         let t = self.apply_ns(c.arg, local_us);
                         let (k, r) = (self.override_q16, data.retarget());
-                        self.scaling.retarget_ready(t, k, a.stop_ns, r);
+                        let stop = self.ramps_ns(&a).0;
+                        self.scaling.retarget_ready(t, k, stop, r);
                     }
                     FaultCode::None
                 };

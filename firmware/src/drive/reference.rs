@@ -106,7 +106,12 @@ impl<const Q: usize> Drive<Q> {
         while self.queue.len() > 1 {
             match self.queue.front() {
                 Some(f) if sc.s_ns >= f.end_ns() => {
+                    let r = f.ramps_us;
                     self.queue.pop_front();
+                    // Only the largest leaving changes the largest.
+                    if r.0 >= self.queue_ramps_us.0 || r.1 >= self.queue_ramps_us.1 {
+                        self.recompute_queue_ramps();
+                    }
                 }
                 _ => break,
             }
@@ -142,8 +147,8 @@ impl<const Q: usize> Drive<Q> {
                 return Some(m);
             }
             let ahead = self.queued_end_ns - sc.s_ns;
-            let need =
-                TimeScaling::stop_distance_ns(a.stop_ns, self.scaling.target_q16()) + a.margin_ns;
+            let need = TimeScaling::stop_distance_ns(self.ramps_ns(a).0, self.scaling.target_q16())
+                + a.margin_ns;
             if !last_queued
                 && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
                 && ahead < need

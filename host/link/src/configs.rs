@@ -11,6 +11,7 @@ use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::DriveConfig;
 use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::segment_maxima;
 use triquint_shared::protocol::stop_ramp::stop_time;
 use triquint_shared::{Limits, Robot};
 
@@ -43,15 +44,18 @@ impl DriveConfigs {
         // The override cap, and the stop ramps sized for a stop from it.
         let s = override_scaling(plan, Maxima { v, a, j });
         let (robot, limits) = (&plan.robot, &plan.limits);
-        let (ts, tq) = (s.stop_time_s, s.quick_stop_time_s);
+        // The drives' own rule over every segment: never shorter than the
+        // ramp a drive sizes for the segments it holds.
+        let r = segment_maxima::for_plan(plan, settings, &s);
+        let (ts, tq) = (r.stop_time_s, r.quick_stop_time_s);
         Ok(Self {
             nodes: [0, 1, 2].map(|i| {
                 let mut c = DriveConfig::new(robot, limits, i, settings, ts, tq);
-                c.override_cap = s.cap as f32;
+                c.override_cap = r.cap as f32;
                 c
             }),
             stop_time_s: ts,
-            override_cap: s.cap,
+            override_cap: r.cap,
         })
     }
 
@@ -260,6 +264,18 @@ mod tests {
         let c = DriveConfigs::for_limits(&Robot::default(), &l, &s);
         let old = stop_time_separate_peaks(l.velocity, l.acceleration, l.jerk, l.jerk, 1.0);
         rows.push(("at the limits", 1.0, c.stop_time_s, old));
+        // The drives' per-segment rule for one segment at the limits.
+        let (coarse, _) = triquint_shared::protocol::stop_ramp::segment_ramps(
+            l.velocity as f32,
+            l.acceleration as f32,
+            l.jerk as f32,
+            l.jerk as f32,
+            s.ceilings.jerk as f32,
+            1.0,
+        )
+        .unwrap();
+        eprintln!("at the limits, by the drives' per-segment rule: T_s {coarse:.3} s");
+        assert!(coarse as f64 >= c.stop_time_s && (coarse as f64) < 1.2 * c.stop_time_s);
         for (name, cap, new, old) in rows {
             eprintln!(
                 "{name}: cap {cap:.3}, T_s {new:.3} s (look-ahead at σ = 1 {:.3} s), by separate peaks {old:.3} s ({:.3} s), ratio {:.3}",

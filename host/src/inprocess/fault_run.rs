@@ -177,6 +177,24 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         c.stop_time *= ramp_factor as f32;
         c.quick_stop_time *= ramp_factor as f32;
     }
+    // What the drives must refuse: a segment above a ceiling, or an
+    // override cap that takes the plan above one. A short stop ramp they
+    // raise to their own (docs/protocol.md, "Stop ramp"): running it whole
+    // is right, within the stop budget.
+    let must_refuse = match sc.above_ceiling {
+        Some(AboveCeiling::Segment(..)) => true,
+        Some(AboveCeiling::OverrideCap(_)) => {
+            let m = triquint_shared::plan::figures::kinematics(&plan.segments);
+            let [v, a, j] = m.largest();
+            let k = configs[0].override_cap as f64;
+            let c = &settings.ceilings;
+            let over = 1.0 + triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN as f64;
+            k * v > c.velocity * over
+                || k * k * a > c.acceleration * over
+                || k * k * k * j > c.jerk * over
+        }
+        Some(AboveCeiling::StopRamp(_)) | None => false,
+    };
     let mut cfg = SimConfig {
         fd: sc.fd,
         record_every: 1,
@@ -286,7 +304,7 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
         sc.node_reset.map(|r| r.0),
     );
     let versions = session.versions().to_vec();
-    let mut figures = fault_figures(&plan, &sim, sc, &wire, &versions, &report);
+    let mut figures = fault_figures(&plan, &sim, sc, must_refuse, &wire, &versions, &report);
     figures.host_error = host_error;
     figures.retransmits = session.retransmits();
     figures.sync_timeout_ns = (settings.sync_timeout * 1e9) as u64;
@@ -300,6 +318,7 @@ fn fault_figures(
     plan: &Plan,
     sim: &Sim,
     sc: &Scenario,
+    must_refuse: bool,
     wire: &[WireSegment],
     versions: &[(u16, u32)],
     run: &RunReport,
@@ -425,7 +444,7 @@ fn fault_figures(
         )
     });
     // A plan above the drives' ceilings must never run whole.
-    let ceiling_missed = sc.above_ceiling.is_some() && whole;
+    let ceiling_missed = must_refuse && whole;
     let ending = if corrupted > 0
         || ceiling_missed
         || running_left

@@ -45,25 +45,31 @@ struct StopRun {
     jerk: f64,
     /// Largest |acceleration| of the reference from the Stop on (m/s²).
     accel: f64,
+    /// The largest of any drive's own stop ramp for its queue (ns).
+    own_ramp_ns: i64,
     /// Every drive Idle, no fault on any node or reported to the host, and
     /// the session ended stopped (or completed: the plan ended first).
     clean: bool,
 }
 
 /// The bounds a stop keeps to (docs/protocol.md, "Stop ramp"): jerk within
-/// max(J, j + J/2), acceleration within max(A, a + 1.875·v/T_s), for the
-/// plan's exact maxima v, a, j at σ = 1.
+/// the drives' own stop budget, min(C, max(J, j·cap³ + J/2)) for their
+/// jerk limit J, ceiling C and override cap, acceleration within
+/// max(A, a + 1.875·v/T_s), for the plan's exact maxima v, a, j.
 #[derive(Clone, Copy, Debug)]
 struct Bounds {
     jerk: f64,
     accel: f64,
 }
 
-fn bounds(plan: &Plan, stop_time_s: f64) -> Bounds {
+fn bounds(plan: &Plan, configs: &DriveConfigs) -> Bounds {
     let [v, a, j] = kinematics(&plan.segments).largest();
     let l = &plan.limits;
+    let c = &configs.nodes[0];
+    let (jl, cap) = (c.max_jerk as f64, configs.override_cap);
+    let stop_time_s = configs.stop_time_s;
     Bounds {
-        jerk: l.jerk.max(j + 0.5 * l.jerk),
+        jerk: (c.ceiling_jerk as f64).min(jl.max(j * cap.powi(3) + 0.5 * jl)),
         accel: l.acceleration.max(a + SMOOTHSTEP_MAX_D1 * v / stop_time_s),
     }
 }
@@ -76,7 +82,11 @@ fn stop_at(plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
     let limit_ns = ((plan.total_time_s + 30.0) * 1e9) as u64;
     let mut sent_ns: Option<u64> = None;
     let mut accel = 0.0f32;
+    let mut own_ramp_ns = 0i64;
     let outcome = loop {
+        for n in &sim.nodes {
+            own_ramp_ns = own_ramp_ns.max(n.node.drive.queue_ramps_ns().0);
+        }
         let start_ns = session.start_us() * 1000;
         if start_ns > 0 && sent_ns.is_none() && sim.now_ns() as f64 >= start_ns as f64 + at_s * 1e9
         {
@@ -151,6 +161,7 @@ fn stop_at(plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
             .map(|n| n.max_stop_jerk as f64)
             .fold(0.0, f64::max),
         accel: accel as f64,
+        own_ramp_ns,
         clean,
     }
 }
@@ -190,8 +201,22 @@ impl Path {
 /// Stops `plan` at `n` seeded instants in [0, T); asserts each and
 /// prints the worst figures.
 fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
-    let configs = DriveConfigs::for_plan(plan, &DriveSettings::default()).unwrap();
-    let b = bounds(plan, configs.stop_time_s);
+    stops_end_on_the_path_with(name, plan, n, seed, &DriveSettings::default());
+}
+
+/// [`stops_end_on_the_path`] on drives with `settings`.
+fn stops_end_on_the_path_with(
+    name: &str,
+    plan: &Plan,
+    n: usize,
+    seed: u64,
+    settings: &DriveSettings,
+) {
+    let configs = DriveConfigs::for_plan(plan, settings).unwrap();
+    let b = bounds(plan, &configs);
+    // The drives' own ramp for what they hold never exceeds the host's
+    // (as the drive rounds it: whole µs).
+    let host_ns = (configs.nodes[0].stop_time * 1e6) as i64 * 1000;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let runs: Vec<StopRun> = (0..n)
         .map(|_| stop_at(plan, &configs, rng.random_range(0.0..plan.total_time_s)))
@@ -206,6 +231,8 @@ fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
                 || r.jerk > b.jerk * 1.001
                 || r.accel > b.accel * 1.001
                 || r.stop_s > configs.stop_time_s + 0.01
+                || r.own_ramp_ns > host_ns
+                || r.own_ramp_ns == 0
         })
         .collect();
     let worst = |f: fn(&StopRun) -> f64| runs.iter().map(f).fold(0.0, f64::max);
@@ -216,7 +243,7 @@ fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
     eprintln!(
         "{name}: {n} stops, T_s {:.3} s: worst off path {:.2} µm (Stop at {worst_at:.3} s; at rest {:.2} µm), \
          worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
-         rest speed {:.1e} m/s; {} unsafe",
+         rest speed {:.1e} m/s, drives' own ramp up to {:.3} s; {} unsafe",
         configs.stop_time_s,
         worst(|r| r.off_path_m) * 1e6,
         worst(|r| r.rest_off_path_m) * 1e6,
@@ -226,6 +253,7 @@ fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
         worst(|r| r.accel),
         b.accel,
         worst(|r| r.rest_speed),
+        worst(|r| r.own_ramp_ns as f64 * 1e-9),
         unsafe_endings.len()
     );
     assert!(unsafe_endings.is_empty(), "{name}: {unsafe_endings:#?}");
@@ -235,6 +263,17 @@ fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
 fn a_stop_at_100_instants_of_the_15_segment_move_ends_on_the_path() {
     let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
     stops_end_on_the_path("15 segments in 0.9 s", &plan, 100, 35);
+}
+
+/// The same move on drives whose jerk ceiling is below the plan's own
+/// stop budget (j + J/4 < j + J/2): every stop stays within the ceiling.
+#[test]
+fn a_stop_at_50_instants_stays_within_the_drives_jerk_ceiling() {
+    let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
+    let [_, _, j] = kinematics(&plan.segments).largest();
+    let mut s = DriveSettings::default();
+    s.ceilings.jerk = j + 0.25 * plan.limits.jerk;
+    stops_end_on_the_path_with("15 segments, ceiling j + J/4", &plan, 50, 38, &s);
 }
 
 #[test]

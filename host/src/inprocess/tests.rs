@@ -403,8 +403,9 @@ fn the_projects_plans_pass_the_ceilings_they_were_made_within() {
             for cfg in &configs.nodes {
                 cfg.validate().unwrap();
                 for (k, w) in plan.wire_segments().unwrap().iter().enumerate() {
-                    let got = Maxima::of(&Seg::from_wire(w, 0)).check(cfg);
-                    assert_eq!(got, Ok(()), "{name} segment {k} {ceilings:?}");
+                    let m = Maxima::of(&Seg::from_wire(w, 0));
+                    let got = m.check(cfg).and_then(|()| m.ramps_us(cfg));
+                    assert!(got.is_ok(), "{name} segment {k} {ceilings:?}: {got:?}");
                 }
             }
         }

@@ -22,6 +22,7 @@ pub mod describe;
 pub mod generate;
 pub mod messages;
 pub mod segment;
+pub mod segment_maxima;
 pub mod segment_rx;
 pub mod stop_ramp;
 pub mod streaming;

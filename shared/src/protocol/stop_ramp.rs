@@ -70,7 +70,14 @@ fn s2_max(u0: f64, u1: f64) -> f64 {
 pub fn stop_time(v: f64, a: f64, j: f64, jerk_limit: f64, cap: f64) -> f64 {
     let cap = if cap.is_finite() { cap.max(1.0) } else { 1.0 };
     let jc = j * cap * cap * cap;
-    let budget = jerk_limit.max(jc + 0.5 * jerk_limit).max(1e-9);
+    stop_time_for_budget(v, a, j, jerk_limit.max(jc + 0.5 * jerk_limit), cap)
+}
+
+/// [`stop_time`] for the budget `budget` (m/s³) rather than the one a jerk
+/// limit gives.
+pub fn stop_time_for_budget(v: f64, a: f64, j: f64, budget: f64, cap: f64) -> f64 {
+    let cap = if cap.is_finite() { cap.max(1.0) } else { 1.0 };
+    let budget = budget.max(1e-9);
     let mut t = MIN_RAMP_S;
     for i in 0..DS_CELLS {
         let d0 = cap * i as f64 / DS_CELLS as f64;
@@ -93,6 +100,160 @@ pub fn stop_time(v: f64, a: f64, j: f64, jerk_limit: f64, cap: f64) -> f64 {
         }
     }
     t
+}
+
+/// Cells of the coarse grid the drives size their own ramps on (over Δσ
+/// and over u): a coarser grid is still a bound (each cell's terms are
+/// bounded by their monotonicity on it), only a less tight one.
+const COARSE_DS_CELLS: usize = 8;
+const COARSE_U_CELLS: usize = 24;
+/// f32 rounding of the cell arithmetic, added to the ramp.
+const F32_SLACK: f32 = 1.0e-4;
+/// The longest ramp a drive runs (s): a segment that needs more is refused.
+pub const MAX_RAMP_S: f32 = 4.0;
+
+/// Per u-cell of the coarse grid: S at its start, the largest S′ and |S″|
+/// on it (rounded up), computed once at compile time.
+const U_TABLE: [[f32; 3]; COARSE_U_CELLS] = u_table();
+
+const fn u_table() -> [[f32; 3]; COARSE_U_CELLS] {
+    const R: f32 = 0.288_675_13;
+    let mut t = [[0.0f32; 3]; COARSE_U_CELLS];
+    let mut k = 0;
+    while k < COARSE_U_CELLS {
+        let u0 = k as f32 / COARSE_U_CELLS as f32;
+        let u1 = (k + 1) as f32 / COARSE_U_CELLS as f32;
+        let mid = if 0.5 < u0 {
+            u0
+        } else if 0.5 > u1 {
+            u1
+        } else {
+            0.5
+        };
+        let mut m2 = s2_f32(u0).max(s2_f32(u1));
+        if u0 <= 0.5 - R && 0.5 - R <= u1 {
+            m2 = m2.max(s2_f32(0.5 - R));
+        }
+        if u0 <= 0.5 + R && 0.5 + R <= u1 {
+            m2 = m2.max(s2_f32(0.5 + R));
+        }
+        t[k] = [
+            s_f32(u0),
+            s1_f32(mid) * (1.0 + F32_SLACK),
+            m2 * (1.0 + F32_SLACK),
+        ];
+        k += 1;
+    }
+    t
+}
+
+/// √x (x ≥ 0) as x/√x by Newton's method for 1/√x from a bit-level
+/// guess, in plain f32 multiplications: the same bits on the drives and
+/// the host, and a few instructions where the drives' libm has no hardware
+/// square root (within f32 rounding; the ramp's slack covers it).
+fn sqrt_f32(x: f32) -> f32 {
+    if x <= 0.0 || !x.is_finite() {
+        return if x.is_nan() { x } else { x.max(0.0) };
+    }
+    let mut y = f32::from_bits(0x5f37_59df - (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y *= 1.5 - 0.5 * x * y * y;
+    }
+    x * y
+}
+
+const fn s_f32(u: f32) -> f32 {
+    u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+}
+
+const fn s1_f32(u: f32) -> f32 {
+    30.0 * u * u * (1.0 - u) * (1.0 - u)
+}
+
+const fn s2_f32(u: f32) -> f32 {
+    (60.0 * u * (1.0 - u) * (1.0 - 2.0 * u)).abs()
+}
+
+/// The stop budgets (controlled, quick) of a segment whose largest joint
+/// |q‴| is `j`, run at σ up to `cap`, on a drive with jerk limit
+/// `jerk_limit` and jerk ceiling `ceiling` (m/s³): the controlled one
+/// max(J, j·cap³ + J/2) and the quick one j·cap³ + 3J, J the limit held
+/// to the ceiling, each at most the ceiling.
+pub fn budgets(j: f32, jerk_limit: f32, ceiling: f32, cap: f32) -> [f32; 2] {
+    let jl = jerk_limit.min(ceiling);
+    let jc = j * cap * cap * cap;
+    [
+        ceiling.min(jl.max(jc + 0.5 * jl)),
+        ceiling.min(jc + 3.0 * jl),
+    ]
+}
+
+/// The ramps (s) with which every transition from a constant σ ≤ `cap`
+/// keeps the joint jerk of a segment with maxima `v`, `a`, `j` within each
+/// of `budgets`: [`stop_time`]'s rule on an 8 × 24 grid in f32, the one
+/// function both the drives (for each segment they accept) and the host
+/// (over the plan) run. `None` when no ramp up to [`MAX_RAMP_S`] does (the
+/// segment's own jerk at the cap leaves no room) or an input is not a
+/// finite number ≥ 0.
+pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
+    let ok = |x: f32| x.is_finite() && x >= 0.0;
+    if !(ok(v) && ok(a) && ok(j) && budgets.iter().all(|b| ok(*b)) && ok(cap) && cap >= 1.0) {
+        return None;
+    }
+    let ds_n = COARSE_DS_CELLS as f32;
+    let slack = RHO_SLACK as f32;
+    let t0 = MIN_RAMP_S as f32;
+    // Per budget: the ramp so far, 1/T and 1/T².
+    let mut t = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
+    // The full stops first: they need the longest ramps, so later cells
+    // seldom raise it (a raise costs a division and a square root).
+    for i in (0..COARSE_DS_CELLS).rev() {
+        let d0 = cap * i as f32 / ds_n;
+        let d1 = cap * (i + 1) as f32 / ds_n;
+        // |σ̇|·T ≤ S′·m1, |σ̈|·T² ≤ |S″|·m2 (m1 grows with Δσ, m2 falls).
+        let m1 = slack * sqrt_f32(d1).min(1.0);
+        let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
+        let (am1, vm2) = (3.0 * a * m1, v * m2);
+        for [s, s1, s2] in U_TABLE {
+            // σ is largest at the cell's smallest Δσ and S.
+            let sigma = cap - d0 * s;
+            let fixed = j * sigma * sigma * sigma;
+            let b = am1 * sigma * s1;
+            let c = vm2 * s2;
+            for (budget, tk) in budgets.iter().zip(t.iter_mut()) {
+                let room = budget - fixed;
+                if room <= 0.0 {
+                    return None;
+                }
+                // Within the budget at the ramp so far: no longer needed.
+                if b * tk[1] + c * tk[2] <= room {
+                    continue;
+                }
+                let cell = (b + sqrt_f32(b * b + 4.0 * room * c)) / (2.0 * room);
+                if cell > tk[0] {
+                    let inv = 1.0 / cell;
+                    *tk = [cell, inv, inv * inv];
+                }
+            }
+        }
+    }
+    let out = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    out.iter().all(|x| *x <= MAX_RAMP_S).then_some(out)
+}
+
+/// The controlled and quick stop ramps (s) of a segment with maxima `v`,
+/// `a`, `j` on a drive with jerk limit `jerk_limit`, ceiling `ceiling` and
+/// override cap `cap` ([`budgets`], [`segment_ramp`]).
+pub fn segment_ramps(
+    v: f32,
+    a: f32,
+    j: f32,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+) -> Option<(f32, f32)> {
+    let [s, q] = segment_ramp(v, a, j, budgets(j, jerk_limit, ceiling, cap), cap)?;
+    Some((s, q))
 }
 
 /// The stop ramp by the bound that takes every peak at once: the joint
@@ -156,6 +317,67 @@ mod tests {
             // Never longer than taking every peak at once.
             assert!(t <= stop_time_separate_peaks(v, a, j, lim, cap) * (1.0 + 1e-12));
         }
+    }
+
+    /// The drives' coarse f32 ramp keeps every transition within its
+    /// budget, and the budget never exceeds the ceiling.
+    #[test]
+    fn segment_ramp_is_a_bound_and_held_to_the_ceiling() {
+        // (v, a, j, jerk limit, ceiling, cap)
+        for (v, a, j, lim, ceil, cap) in [
+            (0.5, 1.2, 5.0, 5.0, 1e6, 1.0),
+            (0.5, 1.2, 5.0, 5.0, 6.0, 1.0),
+            (0.2, 0.8, 1.5, 5.0, 7.5, 1.585),
+            (0.3, 0.77, 2.5, 5.0, 7.5, 1.177),
+            (0.1, 0.5, 0.3, 5.0, 10.0, 2.955),
+            (0.5, 1.2, 0.0, 15.0, 20.0, 1.0),
+        ] {
+            let bs = budgets(j as f32, lim as f32, ceil as f32, cap as f32);
+            let [ts, tq] = segment_ramp(v as f32, a as f32, j as f32, bs, cap as f32)
+                .unwrap_or_else(|| {
+                    panic!(
+                        "{v} {a} {j} {ceil} {cap}: {}",
+                        stop_time_for_budget(v, a, j, bs[0] as f64, cap)
+                    )
+                });
+            for (t, b) in [(ts, bs[0]), (tq, bs[1])] {
+                let (t, b) = (t as f64, b as f64);
+                assert!(b <= ceil, "budget {b} above the ceiling {ceil}");
+                let w = worst_jerk(v, a, j, cap, t);
+                assert!(w <= b * (1.0 + 1e-6), "{v} {a} {j} {cap}: {w} > {b}");
+                // Never shorter than the fine f64 bound for the same budget.
+                let fine = stop_time_for_budget(v, a, j, b, cap);
+                assert!(t >= fine, "{t} < {fine}");
+                assert!(t <= 1.35 * fine.max(MIN_RAMP_S), "{t} ≫ {fine}");
+            }
+        }
+    }
+
+    #[test]
+    fn no_room_under_the_ceiling_is_no_ramp() {
+        // The segment's own jerk at the cap is the ceiling: nothing left.
+        assert_eq!(segment_ramps(0.5, 1.2, 5.0, 5.0, 5.0, 1.0), None);
+        // At 80 % of it, a ramp.
+        assert!(segment_ramps(0.5, 1.2, 4.0, 5.0, 5.0, 1.0).is_some());
+        // Longer than the longest ramp: none.
+        assert_eq!(segment_ramps(50.0, 1.2, 4.0, 5.0, 5.0, 1.0), None);
+        for bad in [f32::NAN, f32::INFINITY, -1.0] {
+            assert_eq!(segment_ramps(bad, 1.2, 4.0, 5.0, 5.0, 1.0), None);
+            assert_eq!(segment_ramps(0.5, 1.2, 4.0, 5.0, 5.0, bad), None);
+        }
+    }
+
+    #[test]
+    fn sqrt_f32_is_the_square_root() {
+        let mut x = 1e-12f32;
+        while x < 1e12 {
+            let got = sqrt_f32(x) as f64;
+            let want = (x as f64).sqrt();
+            assert!((got - want).abs() <= 1e-6 * want, "{x}: {got} vs {want}");
+            x *= 1.37;
+        }
+        assert_eq!(sqrt_f32(0.0), 0.0);
+        assert!(sqrt_f32(f32::INFINITY) == f32::INFINITY);
     }
 
     #[test]

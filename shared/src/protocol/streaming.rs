@@ -95,9 +95,10 @@ impl StreamRule {
             return None;
         }
         let s = override_scaling(plan, Maxima { v, a, j });
+        let ts = super::segment_maxima::for_plan(plan, settings, &s).stop_time_s;
         Some(Self::new(
             capacity,
-            s.stop_time_s,
+            ts,
             settings.underrun_margin,
             settings.heartbeat_period,
         ))
