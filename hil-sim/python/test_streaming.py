@@ -1,6 +1,6 @@
 """Issue 35's streaming fixtures through `triquint upload` against
 `triquint-sim` on vcan0, classic CAN and CAN-FD: 15 segments in 0.9 s, a
-2 ms segment every tenth, 2 000 segments of 25 ms. Each runs to
+2 ms segment every tenth, 2 000 segments of 27 ms. Each runs to
 completion with no fault, every segment executed, and its bus load is
 reported (OUT/streaming-*.json, the table of scripts/hil_figures.py). The
 plan files come from `cargo run --example streaming_fixtures` (hil.sh)."""
