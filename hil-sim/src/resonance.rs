@@ -115,6 +115,15 @@ fn quantised(a: [f64; 3]) -> Vector3<f64> {
     Vector3::from(a).map(|a| (a / ACCEL_COUNT_M_S2).round() * ACCEL_COUNT_M_S2)
 }
 
+/// The accelerometer's record from `from_s` on, as read along `u`.
+fn along(flex: &FlexPlant, u: &Vector3<f64>, from_s: f64) -> Vec<(f64, f64)> {
+    flex.accel
+        .iter()
+        .filter(|s| s.t_s >= from_s)
+        .map(|s| (s.t_s, u.dot(&quantised(s.accel))))
+        .collect()
+}
+
 /// The acceleration amplitude (m/s²) at `hz`: the sweep's, cut to the
 /// velocity, acceleration and jerk ceilings.
 fn amplitude(sweep: &Sweep, limits: &Limits, hz: f64) -> f64 {
@@ -434,12 +443,7 @@ pub fn measure(
                 .plant
                 .flexible()
                 .ok_or_else(|| bad("no accelerometer".into()))?;
-            let accel: Vec<(f64, f64)> = flex
-                .accel
-                .iter()
-                .filter(|s| s.t_s >= HOLD_S)
-                .map(|s| (s.t_s, u.dot(&quantised(s.accel))))
-                .collect();
+            let accel = along(flex, &u, HOLD_S);
             let n = ((sweep.to_hz - sweep.from_hz) / GRID_HZ) as usize + 1;
             let h: Vec<Complex<f64>> = (0..n)
                 .map(|k| {
@@ -471,11 +475,7 @@ pub fn measure(
                         .plant
                         .flexible()
                         .ok_or_else(|| bad("no accelerometer".into()))?;
-                    let read: Vec<(f64, f64)> = flex
-                        .accel
-                        .iter()
-                        .map(|s| (s.t_s, u.dot(&quantised(s.accel))))
-                        .collect();
+                    let read = along(flex, &u, 0.0);
                     // From 50 ms after the burst, while 2 counts above the quantisation.
                     decay(&read, run.end_s + 0.05, m.hz, 2.0 * ACCEL_COUNT_M_S2)
                 }
