@@ -104,9 +104,8 @@ def test_frame_loss_is_recovered_by_retransmission(make_sim, bus):
 
 
 def test_corrupted_segment_parts_fail_the_crc_and_are_retransmitted(make_sim, bus):
-    # One flipped bit in 2 % of segment parts: the CRC-32 rejects them.
-    # (Case I's 9 segments are 48 classic frames since the first goes from
-    # rest: at 1 % seed 12 corrupts none of their ~150 deliveries.)
+    # One flipped bit in 2 % of segment parts, full and compact: the CRC-32
+    # rejects them (Case I's 9 segments are 48 classic frames).
     r = completed_unchanged(make_sim, bus, "corrupt", ["--seed", "12", "--corrupt", "0.02"])
     if r is None:
         return

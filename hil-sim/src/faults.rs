@@ -20,7 +20,7 @@
 //! (the proxy) the drives' counters stay zero: the kernel's vcan has no
 //! error signalling, so the proxy's faults are not bus errors to them.
 //!
-//! Bit corruption is applied to segment parts only: every other message is
+//! Bit corruption is applied to segment parts only (full and compact): every other message is
 //! a single frame guarded by CAN's own CRC-15, whereas a segment is
 //! reassembled from parts and guarded by the protocol's CRC-32, which is
 //! what this fault exercises (a flip the CAN CRC missed, or one made in a
@@ -31,6 +31,7 @@ use std::collections::VecDeque;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_shared::protocol::Frame;
+use triquint_shared::protocol::compact::{SEGMENT_COMPACT, SEGMENT_COMPACT_FD};
 use triquint_shared::protocol::segment::{SEGMENT_PART, SEGMENT_PART_FD};
 
 use crate::bus::{Bus, Delivery};
@@ -156,7 +157,14 @@ pub struct FaultInjector {
 }
 
 fn is_segment_part(id: u16) -> bool {
-    id == SEGMENT_PART.addr.id(0) || id == SEGMENT_PART_FD.addr.id(0)
+    [
+        SEGMENT_PART,
+        SEGMENT_PART_FD,
+        SEGMENT_COMPACT,
+        SEGMENT_COMPACT_FD,
+    ]
+    .iter()
+    .any(|m| m.addr.id(0) == id)
 }
 
 impl FaultInjector {
