@@ -362,6 +362,15 @@ pub fn measure(
     let model = machine.robot.model::<f64>();
     let pose = Pose::from_cartesian(&model, r)?;
     let q0 = pose.q;
+    // Each run starts from a fresh flexible plant at rest at the pose.
+    let fresh_plant = || -> Result<PlantModel, FlexError> {
+        Ok(PlantModel::Flexible(FlexPlant::new(
+            &machine.robot,
+            PlantConfig::default(),
+            params.clone(),
+            q0,
+        )?))
+    };
     let c = machine.effective_ceilings();
     let limits = Limits {
         velocity: c.velocity,
@@ -408,12 +417,7 @@ pub fn measure(
                 peak_j = peak_j.max(m.qddd[axis].abs());
                 peak_t = peak_t.max(dynamics::torque(&model, &m.q, &m.qd, &m.qdd)?.amax());
             }
-            let plant = PlantModel::Flexible(FlexPlant::new(
-                &machine.robot,
-                PlantConfig::default(),
-                params.clone(),
-                q0,
-            )?);
+            let plant = fresh_plant()?;
             let run = test_reference::run(
                 plant,
                 &configs,
@@ -462,12 +466,7 @@ pub fn measure(
                         ..sweep.clone()
                     };
                     let accel = scale * amplitude(&louder, &limits, m.hz);
-                    let plant = PlantModel::Flexible(FlexPlant::new(
-                        &machine.robot,
-                        PlantConfig::default(),
-                        params.clone(),
-                        q0,
-                    )?);
+                    let plant = fresh_plant()?;
                     let reference = |t: f64| burst(q0, axis, m.hz, accel, t);
                     let run =
                         test_reference::run(plant, &configs, &reference, BURST_S, HOLD_S, RING_S)?;
