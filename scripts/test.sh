@@ -34,7 +34,7 @@ cargo test --workspace --locked
 step "fault soak (release)"
 # 400 schedules here (about 2 min; `scripts/soak.sh` alone runs 1 000).
 SOAK_SCHEDULES=${SOAK_SCHEDULES:-400} ./scripts/soak.sh
-FUZZ_SECONDS=${FUZZ_SECONDS:-30} ./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
+FUZZ_SECONDS=${FUZZ_SECONDS:-20} ./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
 
 step "Python package: abi3 wheel in a fresh venv (pip install ./host/python), pytest"
 # The README's install command; the wheel reuses target/ (absolute: pip runs

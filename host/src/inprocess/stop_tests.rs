@@ -218,9 +218,28 @@ fn stops_end_on_the_path_with(
     // (as the drive rounds it: whole µs).
     let host_ns = (configs.nodes[0].stop_time * 1e6) as i64 * 1000;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let runs: Vec<StopRun> = (0..n)
-        .map(|_| stop_at(plan, &configs, rng.random_range(0.0..plan.total_time_s)))
+    let instants: Vec<f64> = (0..n)
+        .map(|_| rng.random_range(0.0..plan.total_time_s))
         .collect();
+    // Each run is independent: two threads, as CI has two cores and this
+    // test is the longest of its binary.
+    let runs: Vec<StopRun> = std::thread::scope(|s| {
+        let halves: Vec<_> = instants
+            .chunks(n.div_ceil(2).max(1))
+            .map(|part| {
+                let configs = &configs;
+                s.spawn(move || {
+                    part.iter()
+                        .map(|&at| stop_at(plan, configs, at))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        halves
+            .into_iter()
+            .flat_map(|h| h.join().expect("a stop run panicked"))
+            .collect()
+    });
     let unsafe_endings: Vec<&StopRun> = runs
         .iter()
         .filter(|r| {
