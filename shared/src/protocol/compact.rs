@@ -319,7 +319,9 @@ fn scale_round(x: i128, h: i128, d: i128) -> Option<i128> {
 }
 
 /// A mantissa with exponent `e` in fine units (2⁻⁴⁸ m); `None` outside
-/// the declared ranges. Integers only: the same on every receiver.
+/// the declared ranges. Integers only: the same on every receiver. Not
+/// inlined: six call sites in a drive's tight flash.
+#[inline(never)]
 fn coefficient(m: i32, e: u8) -> Option<i64> {
     let m = m as i64;
     (e <= EXP_MAX && m.abs() <= MANTISSA_MAX).then(|| m << e)
