@@ -105,7 +105,8 @@ def test_frame_loss_is_recovered_by_retransmission(make_sim, bus):
 
 def test_corrupted_segment_parts_fail_the_crc_and_are_retransmitted(make_sim, bus):
     # One flipped bit in 2 % of segment parts, full and compact: the CRC-32
-    # rejects them (Case I's 9 segments are 48 classic frames).
+    # rejects them (Case I's 9 segments are 39 classic frames; seed 12
+    # corrupts 3 of them on the first pass: proxy.rs, the_vm_crc_scenario).
     r = completed_unchanged(make_sim, bus, "corrupt", ["--seed", "12", "--corrupt", "0.02"])
     if r is None:
         return

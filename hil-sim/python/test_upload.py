@@ -55,9 +55,9 @@ def test_upload_paper_plan(make_sim, bus, case, fd):
     assert [x["state"] for x in summary["nodes"]] == ["Idle"] * 3
     assert all(x["fault"] == 0 for x in summary["nodes"])
     assert summary["segments"] == n
-    # The first segment goes from rest (8 classic frames, 1 CAN-FD) or in
-    # full (20, 2); a continuation in 5 classic frames or 1 CAN-FD frame.
-    assert summary["segment_frames"] >= (1 + (n - 1) if fd else 8 + 5 * (n - 1))
+    # The first segment goes from rest (7 classic frames, 1 CAN-FD) or in
+    # full (20, 2); a continuation in 4 classic frames or 1 CAN-FD frame.
+    assert summary["segment_frames"] >= (1 + (n - 1) if fd else 7 + 4 * (n - 1))
     report = sim.stop()
     # Under emulation most ticks start late and are caught up (counted as
     # missed deadlines); none may be skipped, or the machine is inconsistent.

@@ -399,4 +399,46 @@ mod tests {
             "{corrupted} corrupted, {through} through"
         );
     }
+
+    /// The VM suite's CRC test (test_faults.py: Case I through the proxy,
+    /// `--seed 12 --corrupt 0.02`) must see a corrupted part: Case I's
+    /// first pass, as the host sends it (first segment from rest, then
+    /// continuations), already has one, and the tap refuses it.
+    #[test]
+    fn the_vm_crc_scenario_corrupts_a_part_of_case_one() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../testdata/hil/paper-case1.json"
+        );
+        let plan: triquint_shared::plan::Plan =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let wire = plan.wire_segments().unwrap();
+        let spec = vec![FaultWindow::new(Fault::Corrupt { rate: 0.02 }, 0, u64::MAX)];
+        let mut br = Bridge::new(spec, 12);
+        let mut chain = triquint_shared::protocol::compact::Chain::default();
+        let (mut t, mut frames, mut complete) = (0, 0, 0);
+        let mut out = SegmentRx::default();
+        for (i, s) in wire.iter().enumerate() {
+            for f in chain.next(s, wire.get(i + 1)).frames(false) {
+                frames += 1;
+                t += 100_000;
+                br.received(A, f, t, t);
+                while let Some(g) = br.ready(B, t) {
+                    let Ok((msg, _)) = decode(&g) else {
+                        continue;
+                    };
+                    complete += matches!(
+                        out.push(msg.kind(), g.payload()),
+                        Some(SegmentEvent::Complete { .. })
+                    ) as usize;
+                }
+            }
+        }
+        let corrupted = br.report.faults.corrupted;
+        eprintln!("Case I: {frames} classic frames, {corrupted} corrupted");
+        assert!(
+            corrupted > 0 && complete < wire.len(),
+            "{corrupted} {complete}"
+        );
+    }
 }

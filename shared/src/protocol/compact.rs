@@ -3,32 +3,33 @@
 //! A plan is C3: a segment starts with the position, velocity, acceleration
 //! and jerk its predecessor ends with. A continuation carries only what the
 //! predecessor does not fix: the duration and the coefficients of τ⁴ and τ⁵
-//! of every axis (f32). The receiver rebuilds the full segment from the
-//! predecessor it holds, in the predecessor's exact integer form
-//! ([`Compact::reconstruct`], the same arithmetic on host and drive, so the
-//! host knows every bit the drive will hold):
+//! of every axis, as six 24-bit mantissas m_jk sharing one exponent e:
+//! b_jk = m_jk · 2^e fine units of 2⁻⁴⁸ m. The receiver rebuilds the full
+//! segment from the predecessor it holds, in the predecessor's exact
+//! integer form ([`Compact::reconstruct`], the same arithmetic on host and
+//! drive, so the host knows every bit the drive will hold):
 //!
 //! b_m = round(S_m · (h/h')^m), m = 0..3, with S_m = Σ_k C(k, m) b'_k,
 //!
 //! the Taylor coefficient of order m at the predecessor's end (b' its
-//! normalised coefficients, h' its duration); b_4, b_5 are the f32 values
-//! in units of [`COEFF_SCALE`]. A deviation the chain carries on (a jerk
-//! error persists and is integrated) is corrected by the next
-//! continuation: the host picks b_4, b_5 so that the rebuilt segment ends
-//! where the plan's next one starts ([`Compact::continuing`]). It sends a
-//! segment compact only if what the drive rebuilds stays within
+//! normalised coefficients, h' its duration). A deviation the chain
+//! carries on (a jerk error persists and is integrated) is corrected by
+//! the next continuation: the host picks the mantissas so that the rebuilt
+//! segment ends where the plan's next one starts ([`Compact::continuing`]).
+//! It sends a segment compact only if what the drive rebuilds stays within
 //! [`DeviationBound::DEFAULT`] of the plan's segment; otherwise, and
 //! whenever the previous segment on the bus is not the predecessor (the
 //! first segment, a retransmission), it sends the full segment, which
 //! re-anchors the chain exactly.
 //!
-//! The body is 35 bytes: `seq` u16, `duration_us` u32, `flags` u8 (bit 1
-//! last), b_j4 and b_j5 (f32, m) for j = 1..3, and `crc` u32: the CRC-32 of
-//! the predecessor's body CRC (little-endian) followed by body bytes 0–30.
-//! A receiver holding another predecessor (or none) computes another CRC
-//! and answers [`Reject::NoPredecessor`]; the host then sends the full
-//! segment. Five classic frames of seven body bytes (byte 0 the part
-//! index), or one CAN-FD frame of 48 bytes.
+//! The body is 28 bytes: `seq` u16, `duration_us` u24, `form` u8 (bits
+//! 0–1 the flags, bits 2–7 the exponent e), the mantissas m_j4, m_j5 (i24)
+//! for j = 1..3, and `crc` u32: the CRC-32 of the predecessor's body CRC
+//! (little-endian) followed by body bytes 0–23. A receiver holding another
+//! predecessor (or none) computes another CRC and answers
+//! [`Reject::NoPredecessor`]; the host then sends the full segment. Four
+//! classic frames of seven body bytes (byte 0 the part index), or one
+//! CAN-FD frame of 32 bytes.
 
 use super::Frame;
 use super::crc::Crc32;
@@ -37,11 +38,24 @@ use super::segment::{COEFF_SCALE, FLAG_FIRST, FLAG_LAST, WireSegment};
 use super::wire::{Addr, FieldDef, I48_MAX, MessageDef, WireType};
 
 /// Body length (bytes).
-pub const COMPACT_LEN: usize = 35;
+pub const COMPACT_LEN: usize = 28;
 /// Body bytes per classic part frame.
 pub const CLASSIC_CHUNK: usize = 7;
 /// Payload length of the CAN-FD frame (a valid CAN-FD length ≥ 1 + body).
-pub const FD_LEN: usize = 48;
+pub const FD_LEN: usize = 32;
+/// Offset of the `form` byte (flags and exponent) in the body.
+const FORM: usize = 5;
+/// Offset of the first mantissa in the body.
+const MANTISSAS: usize = 6;
+/// Bits of `form` that are flags; the exponent is above them.
+const FLAG_MASK: u8 = 0b11;
+/// Largest mantissa magnitude (i24, symmetric).
+const MANTISSA_MAX: i64 = (1 << 23) - 1;
+/// Largest exponent: the largest coefficient (2⁵⁵ fine units) has one, and
+/// a mantissa times 2^e stays within 2⁵⁶.
+const EXP_MAX: u8 = 33;
+/// Longest continuation (µs): the u24 duration; a longer segment goes in full.
+pub const COMPACT_MAX_DURATION_US: u32 = (1 << 24) - 1;
 
 /// Bits below a unit ([`COEFF_SCALE`]) of the coefficients a chain
 /// continues from: the start of a continuation is rebuilt from its
@@ -82,22 +96,23 @@ fn unfine(x: i64) -> i64 {
 /// Flag: the segment starts at rest at `pose` (a plan's first segment):
 /// it continues no predecessor, its CRC chains on 0.
 pub const FLAG_AT_REST: u8 = 1;
-/// The longest body (a plan's first segment): 7 + 24 + 18 + 4 bytes.
-pub const COMPACT_MAX: usize = 53;
-/// Payload length of a CAN-FD frame carrying a body longer than 47 bytes.
-pub const FD_LEN_MAX: usize = 64;
+/// The longest body (a plan's first segment): the continuation's 28 bytes
+/// and the start pose (3 × i48).
+pub const COMPACT_MAX: usize = COMPACT_LEN + 18;
+/// Payload length of a CAN-FD frame carrying a body longer than 31 bytes.
+pub const FD_LEN_MAX: usize = 48;
 
 /// Body length of a compact segment with `flags`: the continuation's
-/// 35 bytes, plus the start pose (3 × i48) when it starts at rest.
+/// 28 bytes, plus the start pose (3 × i48) when it starts at rest.
 pub const fn body_len(flags: u8) -> usize {
     if flags & FLAG_AT_REST != 0 {
-        COMPACT_LEN + 18
+        COMPACT_MAX
     } else {
         COMPACT_LEN
     }
 }
 
-/// Part frames of a compact segment with `flags`: 5 or 8 classic, 1 CAN-FD.
+/// Part frames of a compact segment with `flags`: 4 or 7 classic, 1 CAN-FD.
 pub const fn compact_parts(flags: u8, fd: bool) -> usize {
     if fd {
         1
@@ -113,20 +128,20 @@ pub const SEGMENT_COMPACT: MessageDef = MessageDef {
     len: 8,
     sender: "host",
     period: "streamed",
-    doc: " Seven bytes of a compact (continuation) segment body; 5 parts per segment.",
+    doc: " Seven bytes of a compact (continuation) segment body; 4 parts per segment (7 from rest).",
     mux: Some("part"),
     fd: false,
     fields: &PART_FIELD,
 };
 
-/// CAN-FD compact segment (48 bytes).
+/// CAN-FD compact segment (32 bytes; 48 from rest).
 pub const SEGMENT_COMPACT_FD: MessageDef = MessageDef {
     name: "SegmentCompactFd",
     addr: Addr::Broadcast(0x118),
     len: FD_LEN,
     sender: "host",
     period: "streamed",
-    doc: " A whole compact (continuation) segment body in one frame (CAN-FD, BRS).",
+    doc: " A whole compact (continuation) segment body in one frame (CAN-FD, BRS; 48 bytes from rest).",
     mux: Some("part"),
     fd: true,
     fields: &PART_FIELD,
@@ -152,13 +167,13 @@ pub struct BodyField {
     pub doc: &'static str,
 }
 
-const fn coeff(name: &'static str, offset: usize) -> BodyField {
+const fn mantissa(name: &'static str, offset: usize) -> BodyField {
     BodyField {
         name,
         offset,
-        ty: WireType::F32,
-        unit: "m",
-        doc: " Normalised coefficient b_jk = c_jk h^k (k = 4, 5).",
+        ty: WireType::I24,
+        unit: "",
+        doc: " Mantissa m_jk of the normalised coefficient b_jk = c_jk h^k = m_jk 2^(e-48) m (k = 4, 5).",
     }
 }
 
@@ -169,34 +184,34 @@ pub const COMPACT_FIELDS: [BodyField; 10] = [
         offset: 0,
         ty: WireType::U16,
         unit: "",
-        doc: " Segment sequence number (never 0: a plan's first segment is sent in full).",
+        doc: " Segment sequence number (0 only from rest).",
     },
     BodyField {
         name: "duration_us",
         offset: 2,
-        ty: WireType::U32,
+        ty: WireType::U24,
         unit: "us",
-        doc: " Segment duration h.",
+        doc: " Segment duration h (a longer segment than 16.777215 s goes in full).",
     },
     BodyField {
-        name: "flags",
-        offset: 6,
+        name: "form",
+        offset: FORM,
         ty: WireType::U8,
         unit: "",
-        doc: " Bit 1: last segment of the plan (bit 0 is never set).",
+        doc: " Bit 0: starts at rest (the start pose, 3 x i48 in units of 2^-40 m, follows the mantissas); bit 1: last segment of the plan; bits 2-7: exponent e (0-33) of the mantissas.",
     },
-    coeff("c1_4", 7),
-    coeff("c1_5", 11),
-    coeff("c2_4", 15),
-    coeff("c2_5", 19),
-    coeff("c3_4", 23),
-    coeff("c3_5", 27),
+    mantissa("m1_4", MANTISSAS),
+    mantissa("m1_5", MANTISSAS + 3),
+    mantissa("m2_4", MANTISSAS + 6),
+    mantissa("m2_5", MANTISSAS + 9),
+    mantissa("m3_4", MANTISSAS + 12),
+    mantissa("m3_5", MANTISSAS + 15),
     BodyField {
         name: "crc",
-        offset: 31,
+        offset: COMPACT_LEN - 4,
         ty: WireType::U32,
         unit: "",
-        doc: " CRC-32 of the predecessor's body CRC (4 bytes, little-endian), then body bytes 0-30.",
+        doc: " CRC-32 of the predecessor's body CRC (4 bytes, little-endian; 0 from rest), then body bytes 0-23 (0-41 from rest; the CRC at 42).",
     },
 ];
 
@@ -267,9 +282,12 @@ impl DeviationBound {
 pub struct Compact {
     pub seq: u16,
     pub duration_us: u32,
+    /// [`FLAG_AT_REST`], and bit 1 last segment of the plan.
     pub flags: u8,
-    /// b_j4, b_j5 (m).
-    pub b45: [[f32; 2]; 3],
+    /// The exponent e of the mantissas: b_jk = m_jk · 2^e fine units (2⁻⁴⁸ m).
+    pub exp: u8,
+    /// m_j4, m_j5 (i24).
+    pub mantissas: [[i32; 2]; 3],
     /// b_j0 (units of [`COEFF_SCALE`]); sent only with [`FLAG_AT_REST`].
     pub pose: [i64; 3],
     pub crc: u32,
@@ -300,30 +318,32 @@ fn scale_round(x: i128, h: i128, d: i128) -> Option<i128> {
     n.checked_add(half)?.checked_div(d)
 }
 
-/// An f32 coefficient (m) in fine units (2⁻⁴⁸ m), rounded half away from
-/// zero; `None` if not finite or outside the i48 range of units. From the
-/// bits, without floating point: the same on every receiver.
-fn f32_fine(x: f32) -> Option<i64> {
-    let bits = x.to_bits();
-    let exp = ((bits >> 23) & 0xFF) as i32;
-    if exp == 0xFF {
-        return None;
+/// A mantissa with exponent `e` in fine units (2⁻⁴⁸ m); `None` outside
+/// the declared ranges. Integers only: the same on every receiver. Not
+/// inlined: six call sites in a drive's tight flash.
+#[inline(never)]
+fn coefficient(m: i32, e: u8) -> Option<i64> {
+    let m = m as i64;
+    (e <= EXP_MAX && m.abs() <= MANTISSA_MAX).then(|| m << e)
+}
+
+/// v / 2^e rounded half away from zero.
+fn shift_round(v: i64, e: u8) -> i64 {
+    if e == 0 {
+        return v;
     }
-    let mant = (bits & 0x7F_FFFF) as i64 | if exp == 0 { 0 } else { 1 << 23 };
-    // x = mant · 2^(e − 150) (e = 1 for subnormals), in fine units × 2⁴⁸.
-    let shift = exp.max(1) - 150 + 40 + FINE_BITS as i32;
-    let mag = if shift >= 0 {
-        if shift > 31 {
-            return None;
-        }
-        mant << shift
-    } else if shift > -40 {
-        (mant + (1 << (-shift - 1))) >> -shift
+    let half = 1i64 << (e - 1);
+    if v < 0 {
+        -((-v + half) >> e)
     } else {
-        0
-    };
-    let v = if bits >> 31 != 0 { -mag } else { mag };
-    (unfine(v.abs()) <= I48_MAX).then_some(v)
+        (v + half) >> e
+    }
+}
+
+/// The smallest exponent whose mantissas hold `max_abs` (fine units) with
+/// a step to spare either side.
+fn exponent_for(max_abs: f64) -> Option<u8> {
+    (0..=EXP_MAX).find(|&e| libm::round(max_abs / powi(2.0, e as usize)) < MANTISSA_MAX as f64)
 }
 
 /// The chained CRC of a body (all but its last 4 bytes) after predecessor CRC `pred_crc`.
@@ -394,9 +414,9 @@ impl EndFit {
             .sum()
     }
 
-    /// The f32 pair (m) of least cost among those next to the
-    /// least-squares solution.
-    fn best(&self) -> Option<[f32; 2]> {
+    /// The b_4, b_5 (fine units, real) whose end is closest: the plan's
+    /// plus the least-squares correction.
+    fn ideal(&self) -> [f64; 2] {
         // Normal equations of min Σ (w_m (C(4,m) d_4 + C(5,m) d_5 − g_m))².
         let (mut a, mut b, mut c, mut r0, mut r1) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for ((row, w), g) in BINOMIAL.iter().zip(&self.weight).zip(&self.gap) {
@@ -414,57 +434,37 @@ impl EndFit {
         } else {
             [0.0; 2]
         };
-        // Whole fine units either side where an f32 step is finer than
-        // one, f32 steps either side where it is coarser.
-        let unit = COEFF_SCALE / (1u32 << FINE_BITS) as f64;
+        [self.plan45[0] as f64 + d[0], self.plan45[1] as f64 + d[1]]
+    }
+
+    /// The mantissa pair (exponent `e`) of least cost among those next to `ideal`.
+    fn best(&self, ideal: [f64; 2], e: u8) -> [i32; 2] {
+        let step = powi(2.0, e as usize);
         let near = |k: usize| {
-            let u = libm::round(self.plan45[k] as f64 + d[k]);
-            let x = (u * unit) as f32;
-            [
-                ((u - 1.0) * unit) as f32,
-                x,
-                ((u + 1.0) * unit) as f32,
-                f32_step(x, -1),
-                f32_step(x, 1),
-            ]
+            let u = libm::round(ideal[k] / step) as i64;
+            [u - 1, u, u + 1].map(|m| m.clamp(-MANTISSA_MAX, MANTISSA_MAX))
         };
         let (c4, c5) = (near(0), near(1));
-        let mut best: Option<(f64, [f32; 2])> = None;
-        for &x4 in &c4 {
-            for &x5 in &c5 {
-                let (Some(u4), Some(u5)) = (f32_fine(x4), f32_fine(x5)) else {
-                    continue;
-                };
-                let cost = self.cost([(u4 - self.plan45[0]) as f64, (u5 - self.plan45[1]) as f64]);
-                if best.is_none_or(|(bc, _)| cost < bc) {
-                    best = Some((cost, [x4, x5]));
+        let mut best = ([0i32; 2], f64::INFINITY);
+        for &m4 in &c4 {
+            for &m5 in &c5 {
+                let d = [
+                    ((m4 << e) - self.plan45[0]) as f64,
+                    ((m5 << e) - self.plan45[1]) as f64,
+                ];
+                let cost = self.cost(d);
+                if cost < best.1 {
+                    best = ([m4 as i32, m5 as i32], cost);
                 }
             }
         }
-        best.map(|b| b.1)
+        best.0
     }
 }
 
 /// x^m for small m (no_std: no `powi`).
 fn powi(x: f64, m: usize) -> f64 {
     (0..m).fold(1.0, |acc, _| acc * x)
-}
-
-/// The f32 `steps` representable values above `x` (below if negative).
-fn f32_step(x: f32, steps: i32) -> f32 {
-    // Map the bits to a monotone integer (−0 and +0 both to 0) and back.
-    let bits = x.to_bits() as i32;
-    let key = if bits < 0 {
-        i32::MIN.wrapping_sub(bits)
-    } else {
-        bits
-    };
-    let key = key.saturating_add(steps);
-    f32::from_bits(if key < 0 {
-        i32::MIN.wrapping_sub(key)
-    } else {
-        key
-    } as u32)
 }
 
 impl Compact {
@@ -508,10 +508,10 @@ impl Compact {
             Self::start(pred?, self.duration_us)?
         };
         let mut fine = [[0i64; 6]; 3];
-        for ((row, s), b45) in fine.iter_mut().zip(&start).zip(&self.b45) {
+        for ((row, s), m) in fine.iter_mut().zip(&start).zip(&self.mantissas) {
             row[..4].copy_from_slice(s);
-            row[4] = f32_fine(b45[0])?;
-            row[5] = f32_fine(b45[1])?;
+            row[4] = coefficient(m[0], self.exp)?;
+            row[5] = coefficient(m[1], self.exp)?;
             if row.iter().any(|x| unfine(x.abs()) > I48_MAX) {
                 return None;
             }
@@ -532,7 +532,7 @@ impl Compact {
     /// segment they will hold once they rebuilt it; `None` if that would
     /// deviate from `next` beyond `bound` (send `next` in full).
     ///
-    /// b_4, b_5 are not the plan's rounded to f32 but the f32 values whose
+    /// b_4, b_5 are not the plan's rounded to the mantissas but those whose
     /// rebuilt segment ends closest to where the plan's successor `after`
     /// starts (to `next`'s own end for the last segment): the host knows
     /// every bit the receivers rebuild, so each continuation corrects the
@@ -569,7 +569,7 @@ impl Compact {
     }
 
     /// The form within `bound`: the fitted b_4, b_5, else the plan's own
-    /// rounded to f32.
+    /// rounded to the mantissas.
     fn choose(
         pred: Option<&Held>,
         start: [[i64; 4]; 3],
@@ -578,43 +578,50 @@ impl Compact {
         after: Option<&WireSegment>,
         bound: &DeviationBound,
     ) -> Option<(Self, Held)> {
-        let after = after.filter(|a| a.seq == next.seq.wrapping_add(1) && a.duration_us > 0);
-        let mut fitted = [[0.0f32; 2]; 3];
-        for (j, pair) in fitted.iter_mut().enumerate() {
-            *pair = EndFit::new(&start[j], next, after, j).best()?;
+        if next.duration_us > COMPACT_MAX_DURATION_US {
+            return None;
         }
+        let after = after.filter(|a| a.seq == next.seq.wrapping_add(1) && a.duration_us > 0);
+        let fits: [EndFit; 3] = core::array::from_fn(|j| EndFit::new(&start[j], next, after, j));
+        let ideal = fits.each_ref().map(EndFit::ideal);
+        let max_abs = |v: &[[f64; 2]; 3]| v.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let fitted = exponent_for(max_abs(&ideal)).map(|e| {
+            let m: [[i32; 2]; 3] = core::array::from_fn(|j| fits[j].best(ideal[j], e));
+            (e, m)
+        });
         // The plan's own, rounded: when a correction would itself break the
         // bound (a short segment has little room for one).
-        let rounded = next.coeffs.map(|r| {
-            [
-                (r[4] as f64 * COEFF_SCALE) as f32,
-                (r[5] as f64 * COEFF_SCALE) as f32,
-            ]
-        });
-        let base = (next.flags & FLAG_LAST) as u8 | if pred.is_none() { FLAG_AT_REST } else { 0 };
+        let plan = next.coeffs.map(|r| [r[4] << FINE_BITS, r[5] << FINE_BITS]);
+        let rounded = exponent_for(max_abs(&plan.map(|p| p.map(|x| x as f64))))
+            .map(|e| (e, plan.map(|p| p.map(|x| shift_round(x, e) as i32))));
+        let flags =
+            (next.flags as u8 & FLAG_LAST as u8) | if pred.is_none() { FLAG_AT_REST } else { 0 };
         let pred_crc = pred.map_or(0, |p| p.segment.body_crc());
-        [fitted, rounded].into_iter().find_map(|b45| {
-            let flags = base;
-            let mut c = Self {
-                seq: next.seq,
-                duration_us: next.duration_us,
-                flags,
-                b45,
-                pose: if flags & FLAG_AT_REST != 0 {
-                    pose
-                } else {
-                    [0; 3]
-                },
-                crc: 0,
-            };
-            let rebuilt = c.rebuild(pred)?;
-            if !DeviationBound::between(&rebuilt.segment, next).within(bound) {
-                return None;
-            }
-            let (body, len) = c.encode_body();
-            c.crc = chained_crc(pred_crc, &body[..len]);
-            Some((c, rebuilt))
-        })
+        [fitted, rounded]
+            .into_iter()
+            .flatten()
+            .find_map(|(exp, mantissas)| {
+                let mut c = Self {
+                    seq: next.seq,
+                    duration_us: next.duration_us,
+                    flags,
+                    exp,
+                    mantissas,
+                    pose: if flags & FLAG_AT_REST != 0 {
+                        pose
+                    } else {
+                        [0; 3]
+                    },
+                    crc: 0,
+                };
+                let rebuilt = c.rebuild(pred)?;
+                if !DeviationBound::between(&rebuilt.segment, next).within(bound) {
+                    return None;
+                }
+                let (body, len) = c.encode_body();
+                c.crc = chained_crc(pred_crc, &body[..len]);
+                Some((c, rebuilt))
+            })
     }
 
     /// Receiver side: the full segment, if `pred` (with body CRC `pred_crc`)
@@ -649,16 +656,16 @@ impl Compact {
     }
 
     /// The body (with the CRC as it stands) and its length: header,
-    /// b_4, b_5, the pose if it starts at rest, CRC.
+    /// mantissas, the pose if it starts at rest, CRC.
     pub fn encode_body(&self) -> ([u8; COMPACT_MAX], usize) {
         let mut b = [0u8; COMPACT_MAX];
         b[0..2].copy_from_slice(&self.seq.to_le_bytes());
-        b[2..6].copy_from_slice(&self.duration_us.to_le_bytes());
-        b[6] = self.flags;
-        let mut o = 7;
-        for x in self.b45.iter().flatten() {
-            b[o..o + 4].copy_from_slice(&x.to_le_bytes());
-            o += 4;
+        b[2..5].copy_from_slice(&self.duration_us.to_le_bytes()[..3]);
+        b[FORM] = (self.flags & FLAG_MASK) | (self.exp << 2);
+        let mut o = MANTISSAS;
+        for m in self.mantissas.iter().flatten() {
+            b[o..o + 3].copy_from_slice(&m.to_le_bytes()[..3]);
+            o += 3;
         }
         if self.flags & FLAG_AT_REST != 0 {
             for p in &self.pose {
@@ -673,13 +680,14 @@ impl Compact {
     /// Decodes a body (its CRC is checked by [`Compact::reconstruct`] or
     /// [`Compact::from_rest`]); its length follows from its flags.
     pub fn decode_body(b: &[u8; COMPACT_MAX]) -> Self {
-        let f = |o: usize| f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]);
-        let flags = b[6];
-        let mut o = 7;
-        let mut b45 = [[0.0f32; 2]; 3];
-        for pair in &mut b45 {
-            *pair = [f(o), f(o + 4)];
-            o += 8;
+        let i24 = |o: usize| i32::from_le_bytes([b[o], b[o + 1], b[o + 2], 0]) << 8 >> 8;
+        let form = b[FORM];
+        let flags = form & FLAG_MASK;
+        let mut o = MANTISSAS;
+        let mut mantissas = [[0i32; 2]; 3];
+        for pair in &mut mantissas {
+            *pair = [i24(o), i24(o + 3)];
+            o += 6;
         }
         let mut pose = [0i64; 3];
         if flags & FLAG_AT_REST != 0 {
@@ -693,9 +701,10 @@ impl Compact {
         }
         Self {
             seq: u16::from_le_bytes([b[0], b[1]]),
-            duration_us: u32::from_le_bytes([b[2], b[3], b[4], b[5]]),
+            duration_us: u32::from_le_bytes([b[2], b[3], b[4], 0]),
             flags,
-            b45,
+            exp: form >> 2,
+            mantissas,
             pose,
             crc: u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]),
         }
@@ -835,9 +844,9 @@ impl CompactAssembler {
         let part = part as usize;
         // The body's length, from its flags (in part 0, or stored).
         let flags = if part == 0 {
-            data.get(7).copied()
+            data.get(1 + FORM).copied()
         } else {
-            Some(self.body[6])
+            Some(self.body[FORM])
         };
         let Some(flags) = flags else {
             return CompactEvent::Ignored(Reject::Invalid);
@@ -1035,36 +1044,52 @@ mod tests {
     }
 
     #[test]
-    fn f32_steps_are_neighbouring_values() {
-        for x in [1.5f32, -1.5, 1e-30, -1e-30, 3.4e38] {
-            let up = f32_step(x, 1);
-            assert!(up > x && f32_step(up, -1) == x, "{x:e}");
+    fn mantissas_cover_the_coefficient_range_exactly() {
+        // The largest coefficient a segment holds (±128 m) has an exponent.
+        let top = (I48_MAX << FINE_BITS) as f64;
+        let e = exponent_for(top).unwrap();
+        assert!(e <= EXP_MAX);
+        assert!(coefficient(MANTISSA_MAX as i32, e).is_some());
+        assert_eq!(coefficient(MANTISSA_MAX as i32 + 1, 0), None);
+        assert_eq!(coefficient(1, EXP_MAX + 1), None);
+        assert_eq!(exponent_for(0.0), Some(0));
+        assert_eq!(exponent_for(f64::NAN), None);
+        assert_eq!(exponent_for(f64::INFINITY), None);
+        for (v, e, want) in [
+            (5i64, 1u8, 3i64),
+            (-5, 1, -3),
+            (4, 2, 1),
+            (-6, 2, -2),
+            (7, 0, 7),
+        ] {
+            assert_eq!(shift_round(v, e), want, "{v} {e}");
         }
-        assert_eq!(f32_step(0.0, 1), f32::from_bits(1));
-        assert_eq!(f32_step(0.0, -1), -f32::from_bits(1));
-        assert_eq!(f32_step(-0.0, 1), f32::from_bits(1));
-    }
-
-    #[test]
-    fn f32_coefficients_convert_to_fine_units_exactly() {
-        let mut x = 1.234_567e-9f32;
-        while x < 200.0 {
-            for v in [x, -x, x * 1.37, f32::from_bits(x.to_bits() + 1)] {
-                let fine = (1u32 << FINE_BITS) as f64;
-                let want = libm::round(v as f64 / COEFF_SCALE * fine);
-                let got = f32_fine(v);
-                if libm::round(want.abs() / fine) <= I48_MAX as f64 {
-                    assert_eq!(got, Some(want as i64), "{v:e}");
-                } else {
-                    assert_eq!(got, None, "{v:e}");
-                }
-            }
-            x *= 1.9;
-        }
-        assert_eq!(f32_fine(0.0), Some(0));
-        assert_eq!(f32_fine(f32::NAN), None);
-        assert_eq!(f32_fine(f32::INFINITY), None);
-        assert_eq!(f32_fine(1e-30), Some(0));
+        // Every field survives the wire: negative and extreme mantissas,
+        // the largest exponent and duration, a pose.
+        let c = Compact {
+            seq: 0,
+            duration_us: COMPACT_MAX_DURATION_US,
+            flags: FLAG_AT_REST | FLAG_LAST as u8,
+            exp: EXP_MAX,
+            mantissas: [
+                [MANTISSA_MAX as i32, -(MANTISSA_MAX as i32)],
+                [-1, 0],
+                [1, -4_000_000],
+            ],
+            pose: [I48_MAX, -I48_MAX, -1],
+            crc: 0xDEAD_BEEF,
+        };
+        let (body, len) = c.encode_body();
+        assert_eq!(len, COMPACT_MAX);
+        assert_eq!(Compact::decode_body(&body), c);
+        let c = Compact {
+            flags: 0,
+            pose: [0; 3],
+            ..c
+        };
+        let (body, len) = c.encode_body();
+        assert_eq!(len, COMPACT_LEN);
+        assert_eq!(Compact::decode_body(&body), c);
     }
 
     #[test]
@@ -1100,7 +1125,7 @@ mod tests {
         );
         // A flipped bit in the body is refused the same way.
         let mut bad = c;
-        bad.b45[2][1] = f32::from_bits(bad.b45[2][1].to_bits() ^ 1);
+        bad.mantissas[2][1] ^= 1;
         assert_eq!(
             bad.reconstruct(&a.into(), a.body_crc()),
             Err(Reject::NoPredecessor)
@@ -1156,7 +1181,7 @@ mod tests {
     }
 
     #[test]
-    fn a_plan_s_first_segment_from_rest_is_sent_in_eight_classic_frames() {
+    fn a_plan_s_first_segment_from_rest_is_sent_in_seven_classic_frames() {
         let (a, b) = rest_to_rest();
         for fd in [false, true] {
             let mut chain = Chain::default();
@@ -1165,7 +1190,7 @@ mod tests {
             let (f0, f1) = (first.frames(fd), last.frames(fd));
             assert_eq!(
                 (f0.len(), f1.len()),
-                if fd { (1, 1) } else { (8, 5) },
+                if fd { (1, 1) } else { (7, 4) },
                 "fd {fd}"
             );
             let mut rx = crate::protocol::SegmentRx::default();
@@ -1213,7 +1238,7 @@ mod tests {
         let (c, _) = Compact::continuing(&a.into(), &b, None, &DeviationBound::DEFAULT).unwrap();
         for fd in [false, true] {
             let frames: heapless::Vec<Frame, 8> = c.frames(fd).collect();
-            assert_eq!(frames.len(), if fd { 1 } else { 5 });
+            assert_eq!(frames.len(), if fd { 1 } else { 4 });
             assert_eq!(frames[0].payload().len(), if fd { FD_LEN } else { 8 });
             let mut r = CompactAssembler::default();
             let mut out = None;

@@ -58,6 +58,14 @@ fn read(ty: WireType, p: &[u8], off: usize) -> (u64, i64, f64) {
             let v = i32::from_le_bytes([b(0), b(1), b(2), b(3)]);
             (v as u64, v as i64, 0.0)
         }
+        WireType::U24 => {
+            let v = u32::from_le_bytes([b(0), b(1), b(2), 0]);
+            (v as u64, v as i64, 0.0)
+        }
+        WireType::I24 => {
+            let v = i32::from_le_bytes([b(0), b(1), b(2), 0]) << 8 >> 8;
+            (v as u64, v as i64, 0.0)
+        }
         WireType::I48 => {
             let v = get_i48(p, off);
             (v as u64, v, 0.0)
@@ -75,7 +83,7 @@ fn field_value(f: &FieldDef, p: &[u8]) -> Value {
     match f.ty {
         WireType::F32 => Value::Float(x * f.scale),
         _ if f.scale != 1.0 => Value::Float(i as f64 * f.scale),
-        WireType::U8 | WireType::U16 | WireType::U32 => Value::Unsigned(u),
+        WireType::U8 | WireType::U16 | WireType::U24 | WireType::U32 => Value::Unsigned(u),
         _ => Value::Signed(i),
     }
 }
@@ -154,6 +162,7 @@ fn put(ty: WireType, v: &Value, scale: f64, buf: &mut [u8], off: usize) {
         WireType::U8 => w(&[int as u8]),
         WireType::U16 | WireType::I16 => w(&(int as u16).to_le_bytes()),
         WireType::U32 | WireType::I32 => w(&(int as u32).to_le_bytes()),
+        WireType::U24 | WireType::I24 => w(&(int as u32).to_le_bytes()[..3]),
         WireType::I48 => put_i48(int, buf, off),
         WireType::F32 => {
             let x = match v {

@@ -9,6 +9,10 @@ pub enum WireType {
     U32,
     I16,
     I32,
+    /// Unsigned 24-bit integer (compact segment duration).
+    U24,
+    /// Signed 24-bit two's complement integer (compact segment mantissas).
+    I24,
     /// Signed 48-bit two's complement integer (segment coefficients).
     I48,
     /// IEEE 754 binary32.
@@ -20,6 +24,7 @@ impl WireType {
         match self {
             WireType::U8 => 1,
             WireType::U16 | WireType::I16 => 2,
+            WireType::U24 | WireType::I24 => 3,
             WireType::U32 | WireType::I32 | WireType::F32 => 4,
             WireType::I48 => 6,
         }
@@ -30,7 +35,7 @@ impl WireType {
     pub const fn signed(self) -> bool {
         matches!(
             self,
-            WireType::I16 | WireType::I32 | WireType::I48 | WireType::F32
+            WireType::I16 | WireType::I24 | WireType::I32 | WireType::I48 | WireType::F32
         )
     }
     pub const fn is_float(self) -> bool {
@@ -44,6 +49,8 @@ impl WireType {
             WireType::U32 => "u32",
             WireType::I16 => "i16",
             WireType::I32 => "i32",
+            WireType::U24 => "u24",
+            WireType::I24 => "i24",
             WireType::I48 => "i48",
             WireType::F32 => "f32",
         }
