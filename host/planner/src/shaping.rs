@@ -81,7 +81,8 @@ pub fn shape(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
 /// streams can shape into one that does not; for a point-to-point move
 /// whose segment count is the planner's choice, `replan` (the planner, for
 /// a job without a shaper) gives the move again in fewer free-knot
-/// segments, and the shortest shaped plan that streams is kept. Otherwise
+/// segments, from 3 up to the first count whose shaped plan does not
+/// stream, and the shortest shaped plan that streams is kept. Otherwise
 /// the verdict is [`PlanError::Unstreamable`] naming the shaper.
 pub(crate) fn job_shaped(
     job: &Job,
@@ -111,10 +112,14 @@ pub(crate) fn job_shaped(
             let Ok(s) = proven(&unshaped, spec) else {
                 continue;
             };
-            if shortfall(&s).is_none()
-                && best
-                    .as_ref()
-                    .is_none_or(|b| s.total_time_s < b.total_time_s)
+            // More segments shape into more, shorter ones: the counts
+            // above the first that does not stream are not tried.
+            if shortfall(&s).is_some() {
+                break;
+            }
+            if best
+                .as_ref()
+                .is_none_or(|b| s.total_time_s < b.total_time_s)
             {
                 best = Some(s);
             }
