@@ -2,6 +2,7 @@
 //! the data a program needs to act on it (which field, which point, which
 //! limit, the shortest feasible time), and a one-line message for people.
 
+use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::readable::readable;
 
 /// A limit of a job (`[limits]` in a job file).
@@ -185,13 +186,17 @@ pub enum PlanError {
     /// `last` (0-based, a queue's worth less one) last `run_s` together,
     /// less than the `need_s` (look-ahead plus refill delay) that drives
     /// queueing `capacity` segments must hold ahead. Fewer, longer
-    /// segments (fewer points, or a longer total time) stream.
+    /// segments (fewer points, or a longer total time) stream. `shaper`:
+    /// the plan is the job's shaped one, which has a knot per impulse for
+    /// each of the unshaped plan's.
     #[error(
-        "unstreamable: segments {}–{} last {} s together, less than the {} s drives queueing {capacity} segments must hold ahead (docs/protocol.md, Streamability); use fewer points or a longer total time",
+        "unstreamable: {}segments {}–{} last {} s together, less than the {} s drives queueing {capacity} segments must hold ahead (docs/protocol.md, Streamability); {}",
+        shaped_by(shaper),
         first + 1,
         last + 1,
         readable(*run_s),
-        readable(*need_s)
+        readable(*need_s),
+        unstreamable_advice(shaper)
     )]
     Unstreamable {
         first: usize,
@@ -199,6 +204,7 @@ pub enum PlanError {
         run_s: f64,
         need_s: f64,
         capacity: usize,
+        shaper: Option<ShaperSpec>,
     },
     /// The platform would leave the straight segments between the
     /// via-points by more than `path.max_deviation_mm` (`limit_m`): the
@@ -256,6 +262,28 @@ impl PlanError {
         PlanError::InvalidJob {
             field: field.to_string(),
             reason: reason.into(),
+        }
+    }
+}
+
+/// "shaped by EI at 25.6 Hz, ζ 0.062: " for a shaped plan.
+fn shaped_by(shaper: &Option<ShaperSpec>) -> String {
+    shaper.map_or(String::new(), |s| {
+        format!(
+            "shaped by {} at {} Hz, ζ {}: ",
+            s.shaper,
+            readable(s.frequency_hz),
+            readable(s.damping)
+        )
+    })
+}
+
+/// What makes a plan's segments longer (docs/input-shaping.md).
+fn unstreamable_advice(shaper: &Option<ShaperSpec>) -> &'static str {
+    match shaper {
+        None => "use fewer points or a longer total time",
+        Some(_) => {
+            "shaping puts a knot per impulse beside each of the plan's: use fewer points, gentler limits or a shaper with fewer impulses (docs/input-shaping.md)"
         }
     }
 }

@@ -8,7 +8,6 @@ use std::time::Duration;
 use nalgebra::Vector3;
 use triquint_shared::Travel;
 use triquint_shared::plan::figures::kinematics;
-use triquint_shared::plan::shaping::ShaperSpec;
 use triquint_shared::plan::{
     Objective, PLAN_FORMAT, PLAN_FORMAT_BOUNDED, PLAN_FORMAT_FREE_KNOTS, Plan, Segment, SolverStats,
 };
@@ -27,7 +26,6 @@ use crate::search::{SearchResult, global_from, relaxed_global};
 use crate::stats::{PathDeviation, path_deviation_within};
 use crate::streaming::{shortfall, streams};
 use crate::time_scaling::{scaled_x, stretch};
-use triquint_shared::readable::readable;
 
 /// How often [`plan_with`] calls its observer.
 const OBSERVER_PERIOD: Duration = Duration::from_millis(25);
@@ -125,28 +123,11 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     match job.shaper() {
-        Some(spec) => shaped(&plan, spec),
+        Some(spec) => {
+            crate::shaping::job_shaped(job, &plan, spec, &mut |j: &Job| run(j, opts, state))
+        }
         None => Ok(plan),
     }
-}
-
-/// The plan convolved with the job's shaper, its torque and travel proven
-/// again (velocity, acceleration and jerk cannot grow; torque can).
-fn shaped(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
-    let s = crate::shaping::shape(plan, spec)?;
-    let rows = crate::check::check(&s).map_err(|e| PlanError::invalid("shaper", e.to_string()))?;
-    if let Some(bad) = rows.iter().find(|r| !r.ok) {
-        return Err(PlanError::invalid(
-            "shaper",
-            format!(
-                "the shaped plan fails its check: {} is {}, bound {}",
-                bad.what,
-                readable(bad.value),
-                readable(bad.bound)
-            ),
-        ));
-    }
-    Ok(s)
 }
 
 /// The plan of `fixed` (the job's problem at its fixed knots, or the

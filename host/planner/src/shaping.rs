@@ -9,9 +9,14 @@
 use triquint_shared::plan::shaping::{Shaping, Unshaped};
 use triquint_shared::plan::{PLAN_FORMAT_SHAPED, Plan};
 
+use triquint_shared::plan::Objective;
+use triquint_shared::readable::readable;
+
 use crate::check::{TORQUE_CHECK_SAMPLES, max_abs};
 use crate::error::PlanError;
+use crate::job::{Job, KNOT_SEGMENTS, KnotPlacement};
 use crate::shaper::convolve;
+use crate::streaming::{shortfall, streams};
 
 pub use crate::shaper::{ConvolveError, Impulses, MAX_SHAPER_HZ};
 pub use triquint_shared::plan::shaping::{DEFAULT_DAMPING, Shaper, ShaperSpec, UnknownShaper};
@@ -69,6 +74,80 @@ pub fn shape(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
         },
     });
     Ok(shaped)
+}
+
+/// The job's plan shaped by `spec`, proven by `check` and keeping the
+/// streaming rule. Each impulse adds a copy of every knot, so a plan that
+/// streams can shape into one that does not; for a point-to-point move
+/// whose segment count is the planner's choice, `replan` (the planner, for
+/// a job without a shaper) gives the move again in fewer free-knot
+/// segments, from 3 up to the first count whose shaped plan does not
+/// stream, and the shortest shaped plan that streams is kept. Otherwise
+/// the verdict is [`PlanError::Unstreamable`] naming the shaper.
+pub(crate) fn job_shaped(
+    job: &Job,
+    plan: &Plan,
+    spec: &ShaperSpec,
+    replan: &mut dyn FnMut(&Job) -> Result<Plan, PlanError>,
+) -> Result<Plan, PlanError> {
+    let first = proven(plan, spec)?;
+    if shortfall(&first).is_none() {
+        return Ok(first);
+    }
+    let counts_free = job.knot_placement() == KnotPlacement::Free
+        && job.objective() == Objective::MinTime
+        && job.knot_segments().is_none()
+        && job.points_m().len() == 2;
+    let mut best: Option<Plan> = None;
+    if counts_free {
+        for n in KNOT_SEGMENTS.0..plan.segments.len() {
+            let Ok(fewer) = job.to_builder().shaper(None).knot_segments(n).build() else {
+                continue;
+            };
+            let unshaped = match replan(&fewer) {
+                Ok(p) => p,
+                Err(e @ PlanError::Cancelled { .. }) => return Err(e),
+                Err(_) => continue,
+            };
+            let Ok(s) = proven(&unshaped, spec) else {
+                continue;
+            };
+            // More segments shape into more, shorter ones: the counts
+            // above the first that does not stream are not tried.
+            if shortfall(&s).is_some() {
+                break;
+            }
+            if best
+                .as_ref()
+                .is_none_or(|b| s.total_time_s < b.total_time_s)
+            {
+                best = Some(s);
+            }
+        }
+    }
+    match best {
+        Some(s) => Ok(s),
+        None => streams(&first).map(|()| first),
+    }
+}
+
+/// `plan` shaped by `spec`, every row of its `check` passing (velocity,
+/// acceleration and jerk cannot grow; torque can).
+fn proven(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
+    let s = shape(plan, spec)?;
+    let rows = crate::check::check(&s).map_err(|e| PlanError::invalid("shaper", e.to_string()))?;
+    if let Some(bad) = rows.iter().find(|r| !r.ok) {
+        return Err(PlanError::invalid(
+            "shaper",
+            format!(
+                "the shaped plan fails its check: {} is {}, bound {}",
+                bad.what,
+                readable(bad.value),
+                readable(bad.bound)
+            ),
+        ));
+    }
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -190,5 +269,88 @@ mod tests {
         p.shaping.as_mut().unwrap().unshaped.segments[3].coeffs[1][5] += 1e-6;
         // The unshaped plan itself is then no longer C3: refused by check.
         assert!(check(&p).is_err());
+    }
+
+    /// A point-to-point move and its limits (m/s, m/s², m/s³, N·m).
+    fn p2p(v: f64, a: f64, j: f64, torque: f64) -> crate::JobBuilder {
+        let l = crate::Limits {
+            velocity: v,
+            acceleration: a,
+            jerk: j,
+            torque,
+            total_time: 5.0,
+        };
+        Job::builder()
+            .objective(Objective::MinTime)
+            .limits(l)
+            .points_mm([[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]])
+    }
+
+    /// Shaping multiplies a plan's knots by its impulses: the move at
+    /// Table 3's limits and at a fast machine's, shaped by every shaper,
+    /// streams, because the planner takes the move in fewer segments; the
+    /// plan is still the convolution of its record, and no longer than the
+    /// default segments' unshaped plan plus the shaper.
+    #[test]
+    fn shaped_point_to_point_moves_keep_the_streaming_rule() {
+        use crate::{Options, plan};
+        for limits in [(0.5, 1.2, 5.0, 10.0), (1.0, 10.0, 500.0, 1000.0)] {
+            let job = |s| {
+                p2p(limits.0, limits.1, limits.2, limits.3)
+                    .shaper(s)
+                    .build()
+                    .unwrap()
+            };
+            let bare = plan(&job(None), &Options::default()).unwrap();
+            for shaper in [Shaper::Zvd, Shaper::TwoHumpEi] {
+                let sp = spec(shaper);
+                // Its default segments, shaped, do not stream.
+                assert!(shortfall(&shape(&bare, &sp).unwrap()).is_some());
+                let s = plan(&job(Some(sp)), &Options::default()).unwrap();
+                assert_eq!(shortfall(&s), None, "{limits:?} {shaper}");
+                let rows = check(&s).unwrap();
+                assert!(rows.iter().all(|r| r.ok), "{shaper}");
+                let record = &s.shaping.as_ref().unwrap().unshaped;
+                assert!(record.segments.len() < bare.segments.len());
+                let imp = Impulses::for_spec(&sp).unwrap();
+                // What streaming costs: the fewer segments' move is a little
+                // slower than the default segments' one.
+                let cost = (s.total_time_s - imp.duration_s()) / bare.total_time_s;
+                println!(
+                    "{limits:?} {shaper}: {} segments ({} unshaped), {:.4} s, unshaped {:.4} s against {:.4} s (x{cost:.3})",
+                    s.segments.len(),
+                    record.segments.len(),
+                    s.total_time_s,
+                    record.total_time_s,
+                    bare.total_time_s
+                );
+                assert!((1.0..1.15).contains(&cost), "{limits:?} {shaper}: x{cost}");
+            }
+        }
+    }
+
+    /// A segment count the job sets is kept: shaped into a plan that does
+    /// not stream, the job is refused naming the shaper.
+    #[test]
+    fn a_shaped_plan_that_cannot_stream_is_refused_naming_the_shaper() {
+        let job = p2p(1.0, 10.0, 500.0, 1000.0)
+            .knots(KnotPlacement::Free)
+            .knot_segments(7)
+            .shaper(Some(spec(Shaper::TwoHumpEi)))
+            .build()
+            .unwrap();
+        match crate::plan(&job, &crate::Options::default()) {
+            Err(
+                e @ PlanError::Unstreamable {
+                    shaper: Some(s), ..
+                },
+            ) => {
+                assert_eq!(s, spec(Shaper::TwoHumpEi));
+                let m = e.to_string();
+                assert!(m.contains("shaped by 2hump_ei at 25.5 Hz"), "{m}");
+                assert!(m.contains("fewer impulses"), "{m}");
+            }
+            other => panic!("not refused: {other:?}"),
+        }
     }
 }

@@ -39,6 +39,7 @@ pub(crate) fn streams(plan: &Plan) -> Result<(), PlanError> {
             run_s: s.run_us as f64 * 1e-6,
             need_s: s.need_us as f64 * 1e-6,
             capacity: QUEUE_CAPACITY,
+            shaper: plan.shaping.as_ref().map(|s| s.shaper),
         }),
     }
 }
@@ -66,11 +67,13 @@ mod tests {
                     run_s,
                     need_s,
                     capacity,
+                    shaper,
                 } = e
                 else {
                     unreachable!()
                 };
                 assert_eq!(capacity, QUEUE_CAPACITY);
+                assert_eq!(shaper, None);
                 assert_eq!(last + 1 - first, QUEUE_CAPACITY - 1);
                 assert!(last + 1 < 19 && run_s > 0.0 && run_s < need_s, "{e}");
                 assert!(e.to_string().starts_with("unstreamable: segments "), "{e}");

@@ -267,6 +267,7 @@ fn build_plan_error(py: Python<'_>, e: &PlanError, units: Units) -> PyResult<PyE
             run_s,
             need_s,
             capacity,
+            ..
         } => {
             let inst = new_error(py, &errs.unstreamable, &msg)?;
             inst.setattr("first", *first)?;

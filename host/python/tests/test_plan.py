@@ -218,12 +218,13 @@ def test_a_shaped_plan_records_its_shaper_and_its_cost():
     assert unshaped.shaper is None
     s = p.shaper
     assert (s["type"], s["frequency_hz"], s["damping"]) == ("ei", 25.6, 0.062)
-    assert s["duration_s"] == pytest.approx(p.duration - unshaped.duration, abs=1e-9)
     assert s["duration_s"] == pytest.approx(1 / 25.6, abs=2e-3)
-    # Every row holds but streaming: this move's shaped segments are too short
-    # for the drives' queues (docs/input-shaping.md).
+    # At least the shaper's duration longer: to keep the streaming rule the
+    # planner takes this move in fewer segments (docs/input-shaping.md).
+    assert p.duration >= unshaped.duration + s["duration_s"] - 1e-9
+    # Every row holds, streaming too.
     failed = [row["what"] for row in p.check() if not row["ok"]]
-    assert all(w.startswith("streaming") for w in failed), failed
+    assert not failed, failed
     # The dict form, as the job file's [shaper]; Klipper's damping 0.1 by default.
     j = triquint.Job(P2P, objective="min-time", shaper={"type": "zvd", "frequency_hz": 25.6})
     assert triquint.plan(j).shaper["damping"] == 0.1

@@ -228,9 +228,9 @@ mod tests {
     /// profile of the P2P move convolved with ZVD and EI impulses at the
     /// machine's lowest mode (and EI 20 % off it) rings that mode 3–4× less;
     /// and the min-time plan shaped by the planner (`shaping::shape`) is a
-    /// C3 plan that `check` proves. (The drives cannot run it yet: its 14
-    /// segments, six of 19.6 ms, do not keep the stop ramp's worth of plan
-    /// in their queue, and they stop with Underrun.)
+    /// C3 plan that `check` proves. (`shape` alone does not keep the
+    /// streaming rule; the planner's shaped plans, which do, run through
+    /// the drives below.)
     #[test]
     fn shaping_removes_the_ringing_of_the_jerk_steps() {
         use triquint_planner::shaping::{Impulses, Shaper, ShaperSpec, shape};
@@ -384,6 +384,87 @@ mod tests {
                 eprintln!("at {hz:.1} Hz: EI {ei:.4}, 2HUMP-EI {hump:.4}");
                 let best = ei.min(hump);
                 assert!(best <= 0.10, "EI / 2HUMP-EI at {hz} Hz: {best}");
+            }
+        }
+    }
+
+    /// The targets through the drives: the planner's shaped plans keep the
+    /// streaming rule and run on the three simulated drives (bus, clocks,
+    /// firmware) on the flexible plant. At the mode ZVD leaves ≤ 5 % of the
+    /// unshaped min-time plan's residual at the lowest mode; 20 % off, the
+    /// better of EI and 2HUMP-EI ≤ 10 %, except on Case II 20 % below the
+    /// mode, where 2HUMP-EI does not stream and is refused and EI alone
+    /// leaves about 10 %.
+    #[test]
+    fn shaped_plans_run_through_the_drives_and_meet_the_targets() {
+        use triquint_planner::PlanError;
+        use triquint_planner::shaping::{Shaper, ShaperSpec};
+        use triquint_shared::Limits;
+
+        let opts = SimulateOptions {
+            plant: PlantKind::Flexible,
+            ..SimulateOptions::default()
+        };
+        let at_mode = |p: &Plan| {
+            let r = simulate(p, &opts).unwrap().run;
+            assert!(r.completed, "{:?}", r.faults);
+            r.vibration.unwrap().lowest_mode_m_s2.unwrap()
+        };
+        let case2 = triquint_sim::testplan::PAPER_CASE2_MM.to_vec();
+        for (closed, points, [v, a, j]) in [
+            (
+                false,
+                vec![[-60.0, 40.0, 560.0], [60.0, -40.0, 640.0]],
+                [1.0, 10.0, 500.0],
+            ),
+            (true, case2, [2.0, 30.0, 5000.0]),
+        ] {
+            let job = |shaper: Option<(Shaper, f64)>| {
+                Job::builder()
+                    .objective(Objective::MinTime)
+                    .limits(Limits {
+                        velocity: v,
+                        acceleration: a,
+                        jerk: j,
+                        torque: 1000.0,
+                        total_time: 5.0,
+                    })
+                    .points_mm(points.clone())
+                    .shaper(shaper.map(|(shaper, frequency_hz)| ShaperSpec {
+                        shaper,
+                        frequency_hz,
+                        damping: 0.062,
+                    }))
+                    .build()
+                    .unwrap()
+            };
+            let unshaped = at_mode(&plan(&job(None), &Options::default()).unwrap());
+            let shaped = |shaper, hz| match plan(&job(Some((shaper, hz))), &Options::default()) {
+                Ok(p) => Some(at_mode(&p) / unshaped),
+                Err(PlanError::Unstreamable {
+                    shaper: Some(_), ..
+                }) => None,
+                Err(e) => panic!("{shaper} at {hz} Hz: {e}"),
+            };
+            let zvd = shaped(Shaper::Zvd, 25.6).unwrap();
+            eprintln!("drives, at the mode: ZVD {zvd:.4} of {unshaped:.4} m/s²");
+            assert!(zvd <= 0.05, "ZVD at the mode: {zvd}");
+            for hz in [0.8 * 25.6, 1.2 * 25.6] {
+                let (ei, hump) = (shaped(Shaper::Ei, hz), shaped(Shaper::TwoHumpEi, hz));
+                eprintln!("drives, at {hz:.1} Hz: EI {ei:?}, 2HUMP-EI {hump:?}");
+                let best = [ei, hump]
+                    .into_iter()
+                    .flatten()
+                    .fold(f64::INFINITY, f64::min);
+                if closed && hz < 25.6 {
+                    // Not met through the drives: EI leaves about 10 % and
+                    // 2HUMP-EI, which would leave 1.4 % through the law, is
+                    // refused (docs/vibration.md). When it streams, hold it.
+                    assert!(hump.is_none(), "2HUMP-EI streams now: hold the target");
+                    assert!(best > 0.09, "{best}");
+                } else {
+                    assert!(best <= 0.10, "EI / 2HUMP-EI at {hz} Hz: {best}");
+                }
             }
         }
     }
