@@ -191,6 +191,13 @@ pub enum CommandData {
     Commit {
         crc: u32,
         config: Result<Prepared, FaultCode>,
+        /// Replayed by the board from its own store, not sent by a host:
+        /// not held to the ceiling lock.
+        kept: bool,
+        /// The first locked parameter it widens (`ceiling_lock`), judged
+        /// against the configuration of CRC `against` (0: none).
+        widens: Option<u8>,
+        against: u32,
     },
     /// FeedHold, Resume, Override, Stop or QuickStop in the middle of a
     /// transition: the new transition, sized by the receive side.
