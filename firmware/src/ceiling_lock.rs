@@ -83,7 +83,11 @@ mod tests {
         }
         assert_eq!(PARAMS[TRAVEL_MIN as usize].name, "soft_limit_min");
         assert_eq!(PARAMS[40].name, "soft_limit_max");
-        assert!(PARAMS[55..=58].iter().all(|p| p.name.starts_with("ceiling_")));
+        assert!(
+            PARAMS[55..=58]
+                .iter()
+                .all(|p| p.name.starts_with("ceiling_"))
+        );
     }
 
     #[test]

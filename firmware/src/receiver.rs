@@ -34,6 +34,9 @@ pub struct Receiver {
     /// The last two configurations prepared, newest first: the node may
     /// refuse a commit (not Idle) and keep running the earlier one.
     configs: [Option<(u32, DriveConfig)>; 2],
+    /// The frame being handled is the board's replay of its kept
+    /// configuration ([`Receiver::on_kept_frame`]).
+    kept: bool,
 }
 
 /// Velocity, acceleration and jerk of every axis within the configured
@@ -75,6 +78,7 @@ impl Receiver {
             flushes: 0,
             sync: SyncEstimator::default(),
             configs: [None; 2],
+            kept: false,
         }
     }
 
@@ -82,19 +86,22 @@ impl Receiver {
         self.node_id
     }
 
-    /// Handles one received frame; returns what the tick must take, if anything.
-    pub fn on_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
-        self.receive(rx, snapshot, false)
-    }
-
     /// [`Receiver::on_frame`] for a frame a board replays from its own
     /// store (the configuration it kept): its commit is not a host's, so
     /// the ceiling lock does not hold it.
+    // Always inlined: every caller of `on_frame` on a board is then the
+    // receive task itself, which the ELF check holds to the hand-off.
+    #[inline(always)]
     pub fn on_kept_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
-        self.receive(rx, snapshot, true)
+        self.kept = true;
+        let item = self.on_frame(rx, snapshot);
+        self.kept = false;
+        item
     }
 
-    fn receive(&mut self, rx: &RxFrame, snapshot: TickSnapshot, kept: bool) -> Option<Item> {
+    /// Handles one received frame; returns what the tick must take, if anything.
+    pub fn on_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
+        let kept = self.kept;
         if snapshot.flushes != self.flushes {
             self.flushes = snapshot.flushes;
             self.segments.clear();

@@ -152,7 +152,10 @@ fn the_maintenance_window_lets_one_commit_widen_them() {
     assert_eq!(ack(&mut r, CommandCode::UnlockCeilings, crc ^ 1), mismatch);
     assert_eq!(commit(&mut r, &wide), locked(index("soft_limit_max")));
     let window_ms = (MAINTENANCE_WINDOW_US / 1000) as u32;
-    assert_eq!(ack(&mut r, CommandCode::UnlockCeilings, crc), (0, window_ms));
+    assert_eq!(
+        ack(&mut r, CommandCode::UnlockCeilings, crc),
+        (0, window_ms)
+    );
     // ReadConfig inside the window leaves it open.
     assert_eq!(ack(&mut r, CommandCode::ReadConfig, 0).0, 0);
     assert_eq!(commit(&mut r, &wide), (0, wide.crc()));
