@@ -9,8 +9,11 @@
 use triquint_shared::protocol::DriveConfig;
 use triquint_shared::protocol::contract::MAINTENANCE_WINDOW_US;
 
+/// One parameter of a configuration.
+type Param = fn(&DriveConfig) -> f32;
+
 /// Parameter indices of the locked bounds that may only go down.
-const CEILINGS: [(u8, fn(&DriveConfig) -> f32); 5] = [
+const CEILINGS: [(u8, Param); 5] = [
     (40, |c| c.soft_limit_max),
     (55, |c| c.ceiling_velocity),
     (56, |c| c.ceiling_acceleration),
@@ -24,14 +27,18 @@ const TRAVEL_MIN: u8 = 39;
 /// `active`: a ceiling or the travel's high end raised, its low end
 /// lowered. None: `new` is as tight or tighter. A NaN counts as wider.
 pub fn first_widening(active: &DriveConfig, new: &DriveConfig) -> Option<u8> {
-    // `!(x >= y)` rather than `x < y`: NaN widens.
-    if !(new.soft_limit_min >= active.soft_limit_min) {
+    if !at_most(active.soft_limit_min, new.soft_limit_min) {
         return Some(TRAVEL_MIN);
     }
     CEILINGS
         .iter()
-        .find(|(_, f)| !(f(new) <= f(active)))
+        .find(|(_, f)| !at_most(f(new), f(active)))
         .map(|(i, _)| *i)
+}
+
+/// x ≤ y, false with a NaN on either side.
+fn at_most(x: f32, y: f32) -> bool {
+    x.partial_cmp(&y).is_some_and(|o| o.is_le())
 }
 
 /// The maintenance window `UnlockCeilings` opens: until a local time (µs).

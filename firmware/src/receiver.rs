@@ -17,7 +17,7 @@ use crate::ceiling_lock::first_widening;
 use crate::ceilings::Maxima;
 use crate::derived_config::DerivedConfig;
 use crate::hal::RxFrame;
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, TickSnapshot};
+use crate::inbox::{CheckedSegment, CommandData, Item, LockCheck, Prepared, TickSnapshot};
 use crate::scaling::{Retarget, q16_from_permille};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -202,6 +202,10 @@ impl Receiver {
     /// A commit of the written values if their CRC is `want`: every parameter
     /// written, valid, and the robot model built; with what it widens of
     /// the active configuration's (CRC `active_crc`) locked bounds.
+    // Cold, out of line: a commit is rare, and every other frame's
+    // receive path stays as short as without it.
+    #[cold]
+    #[inline(never)]
     fn prepare(&mut self, want: u32, active_crc: u32, kept: bool) -> CommandData {
         let crc = config_crc(&self.written);
         let all = (1u64 << PARAM_COUNT) - 1;
@@ -227,15 +231,14 @@ impl Receiver {
                 cfg,
                 model: cfg.robot().native_model(),
                 active: DerivedConfig::new(&cfg, crc),
+                lock: LockCheck {
+                    kept,
+                    widens,
+                    against: active_crc,
+                },
             })
         };
-        CommandData::Commit {
-            crc,
-            config,
-            kept,
-            widens,
-            against: active_crc,
-        }
+        CommandData::Commit { crc, config }
     }
 
     /// The prepared configuration of CRC `crc`, if this side holds it.

@@ -8,7 +8,7 @@ use triquint_shared::protocol::{
 };
 
 use super::{Drive, StopReason};
-use crate::inbox::{CommandData, Prepared};
+use crate::inbox::{CommandData, LockCheck, Prepared};
 use crate::scaling::q16_from_permille;
 #[cfg(doc)]
 use crate::sync::SyncEstimator;
@@ -164,16 +164,12 @@ impl<const Q: usize> Drive<Q> {
             }
             CommandCode::ConfigCommit => {
                 let (r, value) = match data {
-                    CommandData::Commit {
-                        crc,
-                        config,
-                        kept,
-                        widens,
-                        against,
-                    } => match self.lock(*kept, *widens, *against, local_us) {
-                        Err((r, index)) => (r, index),
-                        Ok(()) => (self.commit(config), *crc),
-                    },
+                    CommandData::Commit { crc, config } => {
+                        match config.as_ref().map(|p| self.lock(&p.lock, local_us)) {
+                            Ok(Err((r, index))) => (r, index),
+                            _ => (self.commit(config), *crc),
+                        }
+                    }
                     _ => (FaultCode::ConfigMismatch, 0),
                 };
                 self.command_ack(c, r, value);
@@ -234,20 +230,14 @@ impl<const Q: usize> Drive<Q> {
     /// (`CeilingsLocked` and the bound's index); one judged against
     /// another configuration than the running one (two commits crossing)
     /// is sent again (`ConfigMismatch`). A board's kept one passes.
-    fn lock(
-        &self,
-        kept: bool,
-        widens: Option<u8>,
-        against: u32,
-        local_us: u64,
-    ) -> Result<(), (FaultCode, u32)> {
-        if kept || self.state != State::Idle {
+    fn lock(&self, lock: &LockCheck, local_us: u64) -> Result<(), (FaultCode, u32)> {
+        if lock.kept || self.state != State::Idle {
             return Ok(());
         }
-        if against != self.config_crc() {
+        if lock.against != self.config_crc() {
             return Err((FaultCode::ConfigMismatch, 0));
         }
-        match widens {
+        match lock.widens {
             Some(i) if !self.maintenance.is_open(local_us) => {
                 Err((FaultCode::CeilingsLocked, u32::from(i)))
             }

@@ -83,8 +83,11 @@ fn locked(index: u32) -> (u8, u32) {
     (FaultCode::CeilingsLocked as u8, index)
 }
 
+/// A change to a configuration.
+type Change = fn(&mut DriveConfig);
+
 /// Each locked bound, widened a little.
-fn widened() -> [(fn(&mut DriveConfig), &'static str); 6] {
+fn widened() -> [(Change, &'static str); 6] {
     [
         (|c| c.ceiling_velocity *= 1.5, "ceiling_velocity"),
         (|c| c.ceiling_acceleration *= 1.01, "ceiling_acceleration"),

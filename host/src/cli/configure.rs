@@ -45,6 +45,6 @@ pub fn run(args: &ConfigureArgs, machine: &Machine) -> CliResult {
         } else {
             ""
         }
-    );
+    )?;
     Ok(())
 }
