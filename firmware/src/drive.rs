@@ -22,6 +22,7 @@ use triquint_shared::protocol::{
 };
 use triquint_shared::quintic::JointMotion;
 
+use crate::ceiling_lock::Window;
 use crate::derived_config::DerivedConfig;
 use crate::enable_check::{EnableCheck, Expected};
 use crate::f32_cast::to_f32;
@@ -88,6 +89,8 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     active: Option<DerivedConfig>,
     /// The committed configuration and its robot model (valid with `active`).
     cfg: DriveConfig,
+    /// The maintenance window in which a commit may widen the ceilings.
+    maintenance: Window,
     model: Model<f32>,
     queue: Deque<Seg, Q>,
     /// Queue flushes so far (the receive side then drops a partial segment).
@@ -178,6 +181,7 @@ impl<const Q: usize> Drive<Q> {
             fault: FaultCode::None,
             active: None,
             cfg: DriveConfig::default(),
+            maintenance: Window::default(),
             model: Model {
                 rho_u: [Vector3::zeros(); 3],
                 l: 0.0,

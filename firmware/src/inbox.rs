@@ -178,6 +178,20 @@ pub struct Prepared {
     pub cfg: DriveConfig,
     pub model: Model<f32>,
     pub active: DerivedConfig,
+    /// The receive side's verdict for the ceiling lock.
+    pub lock: LockCheck,
+}
+
+/// What the ceiling lock needs of a prepared commit (`ceiling_lock`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LockCheck {
+    /// Replayed by the board from its own store, not sent by a host:
+    /// not held to the ceiling lock.
+    pub kept: bool,
+    /// The first locked parameter it widens, judged against the
+    /// configuration of CRC `against` (0: none).
+    pub widens: Option<u8>,
+    pub against: u32,
 }
 
 /// What a command brings beyond its frame.

@@ -11,6 +11,7 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod ceiling_lock;
 pub mod ceilings;
 pub mod derived_config;
 pub mod drive;

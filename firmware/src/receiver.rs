@@ -13,10 +13,11 @@ use triquint_shared::protocol::contract::{
     LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, RELATIVE_LIMIT_MARGIN,
 };
 
+use crate::ceiling_lock::first_widening;
 use crate::ceilings::Maxima;
 use crate::derived_config::DerivedConfig;
 use crate::hal::RxFrame;
-use crate::inbox::{CheckedSegment, CommandData, Item, Prepared, TickSnapshot};
+use crate::inbox::{CheckedSegment, CommandData, Item, LockCheck, Prepared, TickSnapshot};
 use crate::scaling::{Retarget, q16_from_permille};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -33,6 +34,9 @@ pub struct Receiver {
     /// The last two configurations prepared, newest first: the node may
     /// refuse a commit (not Idle) and keep running the earlier one.
     configs: [Option<(u32, DriveConfig)>; 2],
+    /// The frame being handled is the board's replay of its kept
+    /// configuration ([`Receiver::on_kept_frame`]).
+    kept: bool,
 }
 
 /// Velocity, acceleration and jerk of every axis within the configured
@@ -74,6 +78,7 @@ impl Receiver {
             flushes: 0,
             sync: SyncEstimator::default(),
             configs: [None; 2],
+            kept: false,
         }
     }
 
@@ -81,8 +86,22 @@ impl Receiver {
         self.node_id
     }
 
+    /// [`Receiver::on_frame`] for a frame a board replays from its own
+    /// store (the configuration it kept): its commit is not a host's, so
+    /// the ceiling lock does not hold it.
+    // Always inlined: every caller of `on_frame` on a board is then the
+    // receive task itself, which the ELF check holds to the hand-off.
+    #[inline(always)]
+    pub fn on_kept_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
+        self.kept = true;
+        let item = self.on_frame(rx, snapshot);
+        self.kept = false;
+        item
+    }
+
     /// Handles one received frame; returns what the tick must take, if anything.
     pub fn on_frame(&mut self, rx: &RxFrame, snapshot: TickSnapshot) -> Option<Item> {
+        let kept = self.kept;
         if snapshot.flushes != self.flushes {
             self.flushes = snapshot.flushes;
             self.segments.clear();
@@ -120,7 +139,7 @@ impl Receiver {
             Msg::Command(c) if for_me => Some(Item::Command {
                 command: c,
                 rx_us,
-                data: self.command_data(&c, rx_us, &snapshot),
+                data: self.command_data(&c, rx_us, &snapshot, kept),
             }),
             Msg::ConfigWrite { index, value } if for_me => {
                 if let Some(slot) = self.written.get_mut(index as usize) {
@@ -136,11 +155,17 @@ impl Receiver {
         }
     }
 
-    fn command_data(&mut self, c: &Command, rx_us: u64, snapshot: &TickSnapshot) -> CommandData {
+    fn command_data(
+        &mut self,
+        c: &Command,
+        rx_us: u64,
+        snapshot: &TickSnapshot,
+        kept: bool,
+    ) -> CommandData {
         let code = c.command();
         match code {
             Ok(CommandCode::ReadConfig) => CommandData::Values(self.written),
-            Ok(CommandCode::ConfigCommit) => self.prepare(c.arg),
+            Ok(CommandCode::ConfigCommit) => self.prepare(c.arg, snapshot.config_crc, kept),
             Ok(
                 CommandCode::FeedHold
                 | CommandCode::Resume
@@ -175,24 +200,54 @@ impl Receiver {
     }
 
     /// A commit of the written values if their CRC is `want`: every parameter
-    /// written, valid, and the robot model built.
-    fn prepare(&mut self, want: u32) -> CommandData {
+    /// written, valid, and the robot model built; with what it widens of
+    /// the active configuration's (CRC `active_crc`) locked bounds.
+    // Cold, out of line: a commit is rare, and every other frame's
+    // receive path stays as short as without it.
+    #[cold]
+    #[inline(never)]
+    fn prepare(&mut self, want: u32, active_crc: u32, kept: bool) -> CommandData {
         let crc = config_crc(&self.written);
         let all = (1u64 << PARAM_COUNT) - 1;
         let cfg = DriveConfig::from_values(&self.written);
+        let active = self.config_of(active_crc);
+        let widens = match active {
+            Some(a) => first_widening(&a, &cfg),
+            // Nothing held yet: the first configuration sets the bounds.
+            None if active_crc == 0 => None,
+            // Running one this side no longer holds: judged as widening.
+            None => Some(PARAM_COUNT as u8),
+        };
         let config = if self.written_mask & all != all || crc != want || cfg.validate().is_err() {
             Err(FaultCode::ConfigMismatch)
         } else {
+            // The new one, and the one running: a refused commit never
+            // takes the running configuration's place.
             if self.configs[0].map(|(c, _)| c) != Some(crc) {
-                self.configs = [Some((crc, cfg)), self.configs[0]];
+                let keep = active.map(|a| (active_crc, a)).or(self.configs[0]);
+                self.configs = [Some((crc, cfg)), keep];
             }
             Ok(Prepared {
                 cfg,
                 model: cfg.robot().native_model(),
                 active: DerivedConfig::new(&cfg, crc),
+                lock: LockCheck {
+                    kept,
+                    widens,
+                    against: active_crc,
+                },
             })
         };
         CommandData::Commit { crc, config }
+    }
+
+    /// The prepared configuration of CRC `crc`, if this side holds it.
+    fn config_of(&self, crc: u32) -> Option<DriveConfig> {
+        self.configs
+            .iter()
+            .flatten()
+            .find(|(c, _)| *c == crc && crc != 0)
+            .map(|(_, cfg)| *cfg)
     }
 
     fn part(&mut self, msg: Msg, payload: &[u8], active_crc: u32) -> Option<Item> {

@@ -19,6 +19,7 @@ use crate::hal::{Encoder, MotorOutput, RxFrame};
 use crate::node::Node;
 use crate::scaling::Phase;
 
+mod ceiling_lock;
 mod hold;
 mod homing;
 mod reactions;

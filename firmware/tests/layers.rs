@@ -14,6 +14,7 @@ const LAYERS: &[&str] = &[
     "watchdog",       // when a board feeds its hardware watchdog
     "segment",        // a queued segment and its evaluation
     "ceilings",       // the machine ceilings a segment is held to
+    "ceiling_lock",   // a new configuration may tighten them, not widen
     "scaling",        // the jerk-limited time-scaling of stops and resumes
     "sync",           // host time from TimeSync frames
     "derived_config", // what a configuration derives once

@@ -23,7 +23,7 @@ use triquint_sim::{Fault, FaultWindow, testplan};
 const MS: u64 = 1_000_000;
 
 /// The fault kinds of the soak, with the range their parameter is drawn from.
-const KINDS: [(&str, &str); 24] = [
+const KINDS: [(&str, &str); 25] = [
     ("loss", "0.1-3 % of frames"),
     ("corrupt", "0.1-3 % of parts"),
     ("duplicate", "1-20 % of frames"),
@@ -53,6 +53,10 @@ const KINDS: [(&str, &str); 24] = [
     (
         "above a ceiling while running",
         "48-segment move, v ceiling 0.92-0.98 × its peak",
+    ),
+    (
+        "ceilings widened, locked",
+        "commissioned v, a or j 0.5-0.98 × the plan's; top ones sent",
     ),
 ];
 
@@ -206,7 +210,13 @@ fn schedule(k: usize, rng: &mut ChaCha8Rng) -> Scenario {
         }
         21 => sc.above_ceiling = Some(AboveCeiling::OverrideCap(rng.random_range(1.0..1.1))),
         22 => sc.above_ceiling = Some(AboveCeiling::StopRamp(rng.random_range(0.01..0.3))),
-        _ => sc.above_ceiling = Some(AboveCeiling::Segment(0, rng.random_range(LATE_RANGE))),
+        LATE => sc.above_ceiling = Some(AboveCeiling::Segment(0, rng.random_range(LATE_RANGE))),
+        _ => {
+            sc.above_ceiling = Some(AboveCeiling::Locked(
+                rng.random_range(0..3),
+                rng.random_range(0.5..0.98),
+            ))
+        }
     }
     sc
 }

@@ -50,6 +50,7 @@ impl From<OpError> for CliError {
                     | U::NotHomed { .. }
                     | U::ArmTooFar { .. }
                     | U::Refused { .. }
+                    | U::CeilingsLocked { .. }
                     | U::Version { .. },
                 ..
             }

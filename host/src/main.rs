@@ -39,6 +39,9 @@ enum Command {
     Status(cli::status::StatusArgs),
     /// Home all three axes together on their limit switches.
     Home(cli::home::HomeArgs),
+    /// Write the machine file's configuration to the drives, no motion;
+    /// --unlock-ceilings to raise ceilings or widen travel (maintenance).
+    Configure(cli::configure::ConfigureArgs),
     /// Return faulted drives to Idle.
     Clear(cli::clear::ClearArgs),
     /// Send the host's emergency stop frame; wait for every drive to confirm it.
@@ -69,6 +72,7 @@ fn run(cli: Cli) -> CliResult {
         Command::Monitor(a) => cli::monitor::run(a, &a.machine.load()?.robot),
         Command::Status(a) => cli::status::run(a, &a.machine.load()?.robot),
         Command::Home(a) => cli::home::run(a, &a.machine.load()?),
+        Command::Configure(a) => cli::configure::run(a, &a.machine.load()?),
         Command::Clear(a) => cli::clear::run(a, &a.machine.load()?.robot),
         Command::Estop(a) => cli::estop::run(a),
         Command::Hold(a) => cli::hold::run(a),

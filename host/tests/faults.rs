@@ -3,7 +3,9 @@
 //! "Guarantees" section of docs/protocol.md. Seeded: every run is reproducible.
 
 use triquint_firmware::QUEUE_CAPACITY;
-use triquint_host::inprocess::fault_run::{self, BURST_SEGMENTS, BadSegment, Scenario};
+use triquint_host::inprocess::fault_run::{
+    self, AboveCeiling, BURST_SEGMENTS, BadSegment, Scenario,
+};
 use triquint_shared::plan::Plan;
 use triquint_shared::protocol::{FaultCode, Reject};
 use triquint_sim::report::{Ending, FaultRunFigures, RunReport};
@@ -510,4 +512,33 @@ fn a_peer_emergency_stops_every_node_within_two_ticks() {
         .emergency_to_stop_ticks
         .expect("a running node received an Emergency");
     assert!(t <= 2.0, "{t}");
+}
+
+/// Drives commissioned with a velocity ceiling under Case II's peak; the
+/// host then configures them with the top ceilings, as from a machine file
+/// raised without maintenance: the ceiling lock refuses the commit and
+/// nothing moves. In the maintenance window the same commit is taken and
+/// the plan runs whole.
+#[test]
+fn a_host_cannot_widen_the_commissioned_ceilings_outside_maintenance() {
+    let locked = Scenario {
+        above_ceiling: Some(AboveCeiling::Locked(0, 0.8)),
+        ..Scenario::default()
+    };
+    let r = run(&case2(), &locked);
+    report("ceilings widened, locked", &r);
+    assert_eq!(r.ending, Ending::NotStarted, "{r:?}");
+    assert!(r.start_ns.is_none() && !r.executed_whole_plan, "{r:?}");
+    let e = r.host_error.as_deref().unwrap_or("");
+    assert!(
+        e.contains("CeilingsLocked") && e.contains("`ceiling_velocity`"),
+        "{e}"
+    );
+    let unlocked = Scenario {
+        unlock_ceilings: true,
+        ..locked
+    };
+    let r = run(&case2(), &unlocked);
+    report("ceilings widened in maintenance", &r);
+    assert_recovered("ceilings widened in maintenance", &r);
 }

@@ -2,13 +2,13 @@
 //! Start, Stop, feed hold, configuration commit, ...), each answered by a
 //! CommandAck, repeats within the repeat window answered again.
 
-use triquint_shared::protocol::contract::REPEAT_WINDOW_US;
+use triquint_shared::protocol::contract::{MAINTENANCE_WINDOW_US, REPEAT_WINDOW_US};
 use triquint_shared::protocol::{
     Command, CommandAck, CommandCode, FaultCode, State, config_value_frame,
 };
 
 use super::{Drive, StopReason};
-use crate::inbox::{CommandData, Prepared};
+use crate::inbox::{CommandData, LockCheck, Prepared};
 use crate::scaling::q16_from_permille;
 #[cfg(doc)]
 use crate::sync::SyncEstimator;
@@ -40,7 +40,15 @@ impl<const Q: usize> Drive<Q> {
             self.send(f);
             return;
         }
-        let Ok(code) = c.command() else {
+        let code = c.command();
+        // The maintenance window lasts until anything but its own commit.
+        if !matches!(
+            code,
+            Ok(CommandCode::UnlockCeilings | CommandCode::ConfigCommit | CommandCode::ReadConfig)
+        ) {
+            self.maintenance.close();
+        }
+        let Ok(code) = code else {
             self.command_ack(c, FaultCode::BadCommand, 0);
             return;
         };
@@ -155,11 +163,30 @@ impl<const Q: usize> Drive<Q> {
                 return;
             }
             CommandCode::ConfigCommit => {
-                let (r, crc) = match data {
-                    CommandData::Commit { crc, config } => (self.commit(config), *crc),
+                let (r, value) = match data {
+                    CommandData::Commit { crc, config } => {
+                        match config.as_ref().map(|p| self.lock(&p.lock, local_us)) {
+                            Ok(Err((r, index))) => (r, index),
+                            _ => (self.commit(config), *crc),
+                        }
+                    }
                     _ => (FaultCode::ConfigMismatch, 0),
                 };
-                self.command_ack(c, r, crc);
+                self.command_ack(c, r, value);
+                return;
+            }
+            CommandCode::UnlockCeilings => {
+                let r = match (self.state, self.active) {
+                    (State::Idle, Some(a)) if a.crc == c.arg => {
+                        self.maintenance.open(local_us);
+                        self.command_ack(c, FaultCode::None, (MAINTENANCE_WINDOW_US / 1000) as u32);
+                        return;
+                    }
+                    (State::Idle, Some(_)) => FaultCode::ConfigMismatch,
+                    (State::Idle, None) => FaultCode::NoConfig,
+                    _ => FaultCode::WrongState,
+                };
+                self.command_ack(c, r, 0);
                 return;
             }
             CommandCode::Reset => match self.state {
@@ -198,6 +225,26 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
+    /// The ceiling lock on a host's commit (`ceiling_lock`): one that
+    /// widens a locked bound only inside the maintenance window
+    /// (`CeilingsLocked` and the bound's index); one judged against
+    /// another configuration than the running one (two commits crossing)
+    /// is sent again (`ConfigMismatch`). A board's kept one passes.
+    fn lock(&self, lock: &LockCheck, local_us: u64) -> Result<(), (FaultCode, u32)> {
+        if lock.kept || self.state != State::Idle {
+            return Ok(());
+        }
+        if lock.against != self.config_crc() {
+            return Err((FaultCode::ConfigMismatch, 0));
+        }
+        match lock.widens {
+            Some(i) if !self.maintenance.is_open(local_us) => {
+                Err((FaultCode::CeilingsLocked, u32::from(i)))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// Runs a configuration the receive side prepared (Idle only).
     pub(super) fn commit(&mut self, config: &Result<Prepared, FaultCode>) -> FaultCode {
         if self.state != State::Idle {
@@ -210,6 +257,7 @@ impl<const Q: usize> Drive<Q> {
         self.cfg = p.cfg;
         self.model = p.model;
         self.active = Some(p.active);
+        self.maintenance.close();
         // The override persists, within the new configuration's cap.
         let cap = q16_from_permille(self.override_cap_permille());
         self.override_q16 = self.override_q16.min(cap);

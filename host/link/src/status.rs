@@ -113,6 +113,9 @@ pub fn hint(code: FaultCode) -> &'static str {
         WrongScale => {
             "the axis moved too much or too little for its torque at enable: check counts_per_rev, lead and the masses in the machine file, then clear"
         }
+        CeilingsLocked => {
+            "the configuration raises a ceiling or widens the travel the drive holds: only in maintenance, triquint configure --unlock-ceilings"
+        }
     }
 }
 

@@ -49,7 +49,7 @@ pub fn run(args: &HomeArgs, machine: &Machine) -> CliResult {
     let bus = &args.bus.bus(machine)?;
     let homing = &machine.homing;
     let ids = bus.ids;
-    configure(machine, bus)?;
+    configure(machine, bus, false)?;
     let mut port = open(&bus.iface)?;
     // Every axis at once: the commands go out back to back (well within a tick).
     for (k, id) in ids.iter().enumerate() {

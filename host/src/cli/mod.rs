@@ -5,6 +5,7 @@
 pub mod bus_args;
 pub mod check;
 pub mod clear;
+pub mod configure;
 pub mod estop;
 pub mod feed;
 pub mod feed_override;

@@ -52,6 +52,11 @@ pub enum AboveCeiling {
     /// Ceilings at the plan's limits, the stop ramps sent this fraction
     /// of their size.
     StopRamp(f64),
+    /// The drives commissioned with one ceiling as in [`Segment`](Self::Segment),
+    /// then the host configures them with the default (top) ceilings, as
+    /// from a machine file raised without maintenance: the ceiling lock
+    /// must refuse that commit.
+    Locked(usize, f64),
 }
 
 /// What goes wrong during one run.
@@ -78,6 +83,9 @@ pub struct Scenario {
     /// One axis (0–2) described wrongly.
     pub miswired: Option<(usize, Miswired)>,
     pub above_ceiling: Option<AboveCeiling>,
+    /// The host opens the drives' maintenance window before its commit
+    /// (`upload`'s session with `unlock_ceilings`).
+    pub unlock_ceilings: bool,
 }
 
 /// The ceilings and ramp factor of `case` for `plan`.
@@ -105,6 +113,33 @@ fn ceilings_for(plan: &Plan, case: AboveCeiling) -> (Ceilings, f64) {
             set(&mut c, [l.velocity, l.acceleration, l.jerk]);
             (c, f)
         }
+        // The run's own configuration: the top ceilings.
+        AboveCeiling::Locked(..) => (c, 1.0),
+    }
+}
+
+/// Configures the drives of `sim` with `settings` for `plan`, no motion
+/// (the machine as commissioned before the run).
+fn commission(sim: &mut Sim, plan: &Plan, settings: &DriveSettings, fd: bool) -> Option<()> {
+    let configs = DriveConfigs::for_plan(plan, settings).ok()?.nodes;
+    let opts = SessionOptions {
+        fd,
+        ..SessionOptions::default()
+    };
+    let mut session = Session::configure(configs, opts);
+    loop {
+        let mut port = SimPort {
+            sim: &mut *sim,
+            tx_queue: 32,
+        };
+        if session.poll(&mut port).ok()?.is_some() {
+            return Some(());
+        }
+        let t = sim.now_ns() + 100_000;
+        if t > 5_000_000_000 {
+            return None;
+        }
+        sim.run_until(t).ok()?;
     }
 }
 
@@ -183,6 +218,7 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     // is right, within the stop budget.
     let must_refuse = match sc.above_ceiling {
         Some(AboveCeiling::Segment(..)) => true,
+        Some(AboveCeiling::Locked(..)) => !sc.unlock_ceilings,
         Some(AboveCeiling::OverrideCap(_)) => {
             let m = triquint_shared::plan::figures::kinematics(&plan.segments);
             let [v, a, j] = m.largest();
@@ -205,9 +241,18 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     cfg.bus.capture = true;
     let q0 = plan.segments[0].quintic().eval(0.0).q;
     let mut sim = Sim::with_faults(&plan.robot, q0, cfg, sc.windows.clone(), sc.seed);
+    if let Some(AboveCeiling::Locked(which, f)) = sc.above_ceiling {
+        let (c, _) = ceilings_for(&plan, AboveCeiling::Segment(which, f));
+        let tight = DriveSettings {
+            ceilings: c,
+            ..settings.clone()
+        };
+        commission(&mut sim, &plan, &tight, sc.fd).expect("commissioned");
+    }
     let opts = SessionOptions {
         fd: sc.fd,
         finish_grace_us: 500_000,
+        unlock_ceilings: sc.unlock_ceilings,
         ..SessionOptions::default()
     };
     let mut session = Session::new(&plan, configs, opts).expect("encodable plan");

@@ -11,8 +11,10 @@ use crate::ops::bus::Bus;
 use crate::ops::error::{OpError, OpResult};
 
 /// Writes and commits the drives' configuration (limits-sized, with the
-/// homing settings), without motion.
-pub fn configure(machine: &Machine, bus: &Bus) -> OpResult {
+/// homing settings), without motion; `unlock_ceilings`: in each drive's
+/// maintenance window, so the machine file may raise its ceilings or
+/// widen its travel (docs/safety.md, "The ceiling lock").
+pub fn configure(machine: &Machine, bus: &Bus, unlock_ceilings: bool) -> OpResult {
     let settings = DriveSettings {
         control_rate: bus.rate,
         node_ids: bus.ids,
@@ -23,6 +25,7 @@ pub fn configure(machine: &Machine, bus: &Bus) -> OpResult {
     let opts = SessionOptions {
         fd: bus.fd,
         response_timeout_us: (bus.timeout_s * 1e6) as u64,
+        unlock_ceilings,
         ..SessionOptions::default()
     };
     let mut session = Session::configure(configs, opts);

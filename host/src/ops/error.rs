@@ -138,6 +138,9 @@ fn upload_message(e: &UploadError, iface: &str, ids: [u8; 3], timeout_s: f64) ->
             mm(start_mm[2])
         ),
         e @ UploadError::Timeout { .. } => format!("{iface}: {e} (silent for {timeout_s} s)"),
+        e @ UploadError::CeilingsLocked { .. } => format!(
+            "{iface}: {e}: a drive takes raised ceilings or wider travel only in maintenance, with the machine at rest: `triquint configure --machine MACHINE.toml --iface {iface}{n} --unlock-ceilings`"
+        ),
         e => format!("{iface}: {e}"),
     }
 }

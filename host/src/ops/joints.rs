@@ -33,7 +33,7 @@ pub fn reported_joints(machine: &Machine, bus: &Bus) -> OpResult<Vector3<f64>> {
     let mut port = open(&bus.iface)?;
     let (mut q, mut homed) = listen_positions(&mut port, ids, Duration::from_millis(300))?;
     if q.iter().any(Option::is_none) {
-        configure(machine, bus)?;
+        configure(machine, bus, false)?;
         (q, homed) = listen_positions(&mut port, ids, Duration::from_secs_f64(bus.timeout_s))?;
     }
     drop(port);

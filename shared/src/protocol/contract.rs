@@ -37,6 +37,10 @@ pub const MIN_HEARTBEAT_US: u64 = 1_000;
 /// Armed this long after the start, or Idle this long before the end of
 /// the plan (µs): covers the start skew (one tick) and the end skew.
 pub const PEER_SKEW_MARGIN_US: u64 = 20_000;
+/// How long the maintenance window `UnlockCeilings` opens stays open at
+/// most (µs): long enough for a configuration's writes and the commit's
+/// resends, short enough that a forgotten unlock does not stay open.
+pub const MAINTENANCE_WINDOW_US: u64 = 10_000_000;
 
 /// One row of the generated table.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,6 +125,14 @@ pub const BOUNDS: &[Bound] = &[
         unit: "ms",
         doc: spec_text!(
             "A peer still Loaded/Armed this long after the start, or Idle this long before the plan's end, stops a running node (`PeerLost`)."
+        ),
+    },
+    Bound {
+        name: "maintenance window",
+        value: MAINTENANCE_WINDOW_US as f64 / 1000.0,
+        unit: "ms",
+        doc: spec_text!(
+            "`UnlockCeilings` lets the next ConfigCommit raise ceilings or widen the travel for at most this long (`CeilingsLocked` after)."
         ),
     },
 ];

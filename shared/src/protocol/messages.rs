@@ -81,6 +81,8 @@ code_enum! {
         WrongDirection = 23,
         /// The enable check: the axis's acceleration per torque was outside ¼–4× the model's (encoder scale, lead or inertia wrong).
         WrongScale = 24,
+        /// ConfigCommit refused: the configuration would raise a ceiling (`ceiling_*`, indices 55–58) or widen the travel (`soft_limit_min`, `soft_limit_max`) beyond the active configuration's outside a maintenance window (`UnlockCeilings`); the acknowledgement's value is the index of the first such parameter.
+        CeilingsLocked = 25,
     }
 }
 
@@ -151,6 +153,8 @@ code_enum! {
         Home = 11,
         /// Feed override: σ = `arg2`/1000 from host time `arg` (persists; a hold keeps it for the resume); refused above `override_cap`, the acknowledgement's value is the cap (per mille).
         Override = 12,
+        /// Idle with a configuration: open the maintenance window in which the next ConfigCommit may raise ceilings or widen the travel; `arg` must be the CRC-32 of the active configuration (else `ConfigMismatch`). The window closes at that commit, at any other command but ReadConfig and ConfigCommit, and the maintenance window (Acceptance bounds) after it opened; the acknowledgement's value is the window (ms).
+        UnlockCeilings = 13,
     }
 }
 
@@ -209,7 +213,7 @@ messages! {
         command: u8 @ 0 ["", 1.0, CommandCode],
         /// Echoed in the CommandAck.
         token: u8 @ 1 ["", 1.0],
-        /// Start: host time (µs); FeedHold, Resume, Stop, QuickStop, Override: host time (µs) all nodes apply it at, 0 = on receipt; ConfigCommit: CRC-32; otherwise 0.
+        /// Start: host time (µs); FeedHold, Resume, Stop, QuickStop, Override: host time (µs) all nodes apply it at, 0 = on receipt; ConfigCommit: CRC-32; UnlockCeilings: CRC-32 of the active configuration; otherwise 0.
         arg: u32 @ 2 ["", 1.0],
         /// Override: σ in per mille (1000 = 100 %); otherwise 0.
         arg2: u16 @ 6 ["", 1.0],
@@ -239,7 +243,7 @@ messages! {
         result: u8 @ 2 ["", 1.0, FaultCode],
         /// State after the command.
         state: u8 @ 3 ["", 1.0, State],
-        /// ConfigCommit: CRC-32 the node computed; Override: the cap (per mille); Arm: the feed override the plan starts at (per mille); otherwise 0.
+        /// ConfigCommit: CRC-32 the node computed (refused with CeilingsLocked: the index of the first parameter that widens); Override: the cap (per mille); Arm: the feed override the plan starts at (per mille); UnlockCeilings: the window (ms); otherwise 0.
         value: u32 @ 4 ["", 1.0],
     }
     /// Periodic status of node n.

@@ -45,21 +45,31 @@ pub async fn receive(
 ) {
     let mut handoff = HandOff::new();
     loop {
-        let frame = match select(rx.read_fd(), RESTORE.receive()).await {
-            Either::First(Ok(env)) => to_core(&env.frame).map(|frame| RxFrame {
-                frame,
-                timestamp_us: env.ts.as_micros(),
-            }),
+        let (frame, kept) = match select(rx.read_fd(), RESTORE.receive()).await {
+            Either::First(Ok(env)) => (
+                to_core(&env.frame).map(|frame| RxFrame {
+                    frame,
+                    timestamp_us: env.ts.as_micros(),
+                }),
+                false,
+            ),
             // Counted by the controller (TEC/REC), which the tick reports.
-            Either::First(Err(_bus_error)) => None,
-            Either::Second(kept) => Some(kept),
+            Either::First(Err(_bus_error)) => (None, false),
+            Either::Second(kept) => (Some(kept), true),
         };
         // Every frame, homed or not: the core refuses motion until homed.
         let Some(frame) = frame else {
             continue;
         };
         let snapshot = critical_section::with(|cs| SNAPSHOT.borrow(cs).get());
-        if let Some(item) = receiver.on_frame(&frame, snapshot) {
+        // The kept configuration is the board's own: not held to the
+        // ceiling lock as a host's commit is.
+        let item = if kept {
+            receiver.on_kept_frame(&frame, snapshot)
+        } else {
+            receiver.on_frame(&frame, snapshot)
+        };
+        if let Some(item) = item {
             hand_off(&mut handoff, &mut to_tick, &mut rx, &mut receiver, item).await;
         }
     }

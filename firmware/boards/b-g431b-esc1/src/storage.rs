@@ -1,6 +1,8 @@
 //! The node's configuration in flash (sequential-storage map in the last 4 KB):
 //! every configuration the host commits over CAN is kept, and replayed into
-//! the node after homing on the next start, through the same protocol frames.
+//! the node after homing on the next start, through the same protocol frames
+//! as the board's own (`Receiver::on_kept_frame`: not held to the ceiling
+//! lock, which only ever let tighter or maintenance bounds reach the store).
 
 use core::ops::Range;
 

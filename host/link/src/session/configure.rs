@@ -35,6 +35,8 @@ pub(crate) struct Configuration {
     configs: [DriveConfig; AXES],
     commits: [Commit; AXES],
     readback: Option<Readback>,
+    /// The maintenance windows were asked for.
+    unlock: bool,
 }
 
 fn is_commit(v: &NodeView) -> bool {
@@ -48,6 +50,7 @@ impl Configuration {
             configs,
             commits: [Commit::default(); AXES],
             readback: None,
+            unlock: false,
         }
     }
 
@@ -56,8 +59,16 @@ impl Configuration {
         self.configs[i].node_id as u8
     }
 
-    /// Writes every node's configuration, then commits each.
-    pub fn start(&mut self, now: u64, out: &mut Outbox) {
+    /// Writes every node's configuration, then commits each; with
+    /// `unlock`, each configured node's maintenance window is opened first
+    /// (its key: the CRC it reports running, from `nodes`).
+    pub fn start(&mut self, now: u64, nodes: &Nodes, unlock: bool, out: &mut Outbox) {
+        self.unlock = unlock;
+        for (i, v) in nodes.0.iter().enumerate() {
+            if unlock && v.config_crc != 0 {
+                out.command(self.id(i), CommandCode::UnlockCeilings, v.config_crc);
+            }
+        }
         for i in 0..AXES {
             self.write(i, out);
         }
@@ -99,6 +110,17 @@ impl Configuration {
                 .filter(|a| a.command == CommandCode::ConfigCommit as u8);
             match answer {
                 Some(a) if a.result == 0 => done += 1,
+                // A locked bound widened: the answer names it.
+                Some(a) if a.token == c.token && a.result == FaultCode::CeilingsLocked as u8 => {
+                    let values = self.configs[i].to_values();
+                    let k = a.value as usize;
+                    return Err(UploadError::CeilingsLocked {
+                        node: self.id(i),
+                        param: PARAMS.get(k).map(|p| p.name),
+                        plan_value: values.get(k).copied().unwrap_or(f32::NAN),
+                        unlocked: self.unlock,
+                    });
+                }
                 // The latest commit was refused.
                 // Refused for its state (not Idle), not for its values.
                 Some(a)
@@ -301,7 +323,7 @@ mod tests {
         ] {
             let mut c = Configuration::new(cfgs);
             let mut out = Outbox::default();
-            c.start(0, &mut out);
+            c.start(0, &Nodes::new(ids), false, &mut out);
             let mut nodes = Nodes::new(ids);
             for (k, v) in nodes.0.iter_mut().enumerate() {
                 v.last_answer = Some(CommandAnswer {
@@ -328,6 +350,75 @@ mod tests {
             } else {
                 assert!(e.is_refusal() && msg.contains(want), "{msg}");
             }
+        }
+    }
+
+    #[test]
+    fn unlocking_opens_each_configured_nodes_window_with_its_crc_first() {
+        use triquint_shared::protocol::{Msg, decode};
+        let ids = [4, 5, 6];
+        let mut nodes = Nodes::new(ids);
+        // Node 6 has no configuration yet: its first one sets its bounds.
+        (nodes.0[0].config_crc, nodes.0[1].config_crc) = (0xAB, 0xCD);
+        for unlock in [false, true] {
+            let mut c = Configuration::new(configs(ids));
+            let mut out = Outbox::default();
+            c.start(0, &nodes, unlock, &mut out);
+            let commands: Vec<(u8, u8, u32)> = out
+                .frames()
+                .filter_map(|f| match decode(f) {
+                    Ok((Msg::Command(k), n)) => Some((k.command, n, k.arg)),
+                    _ => None,
+                })
+                .collect();
+            let u = CommandCode::UnlockCeilings as u8;
+            let unlocks: Vec<_> = commands.iter().filter(|k| k.0 == u).collect();
+            if unlock {
+                assert_eq!(unlocks, [&(u, 4, 0xAB), &(u, 5, 0xCD)]);
+                // Before any write.
+                assert!(matches!(
+                    decode(out.frames().next().unwrap()),
+                    Ok((Msg::Command(_), 4))
+                ));
+            } else {
+                assert!(unlocks.is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn a_commit_refused_for_the_ceiling_lock_names_the_parameter() {
+        let ids = [4, 5, 6];
+        let mut cfgs = configs(ids);
+        cfgs[2].ceiling_jerk = 123.0;
+        let opts = SessionOptions::default();
+        for unlock in [false, true] {
+            let mut c = Configuration::new(cfgs);
+            let mut out = Outbox::default();
+            let nodes0 = Nodes::new(ids);
+            c.start(0, &nodes0, unlock, &mut out);
+            let mut nodes = Nodes::new(ids);
+            for (k, v) in nodes.0.iter_mut().enumerate() {
+                let locked = k == 2;
+                v.last_answer = Some(CommandAnswer {
+                    command: CommandCode::ConfigCommit as u8,
+                    token: c.commits[k].token,
+                    result: if locked {
+                        FaultCode::CeilingsLocked as u8
+                    } else {
+                        0
+                    },
+                    value: if locked { 57 } else { cfgs[k].crc() },
+                });
+            }
+            let e = c.committed(0, &nodes, &opts, &mut out).unwrap_err();
+            let msg = e.to_string();
+            assert!(e.is_refusal(), "{msg}");
+            assert!(
+                msg.contains("node 6") && msg.contains("`ceiling_jerk` (to 123)"),
+                "{msg}"
+            );
+            assert_eq!(msg.contains("maintenance window"), unlock, "{msg}");
         }
     }
 }

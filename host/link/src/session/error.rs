@@ -77,6 +77,19 @@ pub enum UploadError {
         run_us: u64,
         need_us: u64,
     },
+    #[error(
+        "node {node} refused the configuration: CeilingsLocked: it widens `{}` (to {plan_value}) beyond what the drive holds{}; nothing moved",
+        param.unwrap_or("a ceiling or the travel"),
+        if *unlocked { ", even in the maintenance window (it closed, or the unlock was refused)" } else { "" }
+    )]
+    CeilingsLocked {
+        node: u8,
+        /// The parameter the drive named (`None`: an index this host does not know).
+        param: Option<&'static str>,
+        plan_value: f32,
+        /// The session had asked for the maintenance window.
+        unlocked: bool,
+    },
     #[error("node {node} refused {}: {}", command.name(), code_name(*code, "unknown code"))]
     Refused {
         node: u8,
@@ -133,6 +146,7 @@ impl UploadError {
                 | UploadError::NotHomed { .. }
                 | UploadError::ArmTooFar { .. }
                 | UploadError::Refused { .. }
+                | UploadError::CeilingsLocked { .. }
         )
     }
 

@@ -573,7 +573,8 @@ impl Session {
         }
         self.out.command(0, CommandCode::Reset, 0);
         if self.opts.configure {
-            self.config.start(now, &mut self.out);
+            let unlock = self.opts.unlock_ceilings;
+            self.config.start(now, &self.nodes, unlock, &mut self.out);
             self.set_phase(Phase::Configure, now);
         } else {
             self.set_phase(Phase::VerifyConfig, now);

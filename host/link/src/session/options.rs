@@ -41,6 +41,10 @@ pub struct SessionOptions {
     /// Send continuations compact where possible (`protocol::compact`);
     /// `false` sends every segment in full.
     pub compact: bool,
+    /// Maintenance: open each configured drive's maintenance window
+    /// (`UnlockCeilings`) before the writes, so the commit may raise its
+    /// ceilings or widen its travel (`CeilingsLocked` otherwise).
+    pub unlock_ceilings: bool,
 }
 
 impl Default for SessionOptions {
@@ -64,6 +68,7 @@ impl Default for SessionOptions {
             require_homed: true,
             feed_override: None,
             compact: true,
+            unlock_ceilings: false,
         }
     }
 }

@@ -34,6 +34,12 @@ impl Outbox {
         self.frames.is_empty()
     }
 
+    /// The frames queued, in order (tests).
+    #[cfg(test)]
+    pub fn frames(&self) -> impl Iterator<Item = &Frame> {
+        self.frames.iter()
+    }
+
     /// Queues a command to `node` (0: every node) with a new token; returns it.
     pub fn command(&mut self, node: u8, code: CommandCode, arg: u32) -> u8 {
         let token = self.next_token();
