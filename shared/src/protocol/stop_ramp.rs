@@ -76,18 +76,31 @@ pub fn stop_time(v: f64, a: f64, j: f64, jerk_limit: f64, cap: f64) -> f64 {
 /// [`stop_time`] for the budget `budget` (m/s³) rather than the one a jerk
 /// limit gives.
 pub fn stop_time_for_budget(v: f64, a: f64, j: f64, budget: f64, cap: f64) -> f64 {
+    grid_bound(v, a, j, budget, cap, DS_CELLS, U_CELLS)
+}
+
+/// [`stop_time_for_budget`] on a grid of `ds_cells` × `u_cells`.
+fn grid_bound(
+    v: f64,
+    a: f64,
+    j: f64,
+    budget: f64,
+    cap: f64,
+    ds_cells: usize,
+    u_cells: usize,
+) -> f64 {
     let cap = if cap.is_finite() { cap.max(1.0) } else { 1.0 };
     let budget = budget.max(1e-9);
     let mut t = MIN_RAMP_S;
-    for i in 0..DS_CELLS {
-        let d0 = cap * i as f64 / DS_CELLS as f64;
-        let d1 = cap * (i + 1) as f64 / DS_CELLS as f64;
+    for i in 0..ds_cells {
+        let d0 = cap * i as f64 / ds_cells as f64;
+        let d1 = cap * (i + 1) as f64 / ds_cells as f64;
         // |σ̇|·T ≤ S'·m1, |σ̈|·T² ≤ |S''|·m2 (m1 grows with Δσ, m2 falls).
         let m1 = RHO_SLACK * libm::sqrt(d1).min(1.0);
         let m2 = RHO_SLACK * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
-        for k in 0..U_CELLS {
-            let u0 = k as f64 / U_CELLS as f64;
-            let u1 = (k + 1) as f64 / U_CELLS as f64;
+        for k in 0..u_cells {
+            let u0 = k as f64 / u_cells as f64;
+            let u1 = (k + 1) as f64 / u_cells as f64;
             // σ is largest at the cell's smallest Δσ and S.
             let sigma = cap - d0 * s(u0);
             let fixed = j * sigma * sigma * sigma;
@@ -102,45 +115,40 @@ pub fn stop_time_for_budget(v: f64, a: f64, j: f64, budget: f64, cap: f64) -> f6
     t
 }
 
-/// Cells of the coarse grid the drives size their own ramps on (over Δσ
-/// and over u): a coarser grid is still a bound (each cell's terms are
-/// bounded by their monotonicity on it), only a less tight one.
+/// Bands of the grid the drives size their own ramps on over Δσ (each
+/// term bounded by its monotonicity on a band), and its cells over u.
 const COARSE_DS_CELLS: usize = 8;
 const COARSE_U_CELLS: usize = 24;
+/// h²/8 for the u-cells' width h: a C² function on a cell exceeds the
+/// larger of its end values by at most h²/8 times its largest |f″| there
+/// (linear interpolation's error).
+const INTERPOLATION: f32 = 1.0 / (8.0 * (COARSE_U_CELLS * COARSE_U_CELLS) as f32);
+/// Largest S′ (15/8) and |S″| (10/√3), rounded up.
+const S1_MAX: f32 = 1.875_001;
+const S2_MAX: f32 = 5.773_51;
+/// Largest |S′S″|, |S‴| and |S⁗| on [0, 1], rounded up.
+const S1S2_MAX: f32 = 6.7;
+const S3_MAX: f32 = 60.0;
+const S4_MAX: f32 = 360.0;
 /// f32 rounding of the cell arithmetic, added to the ramp.
 const F32_SLACK: f32 = 1.0e-4;
 /// The longest ramp a drive runs (s): a segment that needs more is refused.
 pub const MAX_RAMP_S: f32 = 4.0;
 
-/// Per u-cell of the coarse grid: S at its start, the largest S′ and |S″|
-/// on it (rounded up), computed once at compile time.
-const U_TABLE: [[f32; 3]; COARSE_U_CELLS] = u_table();
+/// S, S′ and |S″| at the grid's nodes u = k/24 (the last two rounded
+/// up), computed once at compile time. |S″| has kinks only at 0, ½ and 1,
+/// all nodes: each cell's terms are C² on it.
+const U_NODES: [[f32; 3]; COARSE_U_CELLS + 1] = u_nodes();
 
-const fn u_table() -> [[f32; 3]; COARSE_U_CELLS] {
-    const R: f32 = 0.288_675_13;
-    let mut t = [[0.0f32; 3]; COARSE_U_CELLS];
+const fn u_nodes() -> [[f32; 3]; COARSE_U_CELLS + 1] {
+    let mut t = [[0.0f32; 3]; COARSE_U_CELLS + 1];
     let mut k = 0;
-    while k < COARSE_U_CELLS {
-        let u0 = k as f32 / COARSE_U_CELLS as f32;
-        let u1 = (k + 1) as f32 / COARSE_U_CELLS as f32;
-        let mid = if 0.5 < u0 {
-            u0
-        } else if 0.5 > u1 {
-            u1
-        } else {
-            0.5
-        };
-        let mut m2 = s2_f32(u0).max(s2_f32(u1));
-        if u0 <= 0.5 - R && 0.5 - R <= u1 {
-            m2 = m2.max(s2_f32(0.5 - R));
-        }
-        if u0 <= 0.5 + R && 0.5 + R <= u1 {
-            m2 = m2.max(s2_f32(0.5 + R));
-        }
+    while k <= COARSE_U_CELLS {
+        let u = k as f32 / COARSE_U_CELLS as f32;
         t[k] = [
-            s_f32(u0),
-            s1_f32(mid) * (1.0 + F32_SLACK),
-            m2 * (1.0 + F32_SLACK),
+            s_f32(u),
+            s1_f32(u) * (1.0 + F32_SLACK),
+            s2_f32(u) * (1.0 + F32_SLACK),
         ];
         k += 1;
     }
@@ -188,13 +196,40 @@ pub fn budgets(j: f32, jerk_limit: f32, ceiling: f32, cap: f32) -> [f32; 2] {
     ]
 }
 
+/// The ramp so far with 1/T and 1/T².
+type Ramp = [f32; 3];
+
+/// Raises `tk` to the shortest ramp T with fixed + b/T + c/T² within
+/// `budget`; `None` when fixed leaves no room.
+fn raise([fixed, b, c]: [f32; 3], budget: f32, tk: &mut Ramp) -> Option<()> {
+    let room = budget - fixed;
+    if room <= 0.0 {
+        return None;
+    }
+    // Within the budget at the ramp so far: no longer needed.
+    if b * tk[1] + c * tk[2] <= room {
+        return Some(());
+    }
+    let cell = (b + sqrt_f32(b * b + 4.0 * room * c)) / (2.0 * room);
+    if cell > tk[0] {
+        let inv = 1.0 / cell;
+        *tk = [cell, inv, inv * inv];
+    }
+    Some(())
+}
+
 /// The ramps (s) with which every transition from a constant σ ≤ `cap`
 /// keeps the joint jerk of a segment with maxima `v`, `a`, `j` within each
-/// of `budgets`: [`stop_time`]'s rule on an 8 × 24 grid in f32, the one
-/// function both the drives (for each segment they accept) and the host
-/// (over the plan) run. `None` when no ramp up to [`MAX_RAMP_S`] does (the
-/// segment's own jerk at the cap leaves no room) or an input is not a
-/// finite number ≥ 0.
+/// of `budgets`: [`stop_time`]'s rule in f32, the one function both the
+/// drives (for each segment they accept) and the host (over the plan) run.
+/// On each of 8 bands of Δσ, F is bounded by the smooth function of u
+/// with σ at the band's smallest Δσ, σ̇'s factor at its largest and σ̈'s at
+/// its smallest; that function is bounded by its values at the 25 nodes
+/// u = k/24 plus h²/8 times a bound on its second derivative (so the
+/// bound is tight to second order in h, where one that takes each term's
+/// largest value on a cell loses to first order). `None` when no ramp up
+/// to [`MAX_RAMP_S`] does (the segment's own jerk at the cap leaves no
+/// room) or an input is not a finite number ≥ 0.
 pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
     let ok = |x: f32| x.is_finite() && x >= 0.0;
     if !(ok(v) && ok(a) && ok(j) && budgets.iter().all(|b| ok(*b)) && ok(cap) && cap >= 1.0) {
@@ -203,8 +238,7 @@ pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Opti
     let ds_n = COARSE_DS_CELLS as f32;
     let slack = RHO_SLACK as f32;
     let t0 = MIN_RAMP_S as f32;
-    // Per budget: the ramp so far, 1/T and 1/T².
-    let mut t = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
+    let mut t: [Ramp; 2] = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
     // The full stops first: they need the longest ramps, so later cells
     // seldom raise it (a raise costs a division and a square root).
     for i in (0..COARSE_DS_CELLS).rev() {
@@ -214,26 +248,24 @@ pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Opti
         let m1 = slack * sqrt_f32(d1).min(1.0);
         let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
         let (am1, vm2) = (3.0 * a * m1, v * m2);
-        for [s, s1, s2] in U_TABLE {
-            // σ is largest at the cell's smallest Δσ and S.
+        // On this band F ≤ j·g³ + am1·g·S′/T + vm2·|S″|/T², g = cap − d0·S
+        // (0 ≤ g ≤ cap). Its second derivatives in u, term by term:
+        // (g³)″ = 6g·g′² + 3g²·g″, (g·S′)″ = g·S‴ − 3·d0·S′S″, |S″|″ = ±S⁗.
+        let r = [
+            j * (6.0 * cap * d0 * d0 * S1_MAX * S1_MAX + 3.0 * cap * cap * d0 * S2_MAX),
+            am1 * (cap * S3_MAX + 3.0 * d0 * S1S2_MAX),
+            vm2 * S4_MAX,
+        ]
+        .map(|x| x * INTERPOLATION);
+        for [s, s1, s2] in U_NODES {
             let sigma = cap - d0 * s;
-            let fixed = j * sigma * sigma * sigma;
-            let b = am1 * sigma * s1;
-            let c = vm2 * s2;
+            let node = [
+                j * sigma * sigma * sigma + r[0],
+                am1 * sigma * s1 + r[1],
+                vm2 * s2 + r[2],
+            ];
             for (budget, tk) in budgets.iter().zip(t.iter_mut()) {
-                let room = budget - fixed;
-                if room <= 0.0 {
-                    return None;
-                }
-                // Within the budget at the ramp so far: no longer needed.
-                if b * tk[1] + c * tk[2] <= room {
-                    continue;
-                }
-                let cell = (b + sqrt_f32(b * b + 4.0 * room * c)) / (2.0 * room);
-                if cell > tk[0] {
-                    let inv = 1.0 / cell;
-                    *tk = [cell, inv, inv * inv];
-                }
+                raise(node, *budget, tk)?;
             }
         }
     }
@@ -349,8 +381,44 @@ mod tests {
                 let fine = stop_time_for_budget(v, a, j, b, cap);
                 assert!(t >= fine, "{t} < {fine}");
                 assert!(t <= 1.35 * fine.max(MIN_RAMP_S), "{t} ≫ {fine}");
+                // Never longer than taking each term's largest value on
+                // every cell of the same 8 × 24 grid (the rule before).
+                let cells = grid_bound(v, a, j, b, cap, COARSE_DS_CELLS, COARSE_U_CELLS);
+                assert!(t <= cells * (1.0 + 1e-3), "{t} > {cells}");
             }
         }
+    }
+
+    /// The same over a sweep of maxima, caps and ceilings: the node bound
+    /// with its second-derivative margin holds between the nodes.
+    #[test]
+    fn segment_ramp_is_a_bound_over_a_sweep() {
+        let mut checked = 0;
+        for v in [0.02, 0.5, 2.0] {
+            for a in [0.1, 1.2, 6.0] {
+                for j in [0.0, 1.0, 4.0] {
+                    for cap in [1.0, 1.4, 3.0] {
+                        for ceil in [6.0, 40.0] {
+                            let bs = budgets(j as f32, 5.0, ceil as f32, cap as f32);
+                            let Some(r) =
+                                segment_ramp(v as f32, a as f32, j as f32, bs, cap as f32)
+                            else {
+                                continue;
+                            };
+                            for (t, b) in r.iter().zip(bs) {
+                                let w = worst_jerk(v, a, j, cap, *t as f64);
+                                assert!(
+                                    w <= b as f64 * (1.0 + 1e-6),
+                                    "{v} {a} {j} {cap} {ceil}: {w} > {b}"
+                                );
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 150, "{checked}");
     }
 
     #[test]
