@@ -133,18 +133,16 @@ fn every_subcommand_and_option_is_in_the_synopsis() {
             }
         }
     }
+    let page =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/cli.md"))
+            .unwrap();
+    let shared = page
+        .split("## Options every command shares")
+        .nth(1)
+        .expect("a section of shared options");
     for opt in ["--machine", "--robot", "--rate"] {
         assert!(
-            names(
-                &std::fs::read_to_string(
-                    Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/cli.md")
-                )
-                .unwrap()
-                .split("## Options every command shares")
-                .nth(1)
-                .unwrap(),
-                opt
-            ),
+            names(shared, opt),
             "docs/cli.md: the shared options section lacks {opt}"
         );
     }
@@ -154,8 +152,37 @@ fn every_subcommand_and_option_is_in_the_synopsis() {
 fn no_help_shows_a_rust_path() {
     for sub in subcommands() {
         let help = triquint(&[&sub, "--help"]);
-        for line in help.lines().filter(|l| l.contains("::")) {
-            panic!("`triquint {sub} --help` shows a Rust path: {line}");
+        let paths: Vec<&str> = help.lines().filter(|l| l.contains("::")).collect();
+        assert!(
+            paths.is_empty(),
+            "`triquint {sub} --help` shows a Rust path: {paths:?}"
+        );
+    }
+}
+
+/// A command that reads the machine file takes its drives' node ids from
+/// it unless `--nodes` says otherwise: `status --machine` of a machine on
+/// nodes 4, 5, 6 must not listen for 1, 2, 3.
+#[test]
+fn nodes_default_to_the_machine_files_where_a_command_reads_it() {
+    for sub in subcommands() {
+        let help = triquint(&[&sub, "--help"]);
+        if !(names(&help, "--nodes") && names(&help, "--machine")) {
+            continue;
         }
+        let nodes: String = help
+            .split("--nodes")
+            .nth(1)
+            .unwrap()
+            .split("\n      -")
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert!(
+            nodes.contains("[default: the machine file's `axis.N.node_id`]"),
+            "`triquint {sub} --help`: --nodes does not default to the machine file's: {nodes}"
+        );
     }
 }
