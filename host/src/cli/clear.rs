@@ -16,6 +16,7 @@ use crate::cli::status_text::print_text;
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::{listen, open};
 use crate::ops::send::send_command;
+use crate::ops::shown::drive_name;
 
 #[derive(Args, Debug)]
 pub struct ClearArgs {
@@ -37,8 +38,9 @@ pub fn run(args: &ClearArgs, machine: &Machine) -> CliResult {
     listen(&mut port, &mut l, Duration::from_millis(500), false)?;
     if let Some(v) = l.nodes.0.iter().find(|v| v.heartbeat_at.is_none()) {
         return Err(CliError::device(format!(
-            "{}: node {} sent no heartbeat within 0.5 s",
-            args.iface, v.id
+            "{}: {} sent no heartbeat within 0.5 s",
+            args.iface,
+            drive_name(ids, v.id)
         )));
     }
     let faulted: Vec<u8> = l
@@ -70,8 +72,10 @@ pub fn run(args: &ClearArgs, machine: &Machine) -> CliResult {
         }
         None => Ok(()),
         Some(n) => Err(CliError::motion_fault(format!(
-            "{}: node {} is still in Fault ({})",
-            args.iface, n.id, n.fault.name
+            "{}: {} is still in Fault ({})",
+            args.iface,
+            drive_name(ids, n.id),
+            n.fault.name
         ))),
     }
 }
