@@ -20,7 +20,7 @@ def estop(*extra):
 
 
 def node_lines(out):
-    return dict(re.findall(r"^node (\d+): (.*)$", out, re.M))
+    return dict(re.findall(r"^axis \d \(node (\d+)\): (.*)$", out, re.M))
 
 
 def status(*extra):
@@ -51,7 +51,7 @@ def test_idle_drives_confirm_and_a_missing_one_is_named(make_sim, bus):
     lines = node_lines(out)
     assert lines["1"] == lines["2"] == "Fault (HostEmergency)", out
     assert lines["3"] == "no answer", out
-    assert "node 3 did not confirm the emergency stop within 200 ms" in err, err
+    assert "axis 3 (node 3) did not confirm the emergency stop within 200 ms" in err, err
     sim.stop()
 
 
@@ -61,7 +61,7 @@ def test_node_ids_4_5_6(make_sim, bus):
     # Addressed as 1, 2, 3: nobody confirms (the drives still stop: node 0).
     code, out, err, _ = estop()
     assert code == DEVICE, (out, err)
-    assert "nodes 1, 2, 3 did not confirm" in err, err
+    assert "axis 1 (node 1), axis 2 (node 2), axis 3 (node 3) did not confirm" in err, err
     code, out, err, _ = estop("--nodes", "4,5,6")
     assert code == 0, err
     assert set(node_lines(out)) == {"4", "5", "6"}, out

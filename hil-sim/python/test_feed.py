@@ -69,7 +69,7 @@ def test_feed_hold_resume_override_and_stop_from_another_process(make_sim, bus):
     assert code == 0, err
     out, err = p.communicate(timeout=120)
     assert p.returncode == 0, err
-    assert "node 1: Idle, fault None" in out, out
+    assert "axis 1 (node 1): Idle, fault None" in out, out
     s = status()
     assert all(n["state"] == "Idle" and n["fault"]["code"] == 0 for n in s["nodes"]), s
     # Case II is closed: the next upload starts where this one ended. Stop it.
@@ -95,7 +95,7 @@ def test_upload_approach_from_power_on_and_from_home(make_sim, bus):
     code, out, err = run([TRIQUINT, "upload", plan_path(2), "--iface", IFACE, "--approach"],
                          timeout=180)
     assert code == 0, err
-    assert "node 1: Idle, fault None" in out, out
+    assert "axis 1 (node 1): Idle, fault None" in out, out
     sim.stop()
     sim = make_sim("approach-home", extra=["--unhomed"])
     sim.wait_heartbeats(bus)
@@ -104,7 +104,7 @@ def test_upload_approach_from_power_on_and_from_home(make_sim, bus):
     code, out, err = run([TRIQUINT, "upload", plan_path(2), "--iface", IFACE, "--approach"],
                          timeout=180)
     assert code == 0, err
-    assert "node 1: Idle, fault None" in out, out
+    assert "axis 1 (node 1): Idle, fault None" in out, out
     code, out, err = run([TRIQUINT, "status", "--iface", IFACE, "--json"])
     assert code == 0, err
     s = json.loads(out)

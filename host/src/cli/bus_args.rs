@@ -41,10 +41,7 @@ impl BusArgs {
                 self.timeout
             )));
         }
-        let ids = match &self.nodes_arg {
-            Some(n) => triquint_cli_common::parse::parse_axis_nodes("--nodes", n)?,
-            None => machine.axes.each_ref().map(|a| a.node_id),
-        };
+        let ids = node_ids(self.nodes_arg.as_deref(), machine)?;
         Ok(Bus {
             iface: self.iface.clone(),
             fd: self.fd,
@@ -52,6 +49,15 @@ impl BusArgs {
             rate,
             timeout_s: self.timeout,
         })
+    }
+}
+
+/// The node ids of axes 1, 2, 3: `--nodes` when given, else the machine
+/// file's `axis.N.node_id`.
+pub fn node_ids(nodes_arg: Option<&str>, machine: &Machine) -> CliResult<[u8; 3]> {
+    match nodes_arg {
+        Some(n) => Ok(triquint_cli_common::parse::parse_axis_nodes("--nodes", n)?),
+        None => Ok(machine.axes.each_ref().map(|a| a.node_id)),
     }
 }
 

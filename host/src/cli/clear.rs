@@ -8,35 +8,39 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use triquint_cli_common::outln;
 use triquint_link::Listener;
-use triquint_shared::Robot;
+use triquint_shared::machine::Machine;
 use triquint_shared::protocol::{CommandCode, State};
 
+use crate::cli::bus_args::node_ids;
 use crate::cli::status_text::print_text;
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::{listen, open};
 use crate::ops::send::send_command;
+use crate::ops::shown::drive_name;
 
 #[derive(Args, Debug)]
 pub struct ClearArgs {
     /// SocketCAN interface (can0, vcan0).
     #[arg(long, value_name = "IFACE")]
     pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15) [default: the
+    /// machine file's `axis.N.node_id`].
+    #[arg(long, value_name = "A,B,C")]
+    pub nodes: Option<String>,
     #[command(flatten)]
     pub machine: crate::machine_arg::MachineArg,
 }
 
-pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
-    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+pub fn run(args: &ClearArgs, machine: &Machine) -> CliResult {
+    let ids = node_ids(args.nodes.as_deref(), machine)?;
     let mut port = open(&args.iface)?;
     let mut l = Listener::new(ids);
     listen(&mut port, &mut l, Duration::from_millis(500), false)?;
     if let Some(v) = l.nodes.0.iter().find(|v| v.heartbeat_at.is_none()) {
         return Err(CliError::device(format!(
-            "{}: node {} sent no heartbeat within 0.5 s",
-            args.iface, v.id
+            "{}: {} sent no heartbeat within 0.5 s",
+            args.iface,
+            drive_name(ids, v.id)
         )));
     }
     let faulted: Vec<u8> = l
@@ -59,7 +63,7 @@ pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
         }
         after = Listener::new(ids);
     }
-    let s = after.status(robot);
+    let s = after.status(&machine.robot);
     print_text(&s)?;
     match s.nodes.iter().find(|n| n.state == Some("Fault")) {
         None if faulted.is_empty() => {
@@ -68,8 +72,10 @@ pub fn run(args: &ClearArgs, robot: &Robot) -> CliResult {
         }
         None => Ok(()),
         Some(n) => Err(CliError::motion_fault(format!(
-            "{}: node {} is still in Fault ({})",
-            args.iface, n.id, n.fault.name
+            "{}: {} is still in Fault ({})",
+            args.iface,
+            drive_name(ids, n.id),
+            n.fault.name
         ))),
     }
 }

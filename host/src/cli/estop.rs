@@ -1,6 +1,6 @@
 //! `triquint estop --iface IFACE [--nodes A,B,C]`: the host's emergency
 //! frame (Emergency from node 0). Every drive stops: a moving one along its
-//! path within its stop time, an idle one goes to Fault; `triquint clear`
+//! path with its stop ramp, an idle one goes to Fault; `triquint clear`
 //! afterwards. The frame going out proves nothing, so the command waits
 //! (`--wait`, 200 ms) for every drive to report it (Fault or Stopping with
 //! the host's code), resending meanwhile: exit 0 when each did, 4 naming
@@ -14,7 +14,7 @@ use triquint_shared::protocol::{FaultCode, State};
 
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::open;
-use crate::ops::shown::nodes_arg;
+use crate::ops::shown::{Drive, drive_name, nodes_arg};
 use triquint_cli_common::outln;
 
 /// Longest `--wait` (ms): an emergency stop must not hang.
@@ -59,17 +59,18 @@ pub fn lines(watch: &EstopWatch) -> Vec<String> {
     watch
         .answers()
         .iter()
-        .zip(ids)
-        .map(|(a, id)| match a {
+        .enumerate()
+        .map(|(i, a)| (Drive::of(ids, i), a))
+        .map(|(d, a)| match a {
             Some(EstopAnswer::Heard { state }) => {
-                format!("node {id}: {} (HostEmergency)", state.name())
+                format!("{d}: {} (HostEmergency)", state.name())
             }
             Some(EstopAnswer::Already { state, fault }) => format!(
-                "node {id}: already {} ({}): stopped, not known to have heard the emergency stop",
+                "{d}: already {} ({}): stopped, not known to have heard the emergency stop",
                 state.name(),
                 fault.name()
             ),
-            None => format!("node {id}: no answer"),
+            None => format!("{d}: no answer"),
         })
         .collect()
 }
@@ -80,20 +81,17 @@ pub fn verdict(iface: &str, watch: &EstopWatch, wait_ms: u64) -> CliResult {
     if silent.is_empty() {
         return Ok(());
     }
-    let names: Vec<String> = silent.iter().map(u8::to_string).collect();
-    let (noun, pronoun) = if silent.len() == 1 {
-        ("node", "it")
-    } else {
-        ("nodes", "they")
-    };
+    let ids = watch.ids();
+    let names: Vec<String> = silent.iter().map(|n| drive_name(ids, *n)).collect();
+    let pronoun = if silent.len() == 1 { "it" } else { "they" };
     Err(CliError::device(format!(
-        "{iface}: {noun} {} did not confirm the emergency stop within {wait_ms} ms (no Emergency frame, no heartbeat in {} or {} with {}): {} may be off the bus or still moving; check with `triquint status --iface {iface}{}`",
+        "{iface}: {} did not confirm the emergency stop within {wait_ms} ms (no Emergency frame, no heartbeat in {} or {} with {}): {} may be off the bus or still moving; check with `triquint status --iface {iface}{}`",
         names.join(", "),
         State::Fault.name(),
         State::Stopping.name(),
         FaultCode::HostEmergency.name(),
         pronoun,
-        nodes_arg(watch.ids()),
+        nodes_arg(ids),
     )))
 }
 
@@ -128,21 +126,21 @@ mod tests {
         assert_eq!(e.status, Status::Device);
         assert!(
             e.message
-                .contains("node 5 did not confirm the emergency stop within 200 ms"),
+                .contains("axis 2 (node 5) did not confirm the emergency stop within 200 ms"),
             "{e}"
         );
         assert!(e.message.contains("--nodes 4,5,6"), "{e}");
         assert_eq!(
             lines(&w),
             [
-                "node 4: Fault (HostEmergency)",
-                "node 5: no answer",
-                "node 6: Stopping (HostEmergency)"
+                "axis 1 (node 4): Fault (HostEmergency)",
+                "axis 2 (node 5): no answer",
+                "axis 3 (node 6): Stopping (HostEmergency)"
             ]
         );
         heard(&mut w, 5, State::Fault, FaultCode::FollowingError);
         assert!(verdict("vcan0", &w, 200).is_ok());
-        assert!(lines(&w)[1].starts_with("node 5: already Fault (FollowingError)"));
+        assert!(lines(&w)[1].starts_with("axis 2 (node 5): already Fault (FollowingError)"));
     }
 
     #[test]

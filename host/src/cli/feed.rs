@@ -9,7 +9,7 @@ use triquint_shared::protocol::{FaultCode, State};
 use crate::exit::CliResult;
 use crate::ops::feed::{send_feed, verdict};
 use crate::ops::listen::open;
-use crate::ops::shown::{percent, state_name};
+use crate::ops::shown::{Drive, percent, state_name};
 
 /// `what` to every drive on `iface`: prints each drive's answer; exit 0 when
 /// every drive did it, 8 when one refused (the cap for an override above
@@ -25,8 +25,8 @@ pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
     for (i, a) in sent.answers.iter().enumerate() {
         match a {
             Some(a) => outln!(
-                "node {}: {} → {}{}",
-                ids[i],
+                "{}: {} → {}{}",
+                Drive::of(ids, i),
                 sent.states_before[i].map_or("unknown", State::name),
                 state_name(a.state),
                 match FaultCode::from_u8(a.result) {
@@ -35,7 +35,7 @@ pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
                     None => format!(", refused: code {}", a.result),
                 }
             )?,
-            None => outln!("node {}: no answer", ids[i])?,
+            None => outln!("{}: no answer", Drive::of(ids, i))?,
         }
     }
     verdict(iface, ids, f, &sent.answers)?;

@@ -37,9 +37,10 @@ pub struct MonitorArgs {
         requires = "web"
     )]
     pub replay: Option<std::path::PathBuf>,
-    /// With --web: node ids of the drives of axes 1, 2, 3.
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C", requires = "web")]
-    pub nodes: String,
+    /// With --web: node ids of the drives of axes 1, 2, 3 [default: the
+    /// machine file's `axis.N.node_id`].
+    #[arg(long, value_name = "A,B,C", requires = "web")]
+    pub nodes: Option<String>,
     /// With --web: accept POST /api/hold, /api/resume, /api/stop (from loopback).
     #[arg(long, requires = "web")]
     pub allow_control: bool,
@@ -96,7 +97,7 @@ fn raw(frame: &Frame) -> String {
     format!("{:03X}#{}{hex}", frame.id, if frame.fd { "#" } else { "" })
 }
 
-pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
+pub fn run(args: &MonitorArgs, machine: &triquint_shared::machine::Machine) -> CliResult {
     if let Some(d) = args.duration
         && !(d.is_finite() && d > 0.0)
     {
@@ -110,7 +111,7 @@ pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
             .map_err(|e| CliError::device(format!("cannot install the signal handler: {e}")))?;
     }
     if let Some(addr) = args.web {
-        let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+        let ids = crate::cli::bus_args::node_ids(args.nodes.as_deref(), machine)?;
         let opts = crate::web::WebOptions {
             addr,
             iface: args.iface.clone(),
@@ -120,7 +121,7 @@ pub fn run(args: &MonitorArgs, robot: &triquint_shared::Robot) -> CliResult {
             allow_remote_control: args.allow_remote_control,
             duration: args.duration,
         };
-        return crate::web::run(&opts, robot, stop);
+        return crate::web::run(&opts, &machine.robot, stop);
     }
     let Some(iface) = args.iface.as_deref() else {
         return Err(CliError::bad_input("--iface IFACE is needed without --web"));

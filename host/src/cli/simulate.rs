@@ -14,6 +14,7 @@ use triquint_cli_common::output::write_outputs;
 use crate::exit::{CliError, CliResult};
 use crate::inprocess::simulate::{SimReport, SimulateError, SimulateOptions, simulate};
 use crate::inprocess::test_reference::{self, TestReference};
+use crate::ops::shown::drive_name;
 
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -104,8 +105,8 @@ pub fn run(args: &SimulateArgs) -> CliResult {
         let first = report.faults_on_nodes.first();
         Err(CliError::motion_fault(match first {
             Some(f) => format!(
-                "node {} faulted: {} ({}) at {:.3} s",
-                f.node,
+                "{} faulted: {} ({}) at {:.3} s",
+                drive_name(opts.settings.node_ids, f.node),
                 f.code.name(),
                 f.code as u8,
                 f.t_ns as f64 * 1e-9 - start_s
@@ -240,8 +241,8 @@ fn print_human(
     } else {
         for f in faults {
             outln!(
-                "fault: node {} {} ({}) at {:.3} s",
-                f.node,
+                "fault: {} {} ({}) at {:.3} s",
+                drive_name(opts.settings.node_ids, f.node),
                 f.name,
                 f.code,
                 f.t_s

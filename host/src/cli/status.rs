@@ -9,7 +9,9 @@ use clap::Args;
 use triquint_cli_common::outln;
 use triquint_link::{Listener, MachineStatus};
 use triquint_shared::Robot;
+use triquint_shared::machine::Machine;
 
+use crate::cli::bus_args::node_ids;
 use crate::cli::status_text::print_text;
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::{listen, open};
@@ -19,9 +21,10 @@ pub struct StatusArgs {
     /// SocketCAN interface (can0, vcan0).
     #[arg(long, value_name = "IFACE")]
     pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    /// Node ids of the drives of axes 1, 2, 3 (1 to 15) [default: the
+    /// machine file's `axis.N.node_id`].
+    #[arg(long, value_name = "A,B,C")]
+    pub nodes: Option<String>,
     /// Print exactly one JSON document.
     #[arg(long)]
     pub json: bool,
@@ -45,15 +48,15 @@ pub fn machine_status(
     Ok(l.status(robot))
 }
 
-pub fn run(args: &StatusArgs, robot: &Robot) -> CliResult {
+pub fn run(args: &StatusArgs, machine: &Machine) -> CliResult {
     if !(args.wait.is_finite() && args.wait > 0.0 && args.wait <= 60.0) {
         return Err(CliError::bad_input(format!(
             "--wait {}: must be 0 to 60 seconds",
             args.wait
         )));
     }
-    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
-    let s = machine_status(&args.iface, ids, args.wait, robot)?;
+    let ids = node_ids(args.nodes.as_deref(), machine)?;
+    let s = machine_status(&args.iface, ids, args.wait, &machine.robot)?;
     if args.json {
         outln!(
             "{}",

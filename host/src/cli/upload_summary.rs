@@ -5,6 +5,7 @@ use triquint_cli_common::outln;
 use crate::exit::{CliError, CliResult, Status};
 use crate::ops::bus::Bus;
 use crate::ops::run::UploadSummary;
+use crate::ops::shown::drive_name;
 
 /// Prints the summary; exit 0 only when every node completed without a fault.
 pub fn show(s: &UploadSummary, bus: &Bus, json: bool) -> CliResult {
@@ -27,8 +28,8 @@ pub fn show(s: &UploadSummary, bus: &Bus, json: bool) -> CliResult {
         )?;
         for n in &s.nodes {
             outln!(
-                "node {}: {}, fault {} ({})",
-                n.node,
+                "{}: {}, fault {} ({})",
+                drive_name(bus.ids, n.node),
                 n.state,
                 n.fault_name,
                 n.fault
@@ -45,7 +46,12 @@ pub fn show(s: &UploadSummary, bus: &Bus, json: bool) -> CliResult {
         ));
     }
     Err(CliError::motion_fault(match s.faults.first() {
-        Some(f) => format!("node {} faulted: {} ({})", f.node, f.name, f.code),
+        Some(f) => format!(
+            "{} faulted: {} ({})",
+            drive_name(bus.ids, f.node),
+            f.name,
+            f.code
+        ),
         None => "the plan did not complete".to_string(),
     }))
 }

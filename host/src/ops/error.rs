@@ -10,7 +10,7 @@ use triquint_shared::params::OutsideTravel;
 use triquint_shared::protocol::{CommandAck, FaultCode, State};
 
 use crate::ops::bus::Bus;
-use crate::ops::shown::{nodes_arg, percent, state_name};
+use crate::ops::shown::{Drive, nodes_arg, percent, state_name};
 
 pub type OpResult<T = ()> = Result<T, OpError>;
 
@@ -27,39 +27,39 @@ pub enum OpError {
     #[error("the transmit queue stayed full")]
     QueueFull,
     /// A drive sent no heartbeat while the host listened.
-    #[error("node {node} sent no heartbeat within {within_s} s")]
-    NoHeartbeat { node: u8, within_s: f64 },
+    #[error("{drive} sent no heartbeat within {within_s} s")]
+    NoHeartbeat { drive: Drive, within_s: f64 },
     /// A drive did not answer a feed command (resends included).
-    #[error("{iface}: node {node} did not answer the command within {within_ms} ms")]
+    #[error("{iface}: {drive} did not answer the command within {within_ms} ms")]
     NoAnswer {
         iface: String,
-        node: u8,
+        drive: Drive,
         within_ms: u128,
     },
     /// A drive refused a feed command; `ack` is its answer.
-    #[error("{}", feed_refusal(iface, *ids, *node, *feed, ack))]
+    #[error("{}", feed_refusal(iface, *ids, *drive, *feed, ack))]
     FeedRefused {
         iface: String,
         ids: [u8; 3],
-        node: u8,
+        drive: Drive,
         feed: Feed,
         ack: CommandAck,
     },
     /// A drive's position is unknown: it is not homed.
     #[error(
-        "{iface}: node {node} is not homed (its position is unknown): run `triquint home --iface {iface}{}` first",
+        "{iface}: {drive} is not homed (its position is unknown): run `triquint home --iface {iface}{}` first",
         nodes_arg(*ids)
     )]
     NotHomed {
         iface: String,
         ids: [u8; 3],
-        node: u8,
+        drive: Drive,
     },
     /// A drive sent no position.
-    #[error("{iface}: node {node}: no position (Telemetry) within {within_s} s")]
+    #[error("{iface}: {drive}: no position (Telemetry) within {within_s} s")]
     NoPosition {
         iface: String,
-        node: u8,
+        drive: Drive,
         within_s: f64,
     },
     /// The joints the drives report have no pose.
@@ -145,21 +145,21 @@ fn upload_message(e: &UploadError, iface: &str, ids: [u8; 3], timeout_s: f64) ->
     }
 }
 
-fn feed_refusal(iface: &str, ids: [u8; 3], node: u8, f: Feed, a: &CommandAck) -> String {
+fn feed_refusal(iface: &str, ids: [u8; 3], drive: Drive, f: Feed, a: &CommandAck) -> String {
     let n = nodes_arg(ids);
     match (f, FaultCode::from_u8(a.result)) {
         (Feed::Override(pm), Some(FaultCode::OverrideAboveCap)) => format!(
-            "{iface}: node {node} refused an override of {} %: the cap of the configured plan is {} % (`triquint override {} --iface {iface}{n}` at most)",
+            "{iface}: {drive} refused an override of {} %: the cap of the configured plan is {} % (`triquint override {} --iface {iface}{n}` at most)",
             percent(pm as u32),
             percent(a.value),
             percent(a.value)
         ),
         (_, Some(FaultCode::WrongState)) if a.state == State::Fault as u8 => format!(
-            "{iface}: node {node} is in Fault: nothing to {}; see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}`",
+            "{iface}: {drive} is in Fault: nothing to {}; see why with `triquint status --iface {iface}{n}`, clear it with `triquint clear --iface {iface}{n}`",
             verb(f)
         ),
         (_, code) => format!(
-            "{iface}: node {node} refused ({}) in state {}",
+            "{iface}: {drive} refused ({}) in state {}",
             code.map_or("unknown code", FaultCode::name),
             state_name(a.state)
         ),

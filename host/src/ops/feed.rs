@@ -12,6 +12,7 @@ use triquint_link::{CanPort, Feed, HostClock, Listener};
 use triquint_shared::protocol::{CommandAck, Msg, State, decode};
 
 use crate::ops::error::{OpError, OpResult};
+use crate::ops::shown::Drive;
 
 /// How long to listen first: a heartbeat from every drive (100 ms apart)
 /// and two TimeSyncs (100 ms apart while an upload runs).
@@ -48,9 +49,14 @@ pub fn send_feed<P: CanPort>(port: &mut P, ids: [u8; 3], f: Feed) -> OpResult<Se
         }
     }
     let states_before = listener.nodes.0.map(|v| v.state);
-    if let Some(v) = listener.nodes.0.iter().find(|v| v.heartbeat_at.is_none()) {
+    if let Some(i) = listener
+        .nodes
+        .0
+        .iter()
+        .position(|v| v.heartbeat_at.is_none())
+    {
         return Err(OpError::NoHeartbeat {
-            node: v.id,
+            drive: Drive::of(ids, i),
             within_s: LISTEN.as_secs_f64(),
         });
     }
@@ -103,12 +109,12 @@ pub fn verdict(iface: &str, ids: [u8; 3], f: Feed, answers: &[Option<CommandAck>
     let mut answered = answers
         .iter()
         .enumerate()
-        .filter_map(|(i, a)| a.map(|a| (ids[i], a)));
-    if let Some((node, ack)) = answered.find(|(_, a)| a.result != 0) {
+        .filter_map(|(i, a)| a.map(|a| (Drive::of(ids, i), a)));
+    if let Some((drive, ack)) = answered.find(|(_, a)| a.result != 0) {
         return Err(OpError::FeedRefused {
             iface: iface.to_string(),
             ids,
-            node,
+            drive,
             feed: f,
             ack,
         });
@@ -116,7 +122,7 @@ pub fn verdict(iface: &str, ids: [u8; 3], f: Feed, answers: &[Option<CommandAck>
     if let Some(i) = answers.iter().position(Option::is_none) {
         return Err(OpError::NoAnswer {
             iface: iface.to_string(),
-            node: ids[i],
+            drive: Drive::of(ids, i),
             within_ms: RESEND_AFTER.as_millis() * (RESENDS as u128 + 1),
         });
     }
@@ -160,7 +166,7 @@ mod tests {
             verdict("vcan0", [4, 5, 6], Feed::Hold, &[ok, faulted, ok]).unwrap_err(),
         );
         assert_eq!(e.status, Status::Refused);
-        assert!(e.message.contains("node 5 is in Fault"), "{e}");
+        assert!(e.message.contains("axis 2 (node 5) is in Fault"), "{e}");
         assert!(
             e.message
                 .contains("triquint clear --iface vcan0 --nodes 4,5,6"),
@@ -169,7 +175,7 @@ mod tests {
         // Silent: device.
         let e = CliError::from(verdict("vcan0", ids, Feed::Stop, &[ok, ok, None]).unwrap_err());
         assert_eq!(e.status, Status::Device);
-        assert!(e.message.contains("node 3 did not answer"), "{e}");
+        assert!(e.message.contains("axis 3 (node 3) did not answer"), "{e}");
     }
 
     /// Three drives behind a fake port: heartbeats and two TimeSyncs of a

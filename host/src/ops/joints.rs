@@ -10,6 +10,7 @@ use crate::ops::bus::Bus;
 use crate::ops::configure::configure;
 use crate::ops::error::{OpError, OpResult};
 use crate::ops::listen::{listen, open};
+use crate::ops::shown::Drive;
 
 /// Joint positions (m) from every drive's Telemetry within `wait`, and
 /// whether each is homed.
@@ -41,19 +42,16 @@ pub fn reported_joints(machine: &Machine, bus: &Bus) -> OpResult<Vector3<f64>> {
         return Err(OpError::NotHomed {
             iface: bus.iface.clone(),
             ids,
-            node: ids[i],
+            drive: Drive::of(ids, i),
         });
     }
     match q {
         [Some(a), Some(b), Some(c)] => Ok(Vector3::new(a, b, c)),
         _ => {
-            let node = q
-                .iter()
-                .position(Option::is_none)
-                .map_or(ids[0], |i| ids[i]);
+            let i = q.iter().position(Option::is_none).unwrap_or(0);
             Err(OpError::NoPosition {
                 iface: bus.iface.clone(),
-                node,
+                drive: Drive::of(ids, i),
                 within_s: bus.timeout_s,
             })
         }

@@ -11,6 +11,43 @@ pub fn nodes_arg(ids: [u8; 3]) -> String {
     }
 }
 
+/// A drive as messages name it: `axis 2 (node 5)`, the axis it drives and
+/// its CAN id, the same words as `status` and the web monitor use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Drive {
+    /// 1, 2 or 3: the machine file's `[axis.N]`.
+    pub axis: usize,
+    pub node: u8,
+}
+
+impl Drive {
+    /// The drive of axis `i + 1` among the node ids `ids` of axes 1, 2, 3.
+    pub fn of(ids: [u8; 3], i: usize) -> Self {
+        Drive {
+            axis: i + 1,
+            node: ids[i],
+        }
+    }
+
+    /// The drive whose node id is `node`, when it is one of `ids`.
+    pub fn with_node(ids: [u8; 3], node: u8) -> Option<Self> {
+        ids.iter()
+            .position(|id| *id == node)
+            .map(|i| Drive::of(ids, i))
+    }
+}
+
+impl std::fmt::Display for Drive {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "axis {} (node {})", self.axis, self.node)
+    }
+}
+
+/// `axis k (node n)` for a node among `ids`, `node n` for another.
+pub fn drive_name(ids: [u8; 3], node: u8) -> String {
+    Drive::with_node(ids, node).map_or_else(|| format!("node {node}"), |d| d.to_string())
+}
+
 /// Name of a state in an acknowledgement.
 pub fn state_name(s: u8) -> &'static str {
     State::from_u8(s).map_or("unknown", State::name)
@@ -30,6 +67,13 @@ mod tests {
     fn percentages_print_short() {
         assert_eq!(percent(1177), "117.7");
         assert_eq!(percent(500), "50");
+    }
+
+    #[test]
+    fn a_drive_is_named_by_its_axis_and_its_node() {
+        assert_eq!(Drive::of([4, 5, 6], 1).to_string(), "axis 2 (node 5)");
+        assert_eq!(drive_name([4, 5, 6], 6), "axis 3 (node 6)");
+        assert_eq!(drive_name([4, 5, 6], 9), "node 9");
     }
 
     #[test]
