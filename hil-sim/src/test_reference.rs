@@ -88,29 +88,93 @@ impl SevenPhase {
 
     /// The motion at `t` (s), at rest before 0 and after the end.
     pub fn at(&self, t: f64) -> JointMotion<f64> {
-        let (mut s, mut v, mut a) = (0.0, 0.0, 0.0);
-        let mut left = t.max(0.0);
-        let mut jerk = 0.0;
-        for &(d, j) in &self.phases {
-            let h = left.min(d);
-            s += v * h + a * h * h / 2.0 + j * h * h * h / 6.0;
-            v += a * h + j * h * h / 2.0;
-            a += j * h;
-            left -= h;
-            if left <= 0.0 {
-                jerk = if h < d { j } else { 0.0 };
-                break;
-            }
-        }
-        if left > 0.0 {
-            // Past the end: exactly at the target, at rest.
-            (s, v, a) = (1.0, 0.0, 0.0);
-        }
+        // Past the end: exactly at the target, at rest.
+        let [s, v, a, jerk] = integrate(&self.phases, t).unwrap_or([1.0, 0.0, 0.0, 0.0]);
         JointMotion {
             q: self.q0 + self.dq * s,
             qd: self.dq * v,
             qdd: self.dq * a,
             qddd: self.dq * jerk,
+        }
+    }
+}
+
+/// Position, velocity, acceleration and jerk at `t` of a profile that starts
+/// at rest at 0 and runs through `phases` (duration, jerk); none past the end.
+fn integrate(phases: &[(f64, f64); 7], t: f64) -> Option<[f64; 4]> {
+    let (mut s, mut v, mut a) = (0.0, 0.0, 0.0);
+    let mut left = t.max(0.0);
+    for &(d, j) in phases {
+        let h = left.min(d);
+        s += v * h + a * h * h / 2.0 + j * h * h * h / 6.0;
+        v += a * h + j * h * h / 2.0;
+        a += j * h;
+        left -= h;
+        if left <= 0.0 {
+            return Some([s, v, a, if h < d { j } else { 0.0 }]);
+        }
+    }
+    None
+}
+
+/// A path's own time driven by a 7-phase profile: τ(t) goes from 0 to the
+/// path's duration T in the same T, at rest at both ends, its jerk ±J or 0
+/// (it jumps at every phase boundary), so the retimed motion
+/// q(t) = path(τ(t)) follows the path's geometry with jerk steps wherever the
+/// path moves. This is the 7-phase profile of a move that is not a straight
+/// line (a closed path has none).
+///
+/// The phases are fixed fractions of T: jerk phases T/12, constant
+/// acceleration T/12, cruise T/2, so τ̇ peaks at 4/3 (a path already at its
+/// velocity limit exceeds it by a third: the same duration with a slower
+/// start and end must cruise faster), τ̈ at 8/T and J = 96/T².
+#[derive(Clone, Debug, PartialEq)]
+pub struct Retiming {
+    duration: f64,
+    phases: [(f64, f64); 7],
+}
+
+impl Retiming {
+    /// The retiming of a path `duration_s` long; none unless it is finite and positive.
+    pub fn new(duration_s: f64) -> Option<Self> {
+        if !(duration_s.is_finite() && duration_s > 0.0) {
+            return None;
+        }
+        let (tj, tc, tv) = (duration_s / 12.0, duration_s / 12.0, duration_s / 2.0);
+        let j = 96.0 / (duration_s * duration_s);
+        Some(Self {
+            duration: duration_s,
+            phases: [
+                (tj, j),
+                (tc, 0.0),
+                (tj, -j),
+                (tv, 0.0),
+                (tj, -j),
+                (tc, 0.0),
+                (tj, j),
+            ],
+        })
+    }
+
+    pub fn duration(&self) -> f64 {
+        self.duration
+    }
+
+    /// τ and its first three derivatives at `t`, at rest before 0 and after the end.
+    pub fn time_at(&self, t: f64) -> [f64; 4] {
+        integrate(&self.phases, t).unwrap_or([self.duration, 0.0, 0.0, 0.0])
+    }
+
+    /// The motion at `t` of `path` (its motion at its own time τ) retimed:
+    /// the chain rule through τ(t).
+    pub fn at(&self, path: &dyn Fn(f64) -> JointMotion<f64>, t: f64) -> JointMotion<f64> {
+        let [tau, v, a, j] = self.time_at(t);
+        let p = path(tau.clamp(0.0, self.duration));
+        JointMotion {
+            q: p.q,
+            qd: p.qd * v,
+            qdd: p.qdd * (v * v) + p.qd * a,
+            qddd: p.qddd * (v * v * v) + p.qdd * (3.0 * v * a) + p.qd * j,
         }
     }
 }
@@ -231,5 +295,72 @@ mod tests {
         assert!(SevenPhase::new(q0, q0, &limits).is_none());
         let closed = q0 + Vector3::new(1e-9, 0.0, 0.0);
         assert!(SevenPhase::new(q0, closed, &limits).is_none());
+    }
+
+    /// A path retimed by the 7-phase profile: same start, end and duration,
+    /// q, q̇ and q̈ continuous and each the integral of the next, the jerk
+    /// stepping where the path moves.
+    #[test]
+    fn a_retimed_path_keeps_its_ends_and_steps_only_in_jerk() {
+        let (q0, dq, t_end) = (
+            Vector3::new(0.30, 0.25, 0.35),
+            Vector3::new(0.05, -0.02, 0.01),
+            2.0,
+        );
+        // A minimum-jerk quintic at its own time: at rest at both ends.
+        let path = move |tau: f64| {
+            let u = tau / t_end;
+            let (s, v, a, j) = (
+                u * u * u * (10.0 - 15.0 * u + 6.0 * u * u),
+                30.0 * u * u * (1.0 - u) * (1.0 - u) / t_end,
+                60.0 * u * (1.0 - 3.0 * u + 2.0 * u * u) / (t_end * t_end),
+                60.0 * (1.0 - 6.0 * u + 6.0 * u * u) / (t_end * t_end * t_end),
+            );
+            JointMotion {
+                q: q0 + dq * s,
+                qd: dq * v,
+                qdd: dq * a,
+                qddd: dq * j,
+            }
+        };
+        let r = Retiming::new(t_end).unwrap();
+        assert_eq!(r.duration(), t_end);
+        let [tau, v, a, _] = r.time_at(t_end);
+        assert!((tau - t_end).abs() < 1e-12 && v.abs() < 1e-12 && a.abs() < 1e-12);
+        assert!((r.at(&path, 0.0).q - q0).amax() < 1e-15);
+        let end = r.at(&path, t_end);
+        assert!((end.q - (q0 + dq)).amax() < 1e-12);
+        assert!(end.qd.amax() < 1e-12 && end.qdd.amax() < 1e-12);
+        let h = 1e-5;
+        let (mut steps, mut largest_step) = (0, 0.0_f64);
+        // Every phase boundary (multiples of T/12) on the grid.
+        let n = 4800;
+        for k in 1..n {
+            let t = t_end * k as f64 / n as f64;
+            let (b, m, f) = (r.at(&path, t - h), r.at(&path, t), r.at(&path, t + h));
+            assert!(((f.q - b.q) / (2.0 * h) - m.qd).amax() < 1e-7, "q̇ at {t}");
+            assert!(
+                ((f.qd - b.qd) / (2.0 * h) - m.qdd).amax() < 1e-5,
+                "q̈ at {t}"
+            );
+            assert!((f.qdd - b.qdd).amax() < 2.0 * h * 10.0, "q̈ jumps at {t}");
+            let step = (f.qddd - b.qddd).amax();
+            if step > 3e-4 {
+                steps += 1;
+                largest_step = largest_step.max(step);
+            } else {
+                assert!(
+                    ((f.qdd - b.qdd) / (2.0 * h) - m.qddd).amax() < 1e-5,
+                    "jerk at {t}"
+                );
+            }
+        }
+        // The six interior boundaries, where the path moves (at t = 0 and
+        // T the path is at rest, so τ's jerk steps vanish there).
+        assert_eq!(steps, 6, "{steps}");
+        // |Δq⃛| = |q'(τ)|·J, J = 96/T², q' at most 1.875 |dq| / T.
+        let bound = 1.875 * dq.amax() / t_end * 96.0 / (t_end * t_end);
+        assert!(largest_step <= 1.01 * bound, "{largest_step} vs {bound}");
+        assert!(Retiming::new(0.0).is_none() && Retiming::new(f64::NAN).is_none());
     }
 }

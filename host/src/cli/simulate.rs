@@ -35,7 +35,8 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = PlantKind::Rigid)]
     pub plant: PlantKind,
     /// TEST REFERENCE, not a drive's path: run the plan, or a jerk-discontinuous
-    /// 7-phase profile of its move (which the drives refuse), through the
+    /// 7-phase profile of its move or along its path (which the drives
+    /// refuse), through the
     /// firmware's control law below the drives' checks, and report the
     /// residual vibration (with --plant flexible).
     #[arg(long, value_enum, value_name = "KIND")]

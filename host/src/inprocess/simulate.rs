@@ -70,7 +70,7 @@ pub enum SimulateError {
     NoEnd,
     /// A 7-phase reference needs a move; the plan's path is closed.
     #[error(
-        "a 7-phase profile needs a move: the plan's start and end are the same (a closed path)"
+        "a 7-phase profile needs a move: the plan's start and end are the same (a closed path; seven-phase-path retimes the path instead)"
     )]
     ClosedPath,
     #[error("plan: {0}")]

@@ -1,6 +1,6 @@
 //! `triquint simulate --test-reference`: TEST REFERENCES, never a drive's
 //! path. The plan, or a jerk-discontinuous 7-phase profile between its start
-//! and end (which the drives refuse, rightly), run through the firmware's
+//! and end or along its path (which the drives refuse, rightly), run through the firmware's
 //! control law on the plant below the drives' segment checks
 //! (`triquint_sim::test_reference`), with the drives' configuration for the
 //! plan; on the flexible plant, the residual vibration after it.
@@ -12,7 +12,7 @@ use triquint_shared::quintic::JointMotion;
 use triquint_sim::flex::AccelSample;
 use triquint_sim::plant_model::PlantModel;
 use triquint_sim::sim::SimError;
-use triquint_sim::test_reference::{self, SevenPhase};
+use triquint_sim::test_reference::{self, Retiming, SevenPhase};
 use triquint_sim::vibration::{Residual, SETTLE_WINDOW_S};
 
 use super::simulate::{SimulateError, SimulateOptions};
@@ -26,6 +26,10 @@ pub enum TestReference {
     /// A 7-phase jerk-limited profile from the plan's start to its end along
     /// the straight joint-space line, within the plan's limits.
     SevenPhase,
+    /// The plan's own path with its time driven by a 7-phase jerk-limited
+    /// profile from rest to rest over the plan's duration: a 7-phase
+    /// profile of a move that is not a straight line (a closed path).
+    SevenPhasePath,
     /// Holding the plan's start for as long as the plan: the noise floor.
     Still,
 }
@@ -35,6 +39,7 @@ impl TestReference {
         match self {
             Self::Plan => "plan",
             Self::SevenPhase => "seven-phase",
+            Self::SevenPhasePath => "seven-phase-path",
             Self::Still => "still",
         }
     }
@@ -86,6 +91,17 @@ pub fn run(
             let seven =
                 SevenPhase::new(start, end, &plan.limits).ok_or(SimulateError::ClosedPath)?;
             run_motion(plan, opts, kind, &|t| seven.at(t), seven.duration())
+        }
+        TestReference::SevenPhasePath => {
+            let retiming = Retiming::new(plan.total_time_s).ok_or(SimulateError::NoEnd)?;
+            let path = |tau| motion(plan, tau);
+            run_motion(
+                plan,
+                opts,
+                kind,
+                &|t| retiming.at(&path, t),
+                retiming.duration(),
+            )
         }
         TestReference::Still => {
             run_motion(plan, opts, kind, &|_| motion(plan, 0.0), plan.total_time_s)
@@ -171,6 +187,113 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, SimulateError::ClosedPath), "{e}");
+    }
+
+    /// Case II's circle at limits near the machine's (docs/vibration.md),
+    /// min-time: the 7-phase retiming of its own path (`seven-phase-path`)
+    /// starts and ends where the plan does, at rest, in the plan's time; it is
+    /// continuous in q, q̇ and q̈ (each changing no faster than the next
+    /// says), its jerk steps where the path moves, by at most the velocity
+    /// limit times the retiming's jerk; and it rings the lowest mode more
+    /// than the plan shaped by ZVD at the mode.
+    #[test]
+    fn a_seven_phase_retiming_of_case_two_rings_above_the_shaped_plan() {
+        use triquint_planner::shaping::{Shaper, ShaperSpec, shape};
+        use triquint_shared::Limits;
+
+        let limits = Limits {
+            velocity: 2.0,
+            acceleration: 30.0,
+            jerk: 5000.0,
+            torque: 1000.0,
+            total_time: 5.0,
+        };
+        let job = Job::builder()
+            .objective(Objective::MinTime)
+            .limits(limits.clone())
+            .points_mm(triquint_sim::testplan::PAPER_CASE2_MM.to_vec())
+            .build()
+            .unwrap();
+        let p = plan(&job, &Options::default()).unwrap();
+        let t_end = p.total_time_s;
+        let retiming = Retiming::new(t_end).unwrap();
+        let path = |tau| motion(&p, tau);
+        let reference = |t| retiming.at(&path, t);
+        let (start, end) = (reference(0.0), reference(t_end));
+        assert!((start.q - motion(&p, 0.0).q).amax() < 1e-12);
+        assert!((end.q - motion(&p, t_end).q).amax() < 1e-12);
+        assert!(end.qd.amax() < 1e-9 && end.qdd.amax() < 1e-6);
+
+        // Every phase boundary (multiples of T/12) on the grid.
+        let (n, h) = (4800, 1e-6);
+        let j_tau = 96.0 / (t_end * t_end);
+        let (mut steps, mut largest_step, mut v_max, mut a_max) = (0, 0.0_f64, 0.0_f64, 0.0_f64);
+        for k in 1..n {
+            let t = t_end * k as f64 / n as f64;
+            let (b, m, f) = (reference(t - h), reference(t), reference(t + h));
+            let faster = |x: f64, y: f64| 2.0 * h * x.max(y) * 1.01 + 1e-12;
+            assert!(
+                (f.q - b.q).amax() <= faster(f.qd.amax(), b.qd.amax()),
+                "q at {t}"
+            );
+            assert!(
+                (f.qd - b.qd).amax() <= faster(f.qdd.amax(), b.qdd.amax()),
+                "q̇ at {t}"
+            );
+            assert!(
+                (f.qdd - b.qdd).amax() <= faster(f.qddd.amax(), b.qddd.amax()),
+                "q̈ at {t}"
+            );
+            let step = (f.qddd - b.qddd).amax();
+            if step > 0.02 * limits.velocity * j_tau {
+                steps += 1;
+                largest_step = largest_step.max(step);
+            }
+            v_max = v_max.max(m.qd.amax());
+            a_max = a_max.max(m.qdd.amax());
+        }
+        eprintln!(
+            "seven-phase-path: {steps} jerk steps, largest {largest_step:.1} m/s³, |q̇| {:.3} of the limit, |q̈| {:.3}",
+            v_max / limits.velocity,
+            a_max / limits.acceleration
+        );
+        assert!(steps >= 4, "{steps}");
+        assert!(
+            largest_step <= 1.01 * limits.velocity * j_tau,
+            "{largest_step}"
+        );
+        // The same time with a slower start and end: τ̇ peaks at 4/3.
+        assert!(
+            v_max <= 4.0 / 3.0 * limits.velocity * (1.0 + 1e-6),
+            "{v_max}"
+        );
+
+        let opts = SimulateOptions {
+            plant: PlantKind::Flexible,
+            ..SimulateOptions::default()
+        };
+        let at_mode = |p: &Plan, kind| {
+            let r = run(p, &opts, kind).unwrap();
+            r.vibration.unwrap().lowest_mode_m_s2.unwrap()
+        };
+        let unshaped = at_mode(&p, TestReference::Plan);
+        let seven = at_mode(&p, TestReference::SevenPhasePath);
+        let zvd = shape(
+            &p,
+            &ShaperSpec {
+                shaper: Shaper::Zvd,
+                frequency_hz: 25.6,
+                damping: 0.062,
+            },
+        )
+        .unwrap();
+        let shaped = at_mode(&zvd, TestReference::Plan);
+        eprintln!(
+            "at the lowest mode: seven-phase-path {seven:.4}, ZVD {shaped:.4}, unshaped {unshaped:.4} m/s²"
+        );
+        assert!(seven > 3.0 * shaped, "{seven} vs ZVD {shaped}");
+        // And more than the jerk-continuous plan it retimes.
+        assert!(seven > 3.0 * unshaped, "{seven} vs the plan's {unshaped}");
     }
 
     /// The P2P move of docs/vibration.md on the flexible plant: at the
