@@ -70,15 +70,7 @@ impl SevenPhase {
         Some(Self {
             q0,
             dq,
-            phases: [
-                (tj, j),
-                (tc, 0.0),
-                (tj, -j),
-                (tv, 0.0),
-                (tj, -j),
-                (tc, 0.0),
-                (tj, j),
-            ],
+            phases: s_curve(tj, tc, tv, j),
         })
     }
 
@@ -101,6 +93,20 @@ impl SevenPhase {
 
 /// Position, velocity, acceleration and jerk at `t` of a profile that starts
 /// at rest at 0 and runs through `phases` (duration, jerk); none past the end.
+/// The seven (duration, jerk) phases of a rest-to-rest S-curve: jerk
+/// ramps `tj` at ±`j`, constant acceleration `tc`, cruise `tv`.
+fn s_curve(tj: f64, tc: f64, tv: f64, j: f64) -> [(f64, f64); 7] {
+    [
+        (tj, j),
+        (tc, 0.0),
+        (tj, -j),
+        (tv, 0.0),
+        (tj, -j),
+        (tc, 0.0),
+        (tj, j),
+    ]
+}
+
 fn integrate(phases: &[(f64, f64); 7], t: f64) -> Option<[f64; 4]> {
     let (mut s, mut v, mut a) = (0.0, 0.0, 0.0);
     let mut left = t.max(0.0);
@@ -144,15 +150,7 @@ impl Retiming {
         let j = 96.0 / (duration_s * duration_s);
         Some(Self {
             duration: duration_s,
-            phases: [
-                (tj, j),
-                (tc, 0.0),
-                (tj, -j),
-                (tv, 0.0),
-                (tj, -j),
-                (tc, 0.0),
-                (tj, j),
-            ],
+            phases: s_curve(tj, tc, tv, j),
         })
     }
 

@@ -167,6 +167,17 @@ mod tests {
     use super::*;
     use crate::inprocess::simulate::simulate;
 
+    /// The residual at the lowest mode (m/s²) of `p` run with `kind` as the
+    /// reference on the flexible plant.
+    fn at_mode(p: &Plan, kind: TestReference) -> f64 {
+        let opts = SimulateOptions {
+            plant: PlantKind::Flexible,
+            ..SimulateOptions::default()
+        };
+        let r = run(p, &opts, kind).unwrap();
+        r.vibration.unwrap().lowest_mode_m_s2.unwrap()
+    }
+
     /// A closed path has no move for a 7-phase profile: a typed refusal.
     #[test]
     fn a_seven_phase_profile_of_a_closed_path_is_refused() {
@@ -268,14 +279,6 @@ mod tests {
             "{v_max}"
         );
 
-        let opts = SimulateOptions {
-            plant: PlantKind::Flexible,
-            ..SimulateOptions::default()
-        };
-        let at_mode = |p: &Plan, kind| {
-            let r = run(p, &opts, kind).unwrap();
-            r.vibration.unwrap().lowest_mode_m_s2.unwrap()
-        };
         let unshaped = at_mode(&p, TestReference::Plan);
         let seven = at_mode(&p, TestReference::SevenPhasePath);
         let zvd = shape(
@@ -447,14 +450,6 @@ mod tests {
         use triquint_planner::shaping::{Shaper, ShaperSpec, shape};
         use triquint_shared::Limits;
 
-        let opts = SimulateOptions {
-            plant: PlantKind::Flexible,
-            ..SimulateOptions::default()
-        };
-        let at_mode = |p: &Plan, kind| {
-            let r = run(p, &opts, kind).unwrap();
-            r.vibration.unwrap().lowest_mode_m_s2.unwrap()
-        };
         let case2 = triquint_sim::testplan::PAPER_CASE2_MM.to_vec();
         for (points, [v, a, j]) in [
             (

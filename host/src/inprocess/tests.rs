@@ -4,6 +4,7 @@
 use triquint_firmware::QUEUE_CAPACITY;
 use triquint_shared::Robot;
 use triquint_shared::plan::Plan;
+use triquint_shared::protocol::compact::compact_parts;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::{Command, CommandCode, FaultCode, config_write_frame};
 use triquint_sim::{Sim, SimConfig, testplan};
@@ -48,9 +49,11 @@ fn paper_cases_complete_on_classic_and_fd() {
             let r = run(&plan, |o| o.fd = fd).unwrap();
             let what = format!("{name} fd={fd}");
             assert_clean(&r, &what);
-            // The first segment in full, most others compact (one after
-            // a much shorter segment goes in full: Case II has several).
-            let (full, compact) = if fd { (2, 1) } else { (20, 5) };
+            // The first segment in full, most others compact
+            // continuations (one after a much shorter segment goes in
+            // full: Case II has several).
+            let full = if fd { 2 } else { 20 };
+            let compact = compact_parts(0, fd) as u64;
             assert_eq!(r.retransmits, 0, "{what}");
             assert_eq!(r.segments_sent, plan.segments.len() as u64, "{what}");
             assert!(
