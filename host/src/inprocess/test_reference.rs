@@ -166,6 +166,19 @@ mod tests {
 
     use super::*;
     use crate::inprocess::simulate::simulate;
+    use triquint_shared::Limits;
+
+    /// Velocity, acceleration and jerk limits fast enough to ring the
+    /// flexible plant, torque unbounded in effect (docs/vibration.md).
+    fn fast_limits([velocity, acceleration, jerk]: [f64; 3]) -> Limits {
+        Limits {
+            velocity,
+            acceleration,
+            jerk,
+            torque: 1000.0,
+            total_time: 5.0,
+        }
+    }
 
     /// The residual at the lowest mode (m/s²) of `p` run with `kind` as the
     /// reference on the flexible plant.
@@ -210,15 +223,8 @@ mod tests {
     #[test]
     fn a_seven_phase_retiming_of_case_two_rings_above_the_shaped_plan() {
         use triquint_planner::shaping::{Shaper, ShaperSpec, shape};
-        use triquint_shared::Limits;
 
-        let limits = Limits {
-            velocity: 2.0,
-            acceleration: 30.0,
-            jerk: 5000.0,
-            torque: 1000.0,
-            total_time: 5.0,
-        };
+        let limits = fast_limits([2.0, 30.0, 5000.0]);
         let job = Job::builder()
             .objective(Objective::MinTime)
             .limits(limits.clone())
@@ -448,7 +454,6 @@ mod tests {
     #[test]
     fn shaped_at_the_mode_the_residual_meets_the_targets() {
         use triquint_planner::shaping::{Shaper, ShaperSpec, shape};
-        use triquint_shared::Limits;
 
         let case2 = triquint_sim::testplan::PAPER_CASE2_MM.to_vec();
         for (points, [v, a, j]) in [
@@ -460,13 +465,7 @@ mod tests {
         ] {
             let job = Job::builder()
                 .objective(Objective::MinTime)
-                .limits(Limits {
-                    velocity: v,
-                    acceleration: a,
-                    jerk: j,
-                    torque: 1000.0,
-                    total_time: 5.0,
-                })
+                .limits(fast_limits([v, a, j]))
                 .points_mm(points)
                 .build()
                 .unwrap();
@@ -517,7 +516,6 @@ mod tests {
     fn shaped_plans_run_through_the_drives_and_meet_the_targets() {
         use triquint_planner::PlanError;
         use triquint_planner::shaping::{Shaper, ShaperSpec};
-        use triquint_shared::Limits;
 
         let opts = SimulateOptions {
             plant: PlantKind::Flexible,
@@ -540,13 +538,7 @@ mod tests {
             let job = |shaper: Option<(Shaper, f64)>| {
                 Job::builder()
                     .objective(Objective::MinTime)
-                    .limits(Limits {
-                        velocity: v,
-                        acceleration: a,
-                        jerk: j,
-                        torque: 1000.0,
-                        total_time: 5.0,
-                    })
+                    .limits(fast_limits([v, a, j]))
                     .points_mm(points.clone())
                     .shaper(shaper.map(|(shaper, frequency_hz)| ShaperSpec {
                         shaper,
