@@ -198,6 +198,12 @@ impl Rig {
     }
 
     fn command(&mut self, c: CommandCode, arg: u32) -> u8 {
+        self.command_to(c, arg, 0).map_or(255, |(result, _)| result)
+    }
+
+    /// The last answer (result, value) to a command sent to `node`'s
+    /// address (0: broadcast), if any.
+    fn command_to(&mut self, c: CommandCode, arg: u32, node: u8) -> Option<(u8, u32)> {
         let n = self.sent.len();
         self.token = self.token.wrapping_add(1);
         self.rx(Command {
@@ -206,15 +212,14 @@ impl Rig {
             arg,
             arg2: 0,
         }
-        .to_frame(0));
+        .to_frame(node));
         self.sent[n..]
             .iter()
             .filter_map(|f| match decode(f) {
-                Ok((Msg::CommandAck(a), _)) => Some(a.result),
+                Ok((Msg::CommandAck(a), _)) => Some((a.result, a.value)),
                 _ => None,
             })
             .next_back()
-            .unwrap_or(255)
     }
 
     fn tick(&mut self) {

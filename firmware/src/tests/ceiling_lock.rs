@@ -7,7 +7,7 @@ extern crate std;
 
 use triquint_shared::protocol::contract::MAINTENANCE_WINDOW_US;
 use triquint_shared::protocol::{
-    Command, CommandCode, DriveConfig, FaultCode, Msg, PARAMS, State, config_write_frame, decode,
+    Command, CommandCode, DriveConfig, FaultCode, PARAMS, State, config_write_frame,
 };
 
 use super::{Rig, segments};
@@ -25,23 +25,7 @@ fn configured() -> Rig {
 
 /// The answer (result, value) to a command.
 fn ack(r: &mut Rig, c: CommandCode, arg: u32) -> (u8, u32) {
-    let n = r.sent.len();
-    r.token = r.token.wrapping_add(1);
-    r.rx(Command {
-        command: c as u8,
-        token: r.token,
-        arg,
-        arg2: 0,
-    }
-    .to_frame(2));
-    r.sent[n..]
-        .iter()
-        .filter_map(|f| match decode(f) {
-            Ok((Msg::CommandAck(a), _)) => Some((a.result, a.value)),
-            _ => None,
-        })
-        .next_back()
-        .expect("an answer")
+    r.command_to(c, arg, 2).expect("an answer")
 }
 
 /// A host writes `cfg` and commits it: the answer (result, value).
