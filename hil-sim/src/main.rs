@@ -53,9 +53,10 @@ struct Args {
     #[arg(long, value_name = "IFACE", required = true)]
     iface: Option<String>,
     /// Node ids (1–15) of the drives of axes 1, 2, 3 in order; fewer than
-    /// three leave the last axes without a drive (a silent node).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    nodes: String,
+    /// three leave the last axes without a drive (a silent node) [default:
+    /// the machine file's `axis.N.node_id`].
+    #[arg(long, value_name = "A,B,C")]
+    nodes: Option<String>,
     /// Power on with an unknown (seeded) encoder offset on every axis:
     /// positions mean nothing until `triquint home`.
     #[arg(long)]
@@ -72,9 +73,10 @@ struct Args {
     /// CAN-FD sockets (the interface needs MTU 72).
     #[arg(long)]
     fd: bool,
-    /// Control tick rate (Hz), 1000 to 10000; must match the rate the host configures.
-    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
-    rate: f64,
+    /// Control tick rate (Hz), 1000 to 10000; must match the rate the host
+    /// configures [default: the machine file's `drive.control_rate`].
+    #[arg(long, value_name = "HZ")]
+    rate: Option<f64>,
     /// Machine file (TOML, SI units; docs/machine.md): the simulated
     /// robot, switches, encoder scales and motor directions. Without it,
     /// the paper's machine.
@@ -126,13 +128,13 @@ fn stop_on_signals() -> CliResult<Arc<AtomicBool>> {
     Ok(stop)
 }
 
-fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
+fn report_json(args: &Args, cfg: &RealtimeConfig, r: &RealtimeReport) -> String {
     let j = JsonReport {
         last: r.runs.last().cloned().unwrap_or_default(),
         runs: r.runs.clone(),
-        iface: iface.to_string(),
+        iface: cfg.iface.to_string(),
         fd: args.fd,
-        rate_hz: args.rate,
+        rate_hz: cfg.rate_hz,
         ticks: r.ticks,
         missed_deadlines: r.missed_deadlines,
         skipped_ticks: r.skipped_ticks,
@@ -147,9 +149,12 @@ fn report_json(args: &Args, iface: &str, r: &RealtimeReport) -> String {
 }
 
 fn run(args: &Args) -> CliResult {
-    check_rate("--rate", args.rate)?;
-    let nodes = parse_nodes("--nodes", &args.nodes)?;
     let machine = load_machine(args.machine.as_deref())?;
+    let rate = check_rate("--rate", args.rate.unwrap_or(machine.drive.control_rate))?;
+    let nodes = match &args.nodes {
+        Some(n) => parse_nodes("--nodes", n)?,
+        None => machine.axes.iter().map(|a| a.node_id).collect(),
+    };
     let mut switches = [SwitchMode::Working; 3];
     for (opt, axis, mode) in [
         ("--stuck-switch", args.stuck_switch, SwitchMode::Stuck),
@@ -172,7 +177,7 @@ fn run(args: &Args) -> CliResult {
     cfg.unhomed = args.unhomed.then_some(args.seed);
     cfg.switches = switches;
     cfg.fd = args.fd;
-    cfg.rate_hz = args.rate;
+    cfg.rate_hz = rate;
     cfg.plant_kind = args.plant;
     let stop = stop_on_signals()?;
     let port = realtime::open(&cfg).map_err(CliError::device)?;
@@ -203,7 +208,7 @@ fn run(args: &Args) -> CliResult {
     if let Some(path) = &args.report {
         cli::write_report(
             path,
-            &report_json(args, iface, &r),
+            &report_json(args, &cfg, &r),
             &mut std::io::stdout().lock(),
         )?;
     }

@@ -118,7 +118,9 @@ fn an_unhomed_machine_refuses_motion_homes_and_knows_its_position() {
     let configs = DriveConfigs::for_plan(&plan, &settings()).unwrap().nodes;
     let mut up = Session::new(&plan, configs, SessionOptions::default()).unwrap();
     match drive(&mut sim, &mut up, 10.0) {
-        Err(UploadError::NotHomed { node: 1 }) => {}
+        Err(UploadError::NotHomed {
+            node: triquint_link::Drive { axis: 1, node: 1 },
+        }) => {}
         other => panic!("{other:?}"),
     }
     let t = sim.now_ns() + 200_000_000;

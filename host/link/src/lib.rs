@@ -22,6 +22,7 @@
 //! simulator.
 
 pub mod configs;
+pub mod drive;
 pub mod estop;
 pub mod host_clock;
 pub mod session;
@@ -29,6 +30,7 @@ pub mod socketcan;
 pub mod status;
 
 pub use configs::DriveConfigs;
+pub use drive::Drive;
 pub use estop::{EstopAnswer, EstopError, EstopWatch, emergency_stop};
 pub use host_clock::HostClock;
 pub use session::{

@@ -167,7 +167,7 @@ fn a_differing_crc_is_read_back_from_the_right_node() {
                 node_crc,
                 plan_crc,
             } => {
-                assert_eq!(node, bad, "ids {ids:?}");
+                assert_eq!(node, triquint_link::Drive::of(ids, i), "ids {ids:?}");
                 assert_eq!(node_crc, 0x0BAD_C0DE);
                 assert_eq!(plan_crc, configs(ids)[i].crc());
             }

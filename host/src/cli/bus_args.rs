@@ -1,5 +1,5 @@
 //! The bus options of the commands that drive the machine (`upload`,
-//! `move-to`, `home`), checked into the operations' [`Bus`].
+//! `move-to`, `home`, `configure`), checked into the operations' [`Bus`].
 
 use clap::Args;
 use triquint_shared::machine::Machine;
@@ -7,7 +7,7 @@ use triquint_shared::machine::Machine;
 use crate::exit::{CliError, CliResult};
 use crate::ops::bus::Bus;
 
-/// The bus options shared by `upload`, `move-to` and `home`.
+/// The bus options shared by `upload`, `move-to`, `home` and `configure`.
 #[derive(Args, Debug, Clone)]
 pub struct BusArgs {
     /// SocketCAN interface (can0, vcan0).
@@ -20,7 +20,7 @@ pub struct BusArgs {
     /// 10000 [default: the machine file's `drive.control_rate`].
     #[arg(long = "rate", value_name = "HZ")]
     pub rate_arg: Option<f64>,
-    /// How long a node may stay silent before the upload fails (s).
+    /// How long a node may stay silent before the command fails (s).
     #[arg(long, default_value_t = 2.0, value_name = "S")]
     pub timeout: f64,
     /// Node ids of the drives of axes 1, 2, 3 (1 to 15) [default: the

@@ -12,6 +12,7 @@ use clap::Args;
 use triquint_link::{EstopAnswer, EstopWatch, emergency_stop};
 use triquint_shared::protocol::{FaultCode, State};
 
+use crate::cli::drives_args::DrivesArgs;
 use crate::exit::{CliError, CliResult};
 use crate::ops::listen::open;
 use crate::ops::shown::{Drive, drive_name, nodes_arg};
@@ -22,36 +23,55 @@ const MAX_WAIT_MS: u64 = 5_000;
 
 #[derive(Args, Debug)]
 pub struct EstopArgs {
-    /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15) that must confirm.
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    /// The drives that must confirm (the frame reaches every drive).
+    #[command(flatten)]
+    pub drives: DrivesArgs,
     /// How long to wait for every drive to confirm (ms, 1 to 5000).
     #[arg(long, default_value_t = 200, value_name = "MS")]
     pub wait: u64,
 }
 
 pub fn run(args: &EstopArgs) -> CliResult {
-    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", &args.nodes)?;
+    let iface = args.drives.iface.as_str();
+    if let Some(n) = &args.drives.nodes {
+        triquint_cli_common::parse::parse_axis_nodes("--nodes", n)?;
+    }
     if !(1..=MAX_WAIT_MS).contains(&args.wait) {
         return Err(CliError::bad_input(format!(
             "--wait {}: must be 1 to {MAX_WAIT_MS} ms",
             args.wait
         )));
     }
-    let mut port = open(&args.iface)?;
-    let watch = emergency_stop(&mut port, ids, args.wait * 1000, || {
-        std::thread::sleep(Duration::from_millis(1))
-    })
-    .map_err(|e| CliError::device(format!("{}: {e}", args.iface)))?;
-    outln!("emergency stop sent on {}", args.iface)?;
+    // A machine file that cannot be read must not keep the frame from going
+    // out: it only says which drives must confirm.
+    let ids = args.drives.ids();
+    let mut port = open(iface)?;
+    let watch = emergency_stop(
+        &mut port,
+        *ids.as_ref().unwrap_or(&DEFAULT_IDS),
+        args.wait * 1000,
+        || std::thread::sleep(Duration::from_millis(1)),
+    )
+    .map_err(|e| CliError::device(format!("{iface}: {e}")))?;
+    outln!("emergency stop sent on {iface}")?;
+    if let Err(e) = ids {
+        return Err(CliError {
+            message: format!(
+                "{}; which drives had to confirm is unknown: check with `triquint status --iface {iface} --nodes A,B,C`",
+                e.message
+            ),
+            ..e
+        });
+    }
     for line in lines(&watch) {
         outln!("{line}")?;
     }
-    verdict(&args.iface, &watch, args.wait)
+    verdict(iface, &watch, args.wait)
 }
+
+/// The ids watched while the frame goes out when the machine file could
+/// not be read (the frame itself reaches every drive).
+const DEFAULT_IDS: [u8; 3] = [1, 2, 3];
 
 /// A line per drive: what it reported.
 pub fn lines(watch: &EstopWatch) -> Vec<String> {
@@ -152,12 +172,34 @@ mod tests {
             ("0,1,2", 200),
         ] {
             let args = EstopArgs {
-                iface: "triquint-no-such-iface".into(),
-                nodes: nodes.into(),
+                drives: DrivesArgs {
+                    iface: "triquint-no-such-iface".into(),
+                    nodes: Some(nodes.into()),
+                    machine: Default::default(),
+                },
                 wait,
             };
             let e = run(&args).unwrap_err();
             assert_eq!(e.status, Status::BadInput, "{nodes} {wait}: {e}");
         }
+    }
+
+    /// An unreadable machine file only says which drives must confirm: the
+    /// frame is still sent (here the interface is what fails, exit 4).
+    #[test]
+    fn an_unreadable_machine_file_does_not_keep_the_frame_back() {
+        let args = EstopArgs {
+            drives: DrivesArgs {
+                iface: "triquint-no-such-iface".into(),
+                nodes: None,
+                machine: crate::machine_arg::MachineArg {
+                    file: Some("triquint-no-such-machine.toml".into()),
+                },
+            },
+            wait: 200,
+        };
+        let e = run(&args).unwrap_err();
+        assert_eq!(e.status, Status::Device, "{e}");
+        assert!(e.message.contains("triquint-no-such-iface"), "{e}");
     }
 }

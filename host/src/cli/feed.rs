@@ -6,6 +6,7 @@ use triquint_cli_common::outln;
 use triquint_link::Feed;
 use triquint_shared::protocol::{FaultCode, State};
 
+use crate::cli::drives_args::DrivesArgs;
 use crate::exit::CliResult;
 use crate::ops::feed::{send_feed, verdict};
 use crate::ops::listen::open;
@@ -14,8 +15,9 @@ use crate::ops::shown::{Drive, percent, state_name};
 /// `what` to every drive on `iface`: prints each drive's answer; exit 0 when
 /// every drive did it, 8 when one refused (the cap for an override above
 /// it), 4 when one did not answer.
-pub fn run(iface: &str, nodes: &str, f: Feed, what: &str) -> CliResult {
-    let ids = triquint_cli_common::parse::parse_axis_nodes("--nodes", nodes)?;
+pub fn run(drives: &DrivesArgs, f: Feed, what: &str) -> CliResult {
+    let ids = drives.ids()?;
+    let iface = drives.iface.as_str();
     let mut port = open(iface)?;
     let sent = send_feed(&mut port, ids, f)?;
     match sent.host_us {

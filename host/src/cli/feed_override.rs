@@ -8,6 +8,7 @@
 use clap::Args;
 use triquint_link::Feed;
 
+use crate::cli::drives_args::DrivesArgs;
 use crate::exit::{CliError, CliResult};
 use crate::ops::shown::percent;
 
@@ -16,12 +17,8 @@ pub struct OverrideArgs {
     /// Feed override in per cent of the planned speed (e.g. 50, 110).
     #[arg(value_name = "PERCENT")]
     pub percent: String,
-    /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    #[command(flatten)]
+    pub drives: DrivesArgs,
 }
 
 /// "50", "50%", "117.5" → per mille (1–32000).
@@ -42,7 +39,7 @@ pub fn parse_percent(s: &str) -> CliResult<u16> {
 pub fn run(args: &OverrideArgs) -> CliResult {
     let pm = parse_percent(&args.percent)?;
     let what = format!("feed override {} %", percent(pm as u32));
-    crate::cli::feed::run(&args.iface, &args.nodes, Feed::Override(pm), &what)
+    crate::cli::feed::run(&args.drives, Feed::Override(pm), &what)
 }
 
 #[cfg(test)]

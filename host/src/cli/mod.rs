@@ -6,6 +6,7 @@ pub mod bus_args;
 pub mod check;
 pub mod clear;
 pub mod configure;
+pub mod drives_args;
 pub mod estop;
 pub mod feed;
 pub mod feed_override;

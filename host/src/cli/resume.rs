@@ -6,18 +6,15 @@
 use clap::Args;
 use triquint_link::Feed;
 
+use crate::cli::drives_args::DrivesArgs;
 use crate::exit::CliResult;
 
 #[derive(Args, Debug)]
 pub struct ResumeArgs {
-    /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    #[command(flatten)]
+    pub drives: DrivesArgs,
 }
 
 pub fn run(args: &ResumeArgs) -> CliResult {
-    crate::cli::feed::run(&args.iface, &args.nodes, Feed::Resume, "resume")
+    crate::cli::feed::run(&args.drives, Feed::Resume, "resume")
 }

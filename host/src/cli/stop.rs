@@ -7,16 +7,13 @@
 use clap::Args;
 use triquint_link::Feed;
 
+use crate::cli::drives_args::DrivesArgs;
 use crate::exit::CliResult;
 
 #[derive(Args, Debug)]
 pub struct StopArgs {
-    /// SocketCAN interface (can0, vcan0).
-    #[arg(long, value_name = "IFACE")]
-    pub iface: String,
-    /// Node ids of the drives of axes 1, 2, 3 (1 to 15).
-    #[arg(long, default_value = "1,2,3", value_name = "A,B,C")]
-    pub nodes: String,
+    #[command(flatten)]
+    pub drives: DrivesArgs,
     /// Stop with the quick-stop ramp (three times the jerk budget).
     #[arg(long)]
     pub quick: bool,
@@ -28,5 +25,5 @@ pub fn run(args: &StopArgs) -> CliResult {
     } else {
         (Feed::Stop, "stop")
     };
-    crate::cli::feed::run(&args.iface, &args.nodes, f, what)
+    crate::cli::feed::run(&args.drives, f, what)
 }

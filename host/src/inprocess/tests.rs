@@ -193,7 +193,7 @@ fn arm_is_refused_away_from_the_plan_start() {
         match e {
             SimulateError::Upload(
                 ref u @ UploadError::ArmTooFar {
-                    node: 2,
+                    node: triquint_link::Drive { axis: 2, node: 2 },
                     distances_mm,
                     start_mm,
                 },
@@ -264,7 +264,7 @@ fn a_node_with_another_configuration_is_named() {
     assert!(err.is_config(), "{err}");
     match err {
         UploadError::ConfigMismatch { node, param, .. } => {
-            assert_eq!(node, 3);
+            assert_eq!(node, triquint_link::Drive { axis: 3, node: 3 });
             assert_eq!(param, "kp");
         }
         other => panic!("{other}"),

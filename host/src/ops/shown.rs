@@ -11,37 +11,7 @@ pub fn nodes_arg(ids: [u8; 3]) -> String {
     }
 }
 
-/// A drive as messages name it: `axis 2 (node 5)`, the axis it drives and
-/// its CAN id, the same words as `status` and the web monitor use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Drive {
-    /// 1, 2 or 3: the machine file's `[axis.N]`.
-    pub axis: usize,
-    pub node: u8,
-}
-
-impl Drive {
-    /// The drive of axis `i + 1` among the node ids `ids` of axes 1, 2, 3.
-    pub fn of(ids: [u8; 3], i: usize) -> Self {
-        Drive {
-            axis: i + 1,
-            node: ids[i],
-        }
-    }
-
-    /// The drive whose node id is `node`, when it is one of `ids`.
-    pub fn with_node(ids: [u8; 3], node: u8) -> Option<Self> {
-        ids.iter()
-            .position(|id| *id == node)
-            .map(|i| Drive::of(ids, i))
-    }
-}
-
-impl std::fmt::Display for Drive {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "axis {} (node {})", self.axis, self.node)
-    }
-}
+pub use triquint_link::Drive;
 
 /// `axis k (node n)` for a node among `ids`, `node n` for another.
 pub fn drive_name(ids: [u8; 3], node: u8) -> String {

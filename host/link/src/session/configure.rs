@@ -11,6 +11,7 @@ use triquint_shared::protocol::{
 use super::nodes::{AXES, NodeView, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
+use crate::Drive;
 
 /// The latest ConfigCommit to one node.
 #[derive(Clone, Copy, Debug, Default)]
@@ -57,6 +58,14 @@ impl Configuration {
     /// Node id of index `i` (its configuration's).
     fn id(&self, i: usize) -> u8 {
         self.configs[i].node_id as u8
+    }
+
+    /// The drive of index `i`, as messages name it.
+    fn drive(&self, i: usize) -> Drive {
+        Drive {
+            axis: i + 1,
+            node: self.id(i),
+        }
     }
 
     /// Writes every node's configuration, then commits each; with
@@ -115,7 +124,7 @@ impl Configuration {
                     let values = self.configs[i].to_values();
                     let k = a.value as usize;
                     return Err(UploadError::CeilingsLocked {
-                        node: self.id(i),
+                        node: self.drive(i),
                         param: PARAMS.get(k).map(|p| p.name),
                         plan_value: values.get(k).copied().unwrap_or(f32::NAN),
                         unlocked: self.unlock,
@@ -129,7 +138,7 @@ impl Configuration {
                         && a.result != 0 =>
                 {
                     return Err(UploadError::Refused {
-                        node: self.id(i),
+                        node: self.drive(i),
                         command: CommandCode::ConfigCommit,
                         code: FaultCode::from_u8(a.result),
                     });
@@ -137,7 +146,7 @@ impl Configuration {
                 Some(a) if a.token == c.token => {
                     if !can_resend {
                         return Err(UploadError::ConfigCrc {
-                            node: self.id(i),
+                            node: self.drive(i),
                             node_crc: a.value,
                             plan_crc: self.configs[i].crc(),
                         });
@@ -164,7 +173,7 @@ impl Configuration {
     }
 
     /// Which node has not answered a commit (for the timeout).
-    pub fn uncommitted(nodes: &Nodes) -> u8 {
+    pub fn uncommitted(nodes: &Nodes) -> Drive {
         nodes.first(|v| !is_commit(v))
     }
 
@@ -208,7 +217,7 @@ impl Configuration {
             let got = r.values[k].unwrap_or(f32::NAN);
             if got.to_bits() != want[k].to_bits() {
                 return Some(UploadError::ConfigMismatch {
-                    node: r.node,
+                    node: self.drive(i),
                     param: p.name,
                     node_value: got,
                     plan_value: want[k],
@@ -216,7 +225,7 @@ impl Configuration {
             }
         }
         Some(UploadError::ConfigCrc {
-            node: r.node,
+            node: self.drive(i),
             node_crc: nodes.0[i].config_crc,
             plan_crc: self.configs[i].crc(),
         })
@@ -273,7 +282,7 @@ mod tests {
                         node_crc,
                         plan_crc,
                     }) => {
-                        assert_eq!(node, ids[i]);
+                        assert_eq!(node, Drive::of(ids, i));
                         assert_eq!(node_crc, 0xDEAD_BEEF);
                         assert_eq!(plan_crc, plan.crc());
                     }
@@ -289,7 +298,7 @@ mod tests {
                         node_value,
                         plan_value,
                     }) => {
-                        assert_eq!((node, param), (ids[i], PARAMS[0].name));
+                        assert_eq!((node, param), (Drive::of(ids, i), PARAMS[0].name));
                         assert_eq!((node_value, plan_value), (7.0, 0.5));
                     }
                     e => panic!("ids {ids:?} index {i}: {e:?}"),

@@ -3,7 +3,7 @@
 use triquint_shared::protocol::segment::SegmentError;
 use triquint_shared::protocol::{CommandCode, FaultCode, Reject};
 
-use crate::PortError;
+use crate::{Drive, PortError};
 
 /// Why an upload cannot go on.
 #[derive(Debug, thiserror::Error)]
@@ -16,55 +16,53 @@ pub enum UploadError {
         #[source]
         source: SegmentError,
     },
-    #[error("node {node}: no answer while {what}")]
-    Timeout { node: u8, what: &'static str },
+    #[error("{node}: no answer while {what}")]
+    Timeout { node: Drive, what: &'static str },
     #[error(
-        "node {node}: configuration differs from the plan's: `{param}` is {node_value} on the node, {plan_value} in the plan"
+        "{node}: configuration differs from the plan's: `{param}` is {node_value} on the node, {plan_value} in the plan"
     )]
     ConfigMismatch {
-        node: u8,
+        node: Drive,
         param: &'static str,
         node_value: f32,
         plan_value: f32,
     },
     #[error("{}", config_crc(*node, *node_crc, *plan_crc))]
     ConfigCrc {
-        node: u8,
+        node: Drive,
         node_crc: u32,
         plan_crc: u32,
     },
-    #[error("node {node} speaks protocol version {got}, this host version {want}: update {}", if got < want { "the drive's firmware (or triquint-sim)" } else { "the host (triquint)" })]
-    Version { node: u8, got: u8, want: u8 },
-    #[error("node {node} is in Fault ({}); nothing was sent", code_name(*code, "unknown"))]
+    #[error("{node} speaks protocol version {got}, this host version {want}: update {}", if got < want { "the drive's firmware (or triquint-sim)" } else { "the host (triquint)" })]
+    Version { node: Drive, got: u8, want: u8 },
+    #[error("{node} is in Fault ({}); nothing was sent", code_name(*code, "unknown"))]
     Faulted {
-        node: u8,
+        node: Drive,
         /// `None`: a code this host does not know.
         code: Option<FaultCode>,
     },
+    #[error("{node} refused: NotHomed (its position is unknown until it is homed); nothing moved")]
+    NotHomed { node: Drive },
     #[error(
-        "node {node} refused: NotHomed (its position is unknown until it is homed); nothing moved"
-    )]
-    NotHomed { node: u8 },
-    #[error(
-        "node {node} refused Arm: ArmTooFar: the platform is not at the plan's start ({}); nothing moved",
+        "{node} refused Arm: ArmTooFar: the platform is not at the plan's start ({}); nothing moved",
         too_far(distances_mm)
     )]
     ArmTooFar {
-        node: u8,
+        node: Drive,
         /// Measured minus start joint position of each axis (mm; `None`: no position heard).
         distances_mm: [Option<f64>; 3],
         /// The plan's start (mm).
         start_mm: [f64; 3],
     },
-    #[error("node {node} rejected segment {seq}: {}", reject_name(*reason))]
+    #[error("{node} rejected segment {seq}: {}", reject_name(*reason))]
     Rejected {
-        node: u8,
+        node: Drive,
         seq: u16,
         /// `None`: a reason this host does not know.
         reason: Option<Reject>,
     },
-    #[error("segment {seq}: not acknowledged by node {node} after {tries} transmissions")]
-    Retransmits { node: u8, seq: usize, tries: u32 },
+    #[error("segment {seq}: not acknowledged by {node} after {tries} transmissions")]
+    Retransmits { node: Drive, seq: usize, tries: u32 },
     #[error(
         "segments {first}–{last} last {} ms, less than the {} ms that queues of {capacity} segments need (look-ahead and refill, docs/protocol.md, Streamability): the drives would underrun; nothing moved",
         *run_us as f64 / 1e3,
@@ -78,21 +76,21 @@ pub enum UploadError {
         need_us: u64,
     },
     #[error(
-        "node {node} refused the configuration: CeilingsLocked: it widens `{}` (to {plan_value}) beyond what the drive holds{}; nothing moved",
+        "{node} refused the configuration: CeilingsLocked: it widens `{}` (to {plan_value}) beyond what the drive holds{}; nothing moved",
         param.unwrap_or("a ceiling or the travel"),
         if *unlocked { ", even in the maintenance window (it closed, or the unlock was refused)" } else { "" }
     )]
     CeilingsLocked {
-        node: u8,
+        node: Drive,
         /// The parameter the drive named (`None`: an index this host does not know).
         param: Option<&'static str>,
         plan_value: f32,
         /// The session had asked for the maintenance window.
         unlocked: bool,
     },
-    #[error("node {node} refused {}: {}", command.name(), code_name(*code, "unknown code"))]
+    #[error("{node} refused {}: {}", command.name(), code_name(*code, "unknown code"))]
     Refused {
-        node: u8,
+        node: Drive,
         command: CommandCode,
         /// `None`: a code this host does not know.
         code: Option<FaultCode>,
@@ -112,14 +110,14 @@ fn reject_name(reason: Option<Reject>) -> &'static str {
 
 /// The ConfigCrc message: the same CRC on both sides means the node has
 /// the values and still refused them (one missing, or out of its range).
-fn config_crc(node: u8, node_crc: u32, plan_crc: u32) -> String {
+fn config_crc(node: Drive, node_crc: u32, plan_crc: u32) -> String {
     if node_crc == plan_crc {
         format!(
-            "node {node} refused the plan's configuration (CRC 0x{plan_crc:08X} on both sides): a value is missing or out of range on the node"
+            "{node} refused the plan's configuration (CRC 0x{plan_crc:08X} on both sides): a value is missing or out of range on the node"
         )
     } else {
         format!(
-            "node {node}: configuration CRC 0x{node_crc:08X} differs from the plan's 0x{plan_crc:08X}"
+            "{node}: configuration CRC 0x{node_crc:08X} differs from the plan's 0x{plan_crc:08X}"
         )
     }
 }
@@ -180,18 +178,18 @@ mod tests {
     #[test]
     fn a_crc_message_never_contradicts_itself() {
         let same = UploadError::ConfigCrc {
-            node: 2,
+            node: Drive { axis: 2, node: 5 },
             node_crc: 0xF23B_5964,
             plan_crc: 0xF23B_5964,
         }
         .to_string();
         assert!(!same.contains("differs"), "{same}");
         assert!(
-            same.contains("node 2 refused") && same.contains("0xF23B5964"),
+            same.contains("axis 2 (node 5) refused") && same.contains("0xF23B5964"),
             "{same}"
         );
         let other = UploadError::ConfigCrc {
-            node: 2,
+            node: Drive { axis: 2, node: 5 },
             node_crc: 1,
             plan_crc: 0xF23B_5964,
         }
@@ -205,7 +203,7 @@ mod tests {
     #[test]
     fn a_rejected_plan_is_bad_input_a_lost_part_is_not() {
         let rejected = |r: Reject| UploadError::Rejected {
-            node: 1,
+            node: Drive { axis: 1, node: 4 },
             seq: 4,
             reason: Some(r),
         };
@@ -220,7 +218,7 @@ mod tests {
             assert!(!rejected(r).is_bad_plan(), "{r:?}");
         }
         let timeout = UploadError::Timeout {
-            node: 1,
+            node: Drive { axis: 1, node: 4 },
             what: "streaming",
         };
         assert!(!timeout.is_bad_plan());
@@ -231,38 +229,38 @@ mod tests {
     #[test]
     fn typed_codes_print_their_protocol_names() {
         let faulted = UploadError::Faulted {
-            node: 1,
+            node: Drive { axis: 1, node: 4 },
             code: Some(FaultCode::FollowingError),
         };
         assert_eq!(
             faulted.to_string(),
-            "node 1 is in Fault (FollowingError); nothing was sent"
+            "axis 1 (node 4) is in Fault (FollowingError); nothing was sent"
         );
         let unknown = UploadError::Faulted {
-            node: 1,
+            node: Drive { axis: 1, node: 4 },
             code: FaultCode::from_u8(250),
         };
         assert_eq!(
             unknown.to_string(),
-            "node 1 is in Fault (unknown); nothing was sent"
+            "axis 1 (node 4) is in Fault (unknown); nothing was sent"
         );
         let refused = UploadError::Refused {
-            node: 3,
+            node: Drive { axis: 3, node: 6 },
             command: CommandCode::ConfigCommit,
             code: Some(FaultCode::WrongState),
         };
         assert_eq!(
             refused.to_string(),
-            "node 3 refused ConfigCommit: WrongState"
+            "axis 3 (node 6) refused ConfigCommit: WrongState"
         );
         let rejected = UploadError::Rejected {
-            node: 2,
+            node: Drive { axis: 2, node: 5 },
             seq: 7,
             reason: None,
         };
         assert_eq!(
             rejected.to_string(),
-            "node 2 rejected segment 7: unknown reason"
+            "axis 2 (node 5) rejected segment 7: unknown reason"
         );
     }
 }

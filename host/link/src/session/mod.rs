@@ -40,6 +40,7 @@ use self::plan_clock::PlanClock;
 use self::start::StartSequence;
 use self::stream::Stream;
 use self::time_sync::TimeSyncMaster;
+use crate::Drive;
 use crate::{CanPort, Received};
 
 /// Progress of a session.
@@ -337,7 +338,10 @@ impl Session {
                 v.depth = a.depth;
                 v.capacity = a.capacity;
                 // Once stopped, the drives refuse what is still on its way.
-                match self.stream.acknowledged(i, node, &a, rx.t_us) {
+                match self
+                    .stream
+                    .acknowledged(i, self.nodes.drive(i), &a, rx.t_us)
+                {
                     Err(_) if self.feed.stopped => {}
                     r => r?,
                 }
@@ -361,7 +365,7 @@ impl Session {
 
     /// `Err(Timeout)` naming `node` once the phase has lasted longer than
     /// `response_timeout_us`.
-    fn timeout(&self, now: u64, what: &'static str, node: u8) -> Result<(), UploadError> {
+    fn timeout(&self, now: u64, what: &'static str, node: Drive) -> Result<(), UploadError> {
         if now.saturating_sub(self.phase_since) > self.opts.response_timeout_us {
             return Err(UploadError::Timeout { node, what });
         }
@@ -411,7 +415,11 @@ impl Session {
                     return Err(e);
                 }
                 let node = self.config.reading_back().unwrap_or(self.nodes.id(0));
-                self.timeout(now, "reading back its configuration", node)?;
+                self.timeout(
+                    now,
+                    "reading back its configuration",
+                    self.nodes.drive_of(node),
+                )?;
             }
             Phase::Sync => {
                 let since = self.phase_since;
@@ -455,7 +463,7 @@ impl Session {
                 } else {
                     let node = self
                         .nodes
-                        .id(answers.iter().position(Option::is_none).unwrap_or(0));
+                        .drive(answers.iter().position(Option::is_none).unwrap_or(0));
                     self.timeout(now, "answering Arm", node)?;
                 }
             }
@@ -550,7 +558,7 @@ impl Session {
         for v in &self.nodes.0 {
             if v.version != PROTOCOL_VERSION {
                 return Err(UploadError::Version {
-                    node: v.id,
+                    node: self.nodes.drive_of(v.id),
                     got: v.version,
                     want: PROTOCOL_VERSION,
                 });
@@ -559,7 +567,7 @@ impl Session {
         if let Some(v) = self.nodes.0.iter().find(|v| v.state == Some(State::Fault)) {
             if !self.opts.clear_faults {
                 return Err(UploadError::Faulted {
-                    node: v.id,
+                    node: self.nodes.drive_of(v.id),
                     code: FaultCode::from_u8(v.fault),
                 });
             }
@@ -569,7 +577,9 @@ impl Session {
         if self.opts.require_homed
             && let Some(v) = self.nodes.0.iter().find(|v| !v.homed)
         {
-            return Err(UploadError::NotHomed { node: v.id });
+            return Err(UploadError::NotHomed {
+                node: self.nodes.drive_of(v.id),
+            });
         }
         self.out.command(0, CommandCode::Reset, 0);
         if self.opts.configure {
@@ -645,7 +655,7 @@ impl Session {
             });
         } else if let Some(v) = silent {
             return Err(UploadError::Timeout {
-                node: v.id,
+                node: self.nodes.drive_of(v.id),
                 what: "finishing the plan (no heartbeat)",
             });
         }

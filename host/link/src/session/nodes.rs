@@ -2,6 +2,8 @@
 
 use triquint_shared::protocol::{CommandAck, Heartbeat, HeartbeatExt, State, flags};
 
+use crate::Drive;
+
 /// Drives of a robot (index `i` drives axis `i + 1`; its node id is
 /// configured, by default `i + 1`).
 pub const AXES: usize = 3;
@@ -129,6 +131,22 @@ impl Nodes {
         self.0.get(i).map_or(0, |v| v.id)
     }
 
+    /// The drive of index `i`, as messages name it.
+    pub fn drive(&self, i: usize) -> Drive {
+        Drive {
+            axis: i + 1,
+            node: self.id(i),
+        }
+    }
+
+    /// The drive of node id `node` (axis 0 for one that is not a drive).
+    pub fn drive_of(&self, node: u8) -> Drive {
+        Drive {
+            axis: self.index(node).map_or(0, |i| i + 1),
+            node,
+        }
+    }
+
     /// Index of node id `node`, if it is one of the drives.
     pub fn index(&self, node: u8) -> Option<usize> {
         (node != 0).then(|| self.0.iter().position(|v| v.id == node))?
@@ -161,9 +179,9 @@ impl Nodes {
             .unwrap_or(0)
     }
 
-    /// The first node for which `missing` holds (the first node if none does).
-    pub fn first(&self, missing: impl Fn(&NodeView) -> bool) -> u8 {
+    /// The first drive for which `missing` holds (the first if none does).
+    pub fn first(&self, missing: impl Fn(&NodeView) -> bool) -> Drive {
         let i = self.0.iter().position(missing).unwrap_or(0);
-        self.id(i)
+        self.drive(i)
     }
 }

@@ -90,7 +90,7 @@ impl StartSequence {
                 .and_then(FaultCode::from_u8)
                 .unwrap_or(FaultCode::None);
             return Err(UploadError::Refused {
-                node: nodes.id(i),
+                node: nodes.drive(i),
                 command: CommandCode::Arm,
                 code: Some(code),
             });

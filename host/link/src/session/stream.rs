@@ -22,6 +22,7 @@ use triquint_shared::protocol::{Reject, SegmentAck, WireSegment};
 use super::nodes::{AXES, Nodes};
 use super::outbox::Outbox;
 use super::{SessionOptions, UploadError};
+use crate::Drive;
 
 /// A segment is resent on a rejection only if its last transmission is older
 /// than this: a full window of classic segments takes about 11 ms on the wire.
@@ -106,7 +107,7 @@ impl Stream {
     pub fn acknowledged(
         &mut self,
         i: usize,
-        node: u8,
+        node: Drive,
         a: &SegmentAck,
         t_us: u64,
     ) -> Result<(), UploadError> {
@@ -196,9 +197,7 @@ impl Stream {
                 if tries > opts.max_retransmits
                     || f.sends > RESENDS_PER_TRY * (opts.max_retransmits + 1)
                 {
-                    let node = (0..AXES)
-                        .find(|&i| !f.acked[i])
-                        .map_or(nodes.id(0), |i| nodes.id(i));
+                    let node = nodes.drive((0..AXES).find(|&i| !f.acked[i]).unwrap_or(0));
                     return Err(UploadError::Retransmits {
                         node,
                         seq: f.seq,
