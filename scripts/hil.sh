@@ -65,7 +65,7 @@ done
 export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" \
     HIL_PLANS="$OUT/plans" HIL_ROOT="$ROOT" HIL_IFACE=vcan0 HIL_IFACE_B=vcan1 PYTHONDONTWRITEBYTECODE=1 \
     PATH="\$PATH:/usr/bin:/sbin"
-"$PY" -m pytest -p no:cacheprovider -v -rfE hil-sim/python ${HIL_PYTEST_ARGS:-}
+"$PY" -m pytest -p no:cacheprovider -v -rfE --durations=12 hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?
 echo "\$status" > "$OUT/status"
 exit \$status

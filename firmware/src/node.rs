@@ -10,6 +10,7 @@ use crate::receiver::Receiver;
 
 /// One drive node with a segment queue of capacity `Q`. Derefs to its
 /// [`Drive`] (state, tick, transmit queue, statistics).
+#[derive(Clone)]
 pub struct Node<const Q: usize = QUEUE_CAPACITY> {
     pub receiver: Receiver,
     pub drive: Drive<Q>,

@@ -23,6 +23,7 @@ use crate::segment::Seg;
 use crate::sync::SyncEstimator;
 
 /// Receive side of one node.
+#[derive(Clone)]
 pub struct Receiver {
     node_id: u8,
     /// Segment reassembly, and the predecessor a compact segment continues.

@@ -55,6 +55,7 @@ pub struct Delivery {
 }
 
 /// The bus. Station 0 is the host, 1–3 the nodes.
+#[derive(Clone)]
 pub struct Bus {
     cfg: BusConfig,
     pending: Vec<VecDeque<(Frame, u64)>>,

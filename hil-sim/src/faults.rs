@@ -135,6 +135,7 @@ pub struct FaultStats {
 }
 
 /// The fault layer of one bus.
+#[derive(Clone)]
 pub struct FaultInjector {
     pub windows: Vec<FaultWindow>,
     rng: ChaCha8Rng,

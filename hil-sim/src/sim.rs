@@ -174,6 +174,7 @@ impl LimitSwitch for SimSwitch {
 }
 
 /// One simulated drive.
+#[derive(Clone)]
 pub struct SimNode {
     pub node: Node,
     /// The axis (0–2) it drives.
@@ -213,7 +214,7 @@ impl Encoder for SimEncoder {
     }
 }
 
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct SimMotor {
     torque: f32,
     enabled: bool,
@@ -363,7 +364,8 @@ pub enum SimError {
     },
 }
 
-/// The virtual machine.
+/// The virtual machine (a clone runs on from the same instant).
+#[derive(Clone)]
 pub struct Sim {
     pub cfg: SimConfig,
     pub bus: Bus,

@@ -31,7 +31,7 @@ struct Readback {
     values: [Option<f32>; PARAM_COUNT],
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Configuration {
     configs: [DriveConfig; AXES],
     commits: [Commit; AXES],

@@ -57,7 +57,7 @@ impl Feed {
 }
 
 /// What the session sent and learnt of feed commands.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct FeedState {
     pending: Vec<(Feed, u8)>,
     /// Override commands seen (own or another station's): token, per mille.

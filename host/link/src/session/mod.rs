@@ -106,7 +106,9 @@ enum Phase {
     Done,
 }
 
-/// One upload of one plan to the three nodes.
+/// One upload of one plan to the three nodes (a clone goes on from the
+/// same point: tests branch a run).
+#[derive(Clone)]
 pub struct Session {
     opts: SessionOptions,
     phase: Phase,

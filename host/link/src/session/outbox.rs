@@ -8,7 +8,7 @@ use crate::{CanPort, PortError};
 
 /// The session's transmit queue: time syncs and urgent resends go to the
 /// front, everything else to the back, in the order queued.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct Outbox {
     frames: VecDeque<Frame>,
     /// Token of the latest command.

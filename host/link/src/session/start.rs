@@ -28,7 +28,7 @@ struct Pending {
     resends: u32,
 }
 
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct StartSequence {
     arm: Pending,
     start: Pending,

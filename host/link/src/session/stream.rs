@@ -50,7 +50,7 @@ struct InFlight {
     refused: bool,
 }
 
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub(crate) struct Stream {
     pub segments: Vec<WireSegment>,
     fd: bool,

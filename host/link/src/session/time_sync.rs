@@ -9,7 +9,7 @@ use super::SessionOptions;
 use super::outbox::Outbox;
 use crate::Received;
 
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct TimeSyncMaster {
     seq: u8,
     next_us: u64,
