@@ -54,15 +54,21 @@ fn the_example_machines_match_the_default_and_the_firmware() {
 }
 
 #[test]
-fn robot_is_offered_only_where_the_machine_is_used() {
+fn a_bad_machine_file_is_read_not_ignored() {
     let dir = scratch("offered");
-    for cmd in ["estop", "hold", "resume", "stop"] {
-        let (status, _, err) = triquint(&dir, &[cmd, "--iface", "none", "--robot", "m.toml"]);
-        assert_eq!(status, 2, "{cmd}: {err}");
-        assert!(err.contains("--robot"), "{cmd}: {err}");
-    }
-    // A bad machine file is read (not ignored) by `plan`: exit 2 naming it.
     std::fs::write(dir.join("bad.toml"), "[axis.1]\ndirection = 2\n").unwrap();
+    let named = "line 2: `axis.1.direction` = 2: must be 1 or -1";
+    // The feed commands take their node ids from it: exit 2 naming it.
+    for cmd in ["hold", "resume", "stop"] {
+        let (status, _, err) = triquint(&dir, &[cmd, "--iface", "none", "--machine", "bad.toml"]);
+        assert_eq!(status, 2, "{cmd}: {err}");
+        assert!(err.contains(named), "{cmd}: {err}");
+    }
+    // estop tries the bus before the file: here the interface fails first.
+    let (status, _, err) = triquint(&dir, &["estop", "--iface", "none", "--machine", "bad.toml"]);
+    assert_eq!(status, 4, "estop: {err}");
+    assert!(err.contains("none: cannot open"), "estop: {err}");
+    // And `plan`.
     let job = example("paper-case1.toml");
     let (status, _, err) = triquint(
         &dir,
@@ -76,10 +82,7 @@ fn robot_is_offered_only_where_the_machine_is_used() {
         ],
     );
     assert_eq!(status, 2, "{err}");
-    assert!(
-        err.contains("line 2: `axis.1.direction` = 2: must be 1 or -1"),
-        "{err}"
-    );
+    assert!(err.contains(named), "{err}");
 }
 
 #[test]
