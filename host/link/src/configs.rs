@@ -286,4 +286,95 @@ mod tests {
             assert!(new <= old * (1.0 + 1e-9) && new >= 0.05, "{name}");
         }
     }
+
+    /// What bounds the drives' stop ramp on the committed test plans: the
+    /// per-segment rule now (v, a, j over the whole segment and its three
+    /// joints) against the same f32 node rule over each joint's maxima on
+    /// K pieces of each segment and at each sampled instant, all with the
+    /// segment's own budgets; and a jerk-limited stop from the plan's
+    /// peak joint speed under its acceleration and jerk limits (printed
+    /// with `--nocapture`; docs/protocol.md, "Stop ramp").
+    #[test]
+    fn stop_ramp_by_pieces_and_instants() {
+        use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
+        use triquint_shared::protocol::stop_ramp::{budgets, segment_ramp};
+        let s = DriveSettings::default();
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let text = std::fs::read_to_string(format!(
+                "{}/../../testdata/protocol/plans/{name}.json",
+                env!("CARGO_MANIFEST_DIR")
+            ))
+            .expect("a test plan");
+            let plan: Plan = serde_json::from_str(&text).expect("a plan");
+            let c = DriveConfigs::for_plan(&plan, &s).unwrap();
+            let cap = c.override_cap as f32;
+            let jl = plan.limits.jerk.min(s.ceilings.jerk) as f32;
+            let ceiling = s.ceilings.jerk as f32;
+            // K = 1, 2, 4, 16 pieces, then every one of 400 instants.
+            let ks = [1usize, 2, 4, 16, 400];
+            let mut t = [0.0f32; 5];
+            let n = 400;
+            for w in plan.wire_segments().unwrap() {
+                let b = w.normalised_f32();
+                let ih = inv_h(w.duration_us) as f64;
+                let bs = budgets(maxima(&b, ih as f32)[2], jl, ceiling, cap);
+                for c in &b {
+                    let c = c.map(|x| x as f64);
+                    let at = |i: usize| {
+                        let u = i as f64 / n as f64;
+                        let d1 = c[1]
+                            + u * (2.0 * c[2]
+                                + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
+                        let d2 =
+                            2.0 * c[2] + u * (6.0 * c[3] + u * (12.0 * c[4] + u * 20.0 * c[5]));
+                        let d3 = 6.0 * c[3] + u * (24.0 * c[4] + u * 60.0 * c[5]);
+                        [d1.abs() * ih, d2.abs() * ih * ih, d3.abs() * ih * ih * ih]
+                    };
+                    let samples: Vec<[f64; 3]> = (0..=n).map(at).collect();
+                    for (k, tk) in ks.iter().zip(t.iter_mut()) {
+                        for p in 0..*k {
+                            let m = samples[p * n / k..=(p + 1) * n / k]
+                                .iter()
+                                .fold([0.0f64; 3], |m, x| {
+                                    [m[0].max(x[0]), m[1].max(x[1]), m[2].max(x[2])]
+                                });
+                            let [v, a, j] = m.map(|x| x as f32);
+                            *tk = tk.max(segment_ramp(v, a, j, bs, cap).unwrap()[0]);
+                        }
+                    }
+                }
+            }
+            let [v, _, _] = largest(&plan).unwrap();
+            let (am, jm) = (plan.limits.acceleration, plan.limits.jerk);
+            let optimal = if v >= am * am / jm {
+                v / am + am / jm
+            } else {
+                2.0 * (v / jm).sqrt()
+            };
+            let now = c.stop_time_s;
+            eprintln!(
+                "{name}: T_s now {now:.3} s; per joint on 1/2/4/16 pieces {:.3}/{:.3}/{:.3}/{:.3} s; per instant {:.3} s (x{:.3}); jerk-limited stop from v {v:.3} m/s {optimal:.3} s (now x{:.2}, per instant x{:.2})",
+                t[0],
+                t[1],
+                t[2],
+                t[3],
+                t[4],
+                t[4] as f64 / now,
+                now / optimal,
+                t[4] as f64 / optimal
+            );
+            // Nested pieces never lengthen the ramp; none beats the
+            // jerk-limited stop.
+            assert!(t[0] as f64 <= now * (1.0 + 1e-6), "{name}");
+            for k in 1..4 {
+                if k != 1 {
+                    assert!(t[k] <= t[k - 1] * (1.0 + 1e-6), "{name} {k}");
+                }
+            }
+            assert!(
+                t[4] <= t[3] * (1.0 + 1e-6) && t[4] as f64 > optimal,
+                "{name}"
+            );
+        }
+    }
 }

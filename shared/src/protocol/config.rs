@@ -98,9 +98,9 @@ config_params! {
     24 following_error_max ["m"],
     /// Arm is refused further than this from the plan start.
     25 arm_tolerance ["m"],
-    /// Duration of a stop (and of feed hold/resume) by time-scaling.
+    /// Stop ramp length T_s of the time-scaling's transitions (stop, feed hold/resume, override); a stop from σ takes T_s·max(√σ, σ).
     26 stop_time ["s"],
-    /// Duration of a quick stop.
+    /// Stop ramp length of a quick stop.
     27 quick_stop_time ["s"],
     /// Extra buffered time required beyond the stop's path length before underrun.
     28 underrun_margin ["s"],

@@ -33,7 +33,7 @@ code_enum! {
     FaultCode {
         /// No fault / command accepted.
         None = 0,
-        /// Buffered motion time fell below the stop time plus margin.
+        /// Buffered motion time fell below the stop's plan-time length (from the stop ramp length T_s) plus margin.
         Underrun = 1,
         /// No time sync within the configured timeout while armed or running.
         LostSync = 2,
@@ -133,9 +133,9 @@ code_enum! {
         Arm = 1,
         /// Armed → Running at host time `arg` (µs, wrapping u32).
         Start = 2,
-        /// Stop along the path with the configured stop time, then Idle (queue flushed); from host time `arg` (µs, 0 = on receipt).
+        /// Stop along the path with the configured stop ramp length T_s, then Idle (queue flushed); from host time `arg` (µs, 0 = on receipt).
         Stop = 3,
-        /// Stop along the path with the quick-stop time, then Idle (queue flushed); from host time `arg`.
+        /// Stop along the path with the quick-stop ramp length, then Idle (queue flushed); from host time `arg`.
         QuickStop = 4,
         /// Fault → Idle; the queue is flushed and sequence numbers restart at 0.
         ClearFault = 5,
