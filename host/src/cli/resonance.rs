@@ -686,3 +686,56 @@ mod tests {
         assert!(e.to_string().starts_with("(0.0, 0.0, 100.0) mm:"), "{e}");
     }
 }
+
+#[cfg(test)]
+mod across_tests {
+    use super::*;
+
+    /// `--across` measures: at the centre and two edges of the grid, swept
+    /// around the lateral pair, every peak lies within 1 % of the model's
+    /// nearest mode (the 20 s sweep finds them within 0.6 %:
+    /// docs/input-shaping.md), and every axis's ring-down damping within
+    /// 30 % of the centre's mean (the damping tolerance; the rotors'
+    /// friction that sets it does not depend on the pose).
+    #[test]
+    fn across_the_grid_the_measured_peaks_are_the_models() {
+        let machine = Machine::default();
+        let sweep = Sweep {
+            from_hz: 15.0,
+            to_hz: 45.0,
+            duration_s: 6.0,
+            ..Sweep::default()
+        };
+        let poses = [[0.0, 0.0, 600.0], [-120.0, 0.0, 600.0], [0.0, 120.0, 600.0]];
+        let model = modes(&machine, &poses).unwrap();
+        let mut centre_damping = None;
+        for (p, m) in poses.iter().zip(&model) {
+            let axes =
+                triquint_sim::resonance::measure(&machine, Vector3::from(*p) * 1e-3, &sweep)
+                    .unwrap();
+            let rows = compare(&axes, m);
+            assert!(rows.len() >= 3, "{p:?}: {} peaks", rows.len());
+            let ringdown: Vec<f64> = rows.iter().filter_map(|r| r.ringdown_damping).collect();
+            assert_eq!(ringdown.len(), 3, "{p:?}: a ring-down lost");
+            let mean = ringdown.iter().sum::<f64>() / 3.0;
+            let centre = *centre_damping.get_or_insert(mean);
+            for r in &rows {
+                eprintln!(
+                    "{p:?} axis {}: {:.3} Hz vs {:.3} ({:+.3} %), ring-down {:?}",
+                    r.axis + 1,
+                    r.hz,
+                    r.model_hz,
+                    r.deviation * 100.0,
+                    r.ringdown_damping
+                );
+                assert!(r.deviation.abs() <= 0.01, "{p:?}: {:.4}", r.deviation);
+                if let Some(d) = r.ringdown_damping {
+                    assert!((d - centre).abs() <= 0.3 * centre, "{p:?}: {d} vs {centre}");
+                }
+            }
+        }
+        // A grid of no poses is refused.
+        assert!(grid(&machine, [0.0, 0.0, 600.0], 0).is_err());
+        assert_eq!(grid(&machine, [0.0, 0.0, 600.0], 1).unwrap().len(), 1);
+    }
+}
