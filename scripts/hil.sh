@@ -51,13 +51,6 @@ nice cargo run --release --locked -q -p triquint-sim --example streaming_fixture
 for f in "$OUT"/plans/stream-*.json; do
     "$BIN/triquint" check "$f" >/dev/null
 done
-# The flexible plant's move (test_flex.py), unshaped and shaped at the mode,
-# with its in-process residual vibration to compare against.
-for run in flex-p2p=none flex-p2p-zvd=zvd:25.6:0.062; do
-    name=${run%%=*} shaper=${run#*=}
-    "$BIN/triquint" plan testdata/hil/flex-p2p.toml --shaper "$shaper" -o "$OUT/plans/$name.json" --quiet
-    "$BIN/triquint" simulate "$OUT/plans/$name.json" --plant flexible --json > "$OUT/plans/$name.inproc.json"
-done
 
 # The guest sees the host's root file system read-only, with PATH reset:
 # everything by absolute path; only $OUT is written back.
