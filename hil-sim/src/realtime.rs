@@ -615,4 +615,54 @@ mod tests {
             assert!(frames < 2 * n as u64 * if fd { 2 } else { 20 });
         }
     }
+
+    /// A closed run on the flexible plant waits out its settle window and
+    /// then carries the residual over it; cut short, over what it holds;
+    /// on the rigid plant, none.
+    #[test]
+    fn a_run_on_the_flexible_plant_reports_its_settle_window() {
+        use triquint_shared::kinematics::Pose;
+        let machine = Machine::default();
+        let model = machine.robot.model::<f64>();
+        let q = Pose::from_cartesian(&model, Vector3::new(0.0, 0.0, 0.6))
+            .unwrap()
+            .q;
+        let flex = FlexParams::for_machine(&machine);
+        let mut plant = PlantModel::new(
+            PlantKind::Flexible,
+            &machine.robot,
+            PlantConfig::default(),
+            &flex,
+            q,
+        )
+        .unwrap();
+        let closed = |end_s: f64| Closed {
+            run: RunReport::default(),
+            settle: Some((end_s, q)),
+        };
+        assert_eq!(closed(0.1).ready_at(), 0.1 + SETTLE_WINDOW_S);
+        plant.advance(0.1 + SETTLE_WINDOW_S).unwrap();
+        let v = closed(0.1).report(&plant).unwrap().vibration.unwrap();
+        assert_eq!(v.window_s, SETTLE_WINDOW_S);
+        let full = v.samples;
+        assert!(
+            full as f64 >= SETTLE_WINDOW_S * flex.accelerometer_hz,
+            "{full}"
+        );
+        // Stopped 0.2 s into the window: the report says so.
+        let v = closed(0.4).report(&plant).unwrap().vibration.unwrap();
+        assert!((v.window_s - 0.2).abs() < 1e-9, "{v:?}");
+        assert!(v.samples < full / 2, "{v:?}");
+        // Nothing of the window yet: no figure.
+        assert!(closed(0.7).report(&plant).unwrap().vibration.is_none());
+        let rigid = PlantModel::new(
+            PlantKind::Rigid,
+            &machine.robot,
+            PlantConfig::default(),
+            &flex,
+            q,
+        )
+        .unwrap();
+        assert!(closed(0.0).report(&rigid).unwrap().vibration.is_none());
+    }
 }

@@ -710,9 +710,8 @@ mod across_tests {
         let model = modes(&machine, &poses).unwrap();
         let mut centre_damping = None;
         for (p, m) in poses.iter().zip(&model) {
-            let axes =
-                triquint_sim::resonance::measure(&machine, Vector3::from(*p) * 1e-3, &sweep)
-                    .unwrap();
+            let axes = triquint_sim::resonance::measure(&machine, Vector3::from(*p) * 1e-3, &sweep)
+                .unwrap();
             let rows = compare(&axes, m);
             assert!(rows.len() >= 3, "{p:?}: {} peaks", rows.len());
             let ringdown: Vec<f64> = rows.iter().filter_map(|r| r.ringdown_damping).collect();
