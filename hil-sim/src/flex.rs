@@ -283,6 +283,11 @@ impl FlexPlant {
         self.x.qs
     }
 
+    /// Plant time (s): what the accelerometer's samples are stamped with.
+    pub fn time_s(&self) -> f64 {
+        self.t_s
+    }
+
     /// The platform (m).
     pub fn platform(&self) -> Vector3<f64> {
         self.x.rp

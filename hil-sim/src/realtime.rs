@@ -5,9 +5,15 @@
 //! 1 Mbit/s, 5 Mbit/s FD data phase, over wall time), the plan (reassembled
 //! from the segment frames) and the common start, for the tracking error.
 //!
+//! On the flexible plant a run closes a settle window after the plan's end
+//! (the machine rings on), with the residual vibration the in-process
+//! machine reports (`vibration.rs`), over the same window from the same
+//! accelerometer.
+//!
 //! A tick that starts more than one period late is a missed deadline: the
 //! loop counts it and goes on from the current time, never slipping silently.
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, SystemTime};
 
@@ -29,6 +35,7 @@ use crate::plant::PlantConfig;
 use crate::plant_model::{PlantKind, PlantModel};
 use crate::report::{JsonFault, RunReport};
 use crate::sim::{FaultEvent, LocalClock, Sample, SimError, SimNode, SimSwitch, SwitchMode};
+use crate::vibration::SETTLE_WINDOW_S;
 use triquint_link::socketcan::{SocketCanError, SocketCanPort};
 
 /// What runs, where.
@@ -188,6 +195,36 @@ impl Watch {
     }
 }
 
+/// A run that has closed, waiting (on the flexible plant) for its settle
+/// window to pass before it is reported.
+struct Closed {
+    run: RunReport,
+    /// The plan's end in plant time (s) and the joints' end position (m).
+    settle: Option<(f64, Vector3<f64>)>,
+}
+
+impl Closed {
+    /// Plant time (s) from which it can be reported.
+    fn ready_at(&self) -> f64 {
+        self.settle
+            .map_or(0.0, |(end_s, _)| end_s + SETTLE_WINDOW_S)
+    }
+
+    /// The run, with the residual vibration over the window so far (all of
+    /// it unless the machine was stopped first).
+    fn report(mut self, plant: &PlantModel) -> Result<RunReport, SimError> {
+        if let (Some((end_s, q)), Some(f)) = (self.settle, plant.flexible()) {
+            let window = SETTLE_WINDOW_S.min(f.time_s() - end_s);
+            if window > 0.0 {
+                self.run.vibration = f
+                    .residual(end_s, window, q)
+                    .map_err(|source| SimError::Plant { t_s: end_s, source })?;
+            }
+        }
+        Ok(self.run)
+    }
+}
+
 /// Host time (ns) of a wrapping 32-bit µs host time, unwrapped near `est_ns`.
 fn unwrap_host_us(arg: u32, est_ns: i64) -> i64 {
     let est_us = est_ns.div_euclid(1000);
@@ -256,6 +293,7 @@ pub fn run(
     let mut next = start_ns + tick_ns;
     let mut all_busy_ns = 0u64;
     let mut rx = Vec::new();
+    let mut closed: VecDeque<Closed> = VecDeque::new();
     let result = 'run: loop {
         if stop.load(Ordering::Relaxed) {
             break 'run Ok(());
@@ -339,7 +377,23 @@ pub fn run(
             }
         }
         plant.set_braked(nodes.len() < 3 || !nodes.iter().all(SimNode::enabled));
-        observe(&mut watch, &mut nodes, &plant, t, report);
+        closed.extend(observe(&mut watch, &mut nodes, &plant, t));
+        let now_s = plant.flexible().map_or(0.0, |f| f.time_s());
+        while closed.front().is_some_and(|c| c.ready_at() <= now_s) {
+            if let Some(c) = closed.pop_front() {
+                match c.report(&plant) {
+                    Ok(r) => report.runs.push(r),
+                    Err(e) => break 'run Err(e.into()),
+                }
+            }
+        }
+        // Between runs the accelerometer's record is not needed: kept, it
+        // would grow for as long as the machine runs.
+        if let (PlantModel::Flexible(f), None, true) =
+            (&mut plant, watch.since_ns, closed.is_empty())
+        {
+            f.accel.clear();
+        }
     };
     let end = port.now_ns();
     report.wall_time_s = (end - start_ns) as f64 * 1e-9;
@@ -347,6 +401,10 @@ pub fn run(
     report.foreign_frames = port.foreign;
     let q = plant.q();
     report.final_joint_position_m = [q[0], q[1], q[2]];
+    // Runs still in their settle window are reported with what it holds.
+    for c in closed {
+        report.runs.push(c.report(&plant)?);
+    }
     // A run cut short by the stop is reported as it stands (not completed).
     if watch.since_ns.is_some() && watch.running {
         let r = finish(&watch, &nodes, end, false);
@@ -361,14 +419,9 @@ fn observe(
     nodes: &mut [SimNode],
     plant: &PlantModel,
     now: u64,
-    report: &mut RealtimeReport,
-) {
-    if watch.since_ns.is_none() {
-        return;
-    }
-    let Some(first) = nodes.first() else {
-        return;
-    };
+) -> Option<Closed> {
+    watch.since_ns?;
+    let first = nodes.first()?;
     let local = first.clock.local_us(now);
     let host_ns = first.node.host_ns(local);
     if let (Some(arg), Some(h), None) = (watch.start_arg, host_ns, watch.start_host_ns) {
@@ -395,9 +448,22 @@ fn observe(
     let refused = nodes.iter().any(|n| !n.faults.is_empty()) && at_rest;
     if (watch.running && at_rest) || refused {
         let completed = states.iter().all(|s| *s == State::Idle) && nodes.len() == 3;
-        report.runs.push(finish(watch, nodes, now, completed));
+        let run = finish(watch, nodes, now, completed);
+        // The plan's end in plant time: the drives stopped at most a tick
+        // after it, by their own clocks.
+        let settle = match (plant.flexible(), watch.start_host_ns, host_ns) {
+            (Some(f), Some(start), Some(h)) if watch.running => {
+                eval::at(&watch.segments, run.plan_time_s).map(|end| {
+                    let since_end_s = (h - start) as f64 * 1e-9 - run.plan_time_s;
+                    (f.time_s() - since_end_s.max(0.0), Vector3::from(end.q))
+                })
+            }
+            _ => None,
+        };
         *watch = Watch::default();
+        return Some(Closed { run, settle });
     }
+    None
 }
 
 fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunReport {
@@ -548,5 +614,55 @@ mod tests {
             // Compact after the first segment.
             assert!(frames < 2 * n as u64 * if fd { 2 } else { 20 });
         }
+    }
+
+    /// A closed run on the flexible plant waits out its settle window and
+    /// then carries the residual over it; cut short, over what it holds;
+    /// on the rigid plant, none.
+    #[test]
+    fn a_run_on_the_flexible_plant_reports_its_settle_window() {
+        use triquint_shared::kinematics::Pose;
+        let machine = Machine::default();
+        let model = machine.robot.model::<f64>();
+        let q = Pose::from_cartesian(&model, Vector3::new(0.0, 0.0, 0.6))
+            .unwrap()
+            .q;
+        let flex = FlexParams::for_machine(&machine);
+        let mut plant = PlantModel::new(
+            PlantKind::Flexible,
+            &machine.robot,
+            PlantConfig::default(),
+            &flex,
+            q,
+        )
+        .unwrap();
+        let closed = |end_s: f64| Closed {
+            run: RunReport::default(),
+            settle: Some((end_s, q)),
+        };
+        assert_eq!(closed(0.1).ready_at(), 0.1 + SETTLE_WINDOW_S);
+        plant.advance(0.1 + SETTLE_WINDOW_S).unwrap();
+        let v = closed(0.1).report(&plant).unwrap().vibration.unwrap();
+        assert_eq!(v.window_s, SETTLE_WINDOW_S);
+        let full = v.samples;
+        assert!(
+            full as f64 >= SETTLE_WINDOW_S * flex.accelerometer_hz,
+            "{full}"
+        );
+        // Stopped 0.2 s into the window: the report says so.
+        let v = closed(0.4).report(&plant).unwrap().vibration.unwrap();
+        assert!((v.window_s - 0.2).abs() < 1e-9, "{v:?}");
+        assert!(v.samples < full / 2, "{v:?}");
+        // Nothing of the window yet: no figure.
+        assert!(closed(0.7).report(&plant).unwrap().vibration.is_none());
+        let rigid = PlantModel::new(
+            PlantKind::Rigid,
+            &machine.robot,
+            PlantConfig::default(),
+            &flex,
+            q,
+        )
+        .unwrap();
+        assert!(closed(0.0).report(&rigid).unwrap().vibration.is_none());
     }
 }
