@@ -15,12 +15,12 @@ use triquint_shared::plan::{
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
 use crate::free_knots::{FreeShape, free_knots, toward_straight};
+use crate::inner::{Method, ROUNDS};
 use crate::jerk_knots::jerk_knots;
 use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
 use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
-use crate::inner::{Method, ROUNDS};
 use crate::rounding::{
     FINAL_TORQUE_SAMPLES, fine, lengthen_until_feasible, meets_every_limit, round_within,
 };
@@ -126,15 +126,13 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     match job.shaper() {
-        Some(spec) => {
-            crate::shaping::job_shaped(
-                job,
-                &plan,
-                spec,
-                &mut |j: &Job| run(j, opts, state),
-                &mut |s: f64| retimed(job, &fixed, &plan, s),
-            )
-        }
+        Some(spec) => crate::shaping::job_shaped(
+            job,
+            &plan,
+            spec,
+            &mut |j: &Job| run(j, opts, state),
+            &mut |s: f64| retimed(job, &fixed, &plan, s),
+        ),
         None => Ok(plan),
     }
 }
