@@ -345,7 +345,11 @@ fn leaves_travel(plan: &Plan, travel: &Travel) -> Option<PlanError> {
 /// total-time limit, breaks a limit (torque included), leaves the travel
 /// or the job's deviation bound, or a solve fails.
 fn retimed(job: &Job, fixed: &Problem, plan: &Plan, s: f64) -> Option<Plan> {
-    if !plan.free_knots.is_empty() || plan.intervals_s.len() != fixed.nseg() || !(s >= 1.0) {
+    if !plan.free_knots.is_empty()
+        || plan.intervals_s.len() != fixed.nseg()
+        || s.is_nan()
+        || s < 1.0
+    {
         return None;
     }
     let h: Vec<f64> = plan
