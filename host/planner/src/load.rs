@@ -234,6 +234,14 @@ fn shaping_valid(plan: &Plan) -> Result<(), LoadError> {
     }
     let impulses = Impulses::for_spec(&record.shaper)
         .map_err(|e| LoadError::Invalid(format!("shaping: {e}")))?;
+    if let Some(s) = record.unshaped.retimed
+        && (!s.is_finite() || s < 1.0)
+    {
+        return Err(LoadError::Invalid(format!(
+            "shaping.unshaped: `retimed` is {}, not a slow-down (a finite factor ≥ 1)",
+            exact(s)
+        )));
+    }
     let base = unshaped(plan).ok_or_else(|| LoadError::Invalid("shaping: no record".into()))?;
     validate_plan(&base).map_err(|e| LoadError::Invalid(format!("shaping.unshaped: {e}")))?;
     let want = base.limits.total_time + impulses.duration_s();

@@ -15,12 +15,15 @@ use triquint_shared::plan::{
 use crate::check::max_abs;
 use crate::error::{Limit, PlanError, PointKind};
 use crate::free_knots::{FreeShape, free_knots, toward_straight};
+use crate::inner::{Method, ROUNDS};
 use crate::jerk_knots::jerk_knots;
 use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
 use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
-use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, round_within};
+use crate::rounding::{
+    FINAL_TORQUE_SAMPLES, fine, lengthen_until_feasible, meets_every_limit, round_within,
+};
 use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
 use crate::stats::{PathDeviation, path_deviation_within};
@@ -123,9 +126,13 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
         lp_solves: progress.lp_solves,
     };
     match job.shaper() {
-        Some(spec) => {
-            crate::shaping::job_shaped(job, &plan, spec, &mut |j: &Job| run(j, opts, state))
-        }
+        Some(spec) => crate::shaping::job_shaped(
+            job,
+            &plan,
+            spec,
+            &mut |j: &Job| run(j, opts, state),
+            &mut |s: f64| retimed(job, &fixed, &plan, s),
+        ),
         None => Ok(plan),
     }
 }
@@ -330,6 +337,49 @@ fn leaves_travel(plan: &Plan, travel: &Travel) -> Option<PlanError> {
             limit_m: o.limit_m,
         })
     })
+}
+
+/// `plan`, at the job's own knots, slowed by `s`: its intervals × s
+/// rounded to whole microseconds and solved exactly there, as the planner
+/// finishes any plan; None when it is not at the job's knots, exceeds the
+/// total-time limit, breaks a limit (torque included), leaves the travel
+/// or the job's deviation bound, or a solve fails.
+fn retimed(job: &Job, fixed: &Problem, plan: &Plan, s: f64) -> Option<Plan> {
+    if !plan.free_knots.is_empty()
+        || plan.intervals_s.len() != fixed.nseg()
+        || s.is_nan()
+        || s < 1.0
+    {
+        return None;
+    }
+    let h: Vec<f64> = plan
+        .intervals_s
+        .iter()
+        .map(|x| ((x * s * 1e6).round() * 1e-6).max(1e-6))
+        .collect();
+    let total: f64 = h.iter().sum();
+    if total > job.limits().total_time {
+        return None;
+    }
+    let f = fine(fixed, total);
+    let sol = f.inner(&h, &fixed.zero_x(), Method::Final, ROUNDS)?;
+    if !meets_every_limit(&f, &sol) {
+        return None;
+    }
+    let mut slow = assemble(job, fixed, &sol);
+    if leaves_travel(&slow, job.travel()).is_some() {
+        return None;
+    }
+    if let Some(limit) = job.max_deviation_m() {
+        if path_deviation_within(&slow, limit).ok()?.bound_m > limit {
+            return None;
+        }
+        slow.format = PLAN_FORMAT_BOUNDED.to_string();
+        slow.max_deviation_m = Some(limit);
+    }
+    slow.max_abs = max_abs(&slow, FINAL_TORQUE_SAMPLES).ok()?;
+    slow.solver = plan.solver.clone();
+    Some(slow)
 }
 
 /// The planning problem of a job at its total-time limit.
@@ -586,7 +636,6 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inner::{Method, ROUNDS};
     use crate::search_tests::example_problem;
 
     /// Where travel binds, the verdict is where the closest plan leaves it.

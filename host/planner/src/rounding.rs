@@ -45,7 +45,8 @@ pub(crate) fn meets_every_limit(p: &Problem, s: &Solution) -> bool {
     s.violation == 0.0 && s.jerk <= p.limits.jerk
 }
 
-fn fine(p: &Problem, total: f64) -> Problem {
+/// `p` with the final solve's torque samples, at total time `total`.
+pub(crate) fn fine(p: &Problem, total: f64) -> Problem {
     let mut f = p.clone();
     f.torque_samples = FINAL_TORQUE_SAMPLES;
     f.total_time = total;

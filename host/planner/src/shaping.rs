@@ -16,7 +16,7 @@ use crate::check::{TORQUE_CHECK_SAMPLES, max_abs};
 use crate::error::PlanError;
 use crate::job::{Job, KNOT_SEGMENTS, KnotPlacement};
 use crate::shaper::convolve;
-use crate::streaming::{shortfall, streams};
+use crate::streaming::{shortfall, streams, streams_with_margin};
 
 pub use crate::shaper::{ConvolveError, Impulses, MAX_SHAPER_HZ};
 pub use triquint_shared::plan::shaping::{DEFAULT_DAMPING, Shaper, ShaperSpec, UnknownShaper};
@@ -71,6 +71,7 @@ pub fn shape(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
             segments: plan.segments.clone(),
             max_abs: plan.max_abs.clone(),
             total_time_limit_s: plan.limits.total_time,
+            retimed: None,
         },
     });
     Ok(shaped)
@@ -82,13 +83,18 @@ pub fn shape(plan: &Plan, spec: &ShaperSpec) -> Result<Plan, PlanError> {
 /// whose segment count is the planner's choice, `replan` (the planner, for
 /// a job without a shaper) gives the move again in fewer free-knot
 /// segments, from 3 up to the first count whose shaped plan does not
-/// stream, and the shortest shaped plan that streams is kept. Otherwise
-/// the verdict is [`PlanError::Unstreamable`] naming the shaper.
+/// stream, and the shortest shaped plan that streams is kept. A plan at
+/// the job's own knots (a path's via-points) is slowed instead: `retime`
+/// gives it with its intervals × s (None when that breaks a limit), and
+/// the least s found whose shaped plan streams and passes `check` is kept
+/// and recorded ([`slowed`]). Otherwise the verdict is
+/// [`PlanError::Unstreamable`] naming the shaper.
 pub(crate) fn job_shaped(
     job: &Job,
     plan: &Plan,
     spec: &ShaperSpec,
     replan: &mut dyn FnMut(&Job) -> Result<Plan, PlanError>,
+    retime: &mut dyn FnMut(f64) -> Option<Plan>,
 ) -> Result<Plan, PlanError> {
     let first = proven(plan, spec)?;
     if shortfall(&first).is_none() {
@@ -125,10 +131,65 @@ pub(crate) fn job_shaped(
             }
         }
     }
+    if best.is_none() && !counts_free && plan.free_knots.is_empty() {
+        best = slowed(spec, retime);
+    }
     match best {
         Some(s) => Ok(s),
         None => streams(&first).map(|()| first),
     }
+}
+
+/// Grid step of the slow-down search.
+const SLOWDOWN_STEP: f64 = 0.02;
+/// The largest slow-down tried (the job's total-time limit may stop it first).
+const MAX_SLOWDOWN: f64 = 3.0;
+/// Bisections between the last grid step that failed and the first that held.
+const SLOWDOWN_BISECTIONS: usize = 7;
+/// What a slowed plan's shortest run keeps above the rule's need (µs): the
+/// drives' configuration carries the stop time in f32, so the session's
+/// need can be a microsecond above the planner's, and the bisection would
+/// otherwise stop on the edge.
+const SLOWDOWN_MARGIN_US: u64 = 1_000;
+
+/// The shaped plan of the job's plan slowed by the least s found (a grid
+/// of [`SLOWDOWN_STEP`] from 1, then bisected) whose shaped plan streams
+/// (by [`SLOWDOWN_MARGIN_US`]) and passes its check, with s recorded.
+/// Short shaped segments come from shifted knots t_k + τ_i landing close
+/// together; a uniform slow-down
+/// spreads the knots apart (velocity ÷ s, acceleration ÷ s², jerk ÷ s³;
+/// torque, travel and the total time checked by `retime`).
+fn slowed(spec: &ShaperSpec, retime: &mut dyn FnMut(f64) -> Option<Plan>) -> Option<Plan> {
+    let mut at = |s: f64| -> Option<Plan> {
+        let unshaped = retime(s)?;
+        let shaped = shape(&unshaped, spec).ok()?;
+        if !streams_with_margin(&shaped, SLOWDOWN_MARGIN_US) {
+            return None;
+        }
+        let mut shaped = proven(&unshaped, spec).ok()?;
+        if let Some(r) = shaped.shaping.as_mut() {
+            r.unshaped.retimed = Some(s);
+        }
+        Some(shaped)
+    };
+    let (mut lo, mut hi, mut best) = (1.0, 1.0, None);
+    while best.is_none() && hi < MAX_SLOWDOWN {
+        lo = hi;
+        hi = 1.0 + SLOWDOWN_STEP * ((hi - 1.0) / SLOWDOWN_STEP).round() + SLOWDOWN_STEP;
+        best = at(hi);
+    }
+    best.as_ref()?;
+    for _ in 0..SLOWDOWN_BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        match at(mid) {
+            Some(p) => {
+                hi = mid;
+                best = Some(p);
+            }
+            None => lo = mid,
+        }
+    }
+    best
 }
 
 /// `plan` shaped by `spec`, every row of its `check` passing (velocity,
@@ -327,6 +388,78 @@ mod tests {
                 assert!((1.0..1.15).contains(&cost), "{limits:?} {shaper}: x{cost}");
             }
         }
+    }
+
+    /// Case II at a fast machine's limits: its path's knots are its
+    /// via-points, so fewer segments are not an option. Shaped by 2HUMP-EI
+    /// (four copies of every knot) its plan does not stream; the planner
+    /// slows the plan until the shaped one does, and records by how much.
+    /// Shaped by EI it streams as it is and is not slowed.
+    #[test]
+    fn a_path_at_its_via_points_is_slowed_until_its_shaped_plan_streams() {
+        use crate::{Options, plan};
+        let job = |s| {
+            Job::from_toml(include_str!("../../../examples/paper-case2.toml"))
+                .unwrap()
+                .to_builder()
+                .objective(Objective::MinTime)
+                .limits(crate::Limits {
+                    velocity: 2.0,
+                    acceleration: 30.0,
+                    jerk: 5000.0,
+                    torque: 1000.0,
+                    total_time: 5.0,
+                })
+                .shaper(s)
+                .build()
+                .unwrap()
+        };
+        let bare = plan(&job(None), &Options::default()).unwrap();
+        let at = |shaper| ShaperSpec {
+            shaper,
+            frequency_hz: 0.8 * 25.6,
+            damping: 0.062,
+        };
+        let ei = plan(&job(Some(at(Shaper::Ei))), &Options::default()).unwrap();
+        assert_eq!(ei.shaping.unwrap().unshaped.retimed, None);
+        let sp = at(Shaper::TwoHumpEi);
+        assert!(shortfall(&shape(&bare, &sp).unwrap()).is_some());
+        let s = plan(&job(Some(sp)), &Options::default()).unwrap();
+        assert!(streams_with_margin(&s, SLOWDOWN_MARGIN_US));
+        let rows = check(&s).unwrap();
+        assert!(rows.iter().all(|r| r.ok), "{rows:?}");
+        assert!(rows.iter().any(|r| r.what.starts_with("shaped = unshaped")));
+        let record = &s.shaping.as_ref().unwrap().unshaped;
+        let r = record.retimed.expect("recorded");
+        assert!(r > 1.0 && r < MAX_SLOWDOWN, "{r}");
+        // The same knots, every interval the planned one × r to the µs,
+        // and slower everywhere.
+        assert_eq!(record.knots_m, bare.knots_m);
+        for (a, b) in record.intervals_s.iter().zip(&bare.intervals_s) {
+            assert!((a - b * r).abs() <= 0.5e-6 + 1e-12, "{a} vs {b} × {r}");
+        }
+        for j in 0..3 {
+            assert!(record.max_abs.velocity[j] <= bare.max_abs.velocity[j]);
+            assert!(record.max_abs.jerk[j] <= bare.max_abs.jerk[j]);
+        }
+        let imp = Impulses::for_spec(&sp).unwrap();
+        println!(
+            "case II 2hump_ei {:.2} Hz: slowed x{r:.4}, {} segments, {:.4} s ({:.4} s unshaped, {:.4} s planned, x{:.4}), shaper {:.4} s",
+            sp.frequency_hz,
+            s.segments.len(),
+            s.total_time_s,
+            record.total_time_s,
+            bare.total_time_s,
+            record.total_time_s / bare.total_time_s,
+            imp.duration_s()
+        );
+        // Loaded back, and a recorded factor that is no slow-down refused.
+        let back = parse_plan(&serde_json::to_string(&s).unwrap()).unwrap();
+        assert_eq!(back, s);
+        let mut p = s.clone();
+        p.shaping.as_mut().unwrap().unshaped.retimed = Some(0.5);
+        let e = crate::load::validate_plan(&p).unwrap_err().to_string();
+        assert!(e.contains("retimed"), "{e}");
     }
 
     /// A segment count the job sets is kept: shaped into a plan that does

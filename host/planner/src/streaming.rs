@@ -29,6 +29,23 @@ pub(crate) fn shortfall(plan: &Plan) -> Option<Shortfall> {
     rule.check(&durations).err()
 }
 
+/// Whether `plan` streams with every run of segments at least `margin_us`
+/// longer than the rule needs (a plan the queue holds whole always does).
+pub(crate) fn streams_with_margin(plan: &Plan, margin_us: u64) -> bool {
+    if plan.segments.len() <= QUEUE_CAPACITY {
+        return true;
+    }
+    let Some(rule) = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY) else {
+        return true;
+    };
+    let Ok(wire) = plan.wire_segments() else {
+        return false;
+    };
+    let durations: Vec<u32> = wire.iter().map(|w| w.duration_us).collect();
+    rule.shortest_run(&durations)
+        .is_none_or(|s| s.run_us >= s.need_us.saturating_add(margin_us))
+}
+
 /// `plan` if it streams, else the verdict naming the run that does not.
 pub(crate) fn streams(plan: &Plan) -> Result<(), PlanError> {
     match shortfall(plan) {

@@ -214,6 +214,7 @@ pub fn run(args: &PlanArgs) -> CliResult {
             "lp_solves": plan.solver.lp_solves,
             "seconds": plan.solver.seconds,
             "shaper": plan.shaping.as_ref().map(|s| s.shaper),
+            "retimed": plan.shaping.as_ref().and_then(|s| s.unshaped.retimed),
         });
         triquint_cli_common::outln!("{summary:#}")?;
     } else if !args.quiet {
@@ -228,11 +229,15 @@ pub fn run(args: &PlanArgs) -> CliResult {
             max(m.velocity),
             max(m.torque),
             plan.shaping.as_ref().map_or(String::new(), |s| format!(
-                ", shaped {} {} Hz ζ {} (+{:.6} s)",
+                ", shaped {} {} Hz ζ {} (+{:.6} s){}",
                 s.shaper.shaper,
                 s.shaper.frequency_hz,
                 s.shaper.damping,
-                plan.total_time_s - s.unshaped.total_time_s
+                plan.total_time_s - s.unshaped.total_time_s,
+                s.unshaped.retimed.map_or(String::new(), |r| format!(
+                    ", the plan slowed ×{r:.4} to {:.6} s so that it streams",
+                    s.unshaped.total_time_s
+                ))
             )),
             plan.solver.starts,
             plan.solver.lp_solves,

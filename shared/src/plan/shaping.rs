@@ -111,6 +111,11 @@ pub struct Unshaped {
     /// Its limit on the total time (s); the shaped plan's adds the shaper's
     /// duration.
     pub total_time_limit_s: f64,
+    /// The slow-down s > 1 the planner gave its plan so that the shaped one
+    /// streams: the planned intervals × s, rounded to whole microseconds and
+    /// solved again at the same knots. Absent when the plan was not retimed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub retimed: Option<f64>,
 }
 
 /// A shaped plan's record (format 5).
