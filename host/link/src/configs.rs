@@ -220,14 +220,19 @@ mod tests {
         assert!(honest.stop_time_s >= from.stop_time_s);
     }
 
+    /// A plan committed under testdata/protocol/plans/.
+    fn committed_plan(name: &str) -> Plan {
+        let text = std::fs::read_to_string(format!(
+            "{}/../../testdata/protocol/plans/{name}.json",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .expect("a test plan");
+        serde_json::from_str(&text).expect("a plan")
+    }
+
     #[test]
     fn case2_with_a_tampered_summary_gets_the_honest_ramps() {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../testdata/protocol/plans/case2-spline.json"
-        ))
-        .expect("paper case II plan");
-        let plan: Plan = serde_json::from_str(&text).expect("a plan");
+        let plan = committed_plan("case2-spline");
         let s = DriveSettings::default();
         let honest = DriveConfigs::for_plan(&plan, &s).unwrap();
         let mut tampered = plan.clone();
@@ -249,12 +254,7 @@ mod tests {
         let s = DriveSettings::default();
         let mut rows = vec![];
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
-            let text = std::fs::read_to_string(format!(
-                "{}/../../testdata/protocol/plans/{name}.json",
-                env!("CARGO_MANIFEST_DIR")
-            ))
-            .expect("a test plan");
-            let plan: Plan = serde_json::from_str(&text).expect("a plan");
+            let plan = committed_plan(name);
             let c = DriveConfigs::for_plan(&plan, &s).unwrap();
             let [v, a, j] = largest(&plan).unwrap();
             let old = stop_time_separate_peaks(v, a, j, plan.limits.jerk, c.override_cap);
@@ -300,12 +300,7 @@ mod tests {
         use triquint_shared::protocol::stop_ramp::{budgets, segment_ramp};
         let s = DriveSettings::default();
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
-            let text = std::fs::read_to_string(format!(
-                "{}/../../testdata/protocol/plans/{name}.json",
-                env!("CARGO_MANIFEST_DIR")
-            ))
-            .expect("a test plan");
-            let plan: Plan = serde_json::from_str(&text).expect("a plan");
+            let plan = committed_plan(name);
             let c = DriveConfigs::for_plan(&plan, &s).unwrap();
             let cap = c.override_cap as f32;
             let jl = plan.limits.jerk.min(s.ceilings.jerk) as f32;
