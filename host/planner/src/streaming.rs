@@ -6,44 +6,45 @@
 //! shaping) call [`shortfall`] to prefer fewer, longer segments; the last
 //! stage refuses a plan that breaks it with [`PlanError::Unstreamable`].
 
-use triquint_shared::plan::Plan;
+use triquint_shared::plan::{Plan, WireError};
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_shared::protocol::streaming::{QUEUE_CAPACITY, Shortfall, StreamRule};
 
 use crate::error::PlanError;
 
-/// The first shortest run of `plan`'s segments too short to stream on the
-/// default drives, if any. A plan the queue holds whole always streams
-/// (and costs no stop-ramp sizing).
-pub(crate) fn shortfall(plan: &Plan) -> Option<Shortfall> {
+/// The shortest run of `plan`'s segments against the rule on the default
+/// drives: `Ok(None)` when the queue holds the plan whole (no stop-ramp
+/// sizing then) or no rule applies, `Err` when its wire segments cannot
+/// be made.
+fn shortest_run(plan: &Plan) -> Result<Option<Shortfall>, WireError> {
     if plan.segments.len() <= QUEUE_CAPACITY {
-        return None;
+        return Ok(None);
     }
-    let rule = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY)?;
+    let Some(rule) = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY) else {
+        return Ok(None);
+    };
     let durations: Vec<u32> = plan
-        .wire_segments()
-        .ok()?
+        .wire_segments()?
         .iter()
         .map(|w| w.duration_us)
         .collect();
-    rule.check(&durations).err()
+    Ok(rule.shortest_run(&durations))
+}
+
+/// The first shortest run of `plan`'s segments too short to stream on the
+/// default drives, if any. A plan the queue holds whole always streams.
+pub(crate) fn shortfall(plan: &Plan) -> Option<Shortfall> {
+    shortest_run(plan)
+        .ok()
+        .flatten()
+        .filter(|s| s.run_us < s.need_us)
 }
 
 /// Whether `plan` streams with every run of segments at least `margin_us`
 /// longer than the rule needs (a plan the queue holds whole always does).
 pub(crate) fn streams_with_margin(plan: &Plan, margin_us: u64) -> bool {
-    if plan.segments.len() <= QUEUE_CAPACITY {
-        return true;
-    }
-    let Some(rule) = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY) else {
-        return true;
-    };
-    let Ok(wire) = plan.wire_segments() else {
-        return false;
-    };
-    let durations: Vec<u32> = wire.iter().map(|w| w.duration_us).collect();
-    rule.shortest_run(&durations)
-        .is_none_or(|s| s.run_us >= s.need_us.saturating_add(margin_us))
+    shortest_run(plan)
+        .is_ok_and(|r| r.is_none_or(|s| s.run_us >= s.need_us.saturating_add(margin_us)))
 }
 
 /// `plan` if it streams, else the verdict naming the run that does not.
