@@ -91,8 +91,6 @@ impl SevenPhase {
     }
 }
 
-/// Position, velocity, acceleration and jerk at `t` of a profile that starts
-/// at rest at 0 and runs through `phases` (duration, jerk); none past the end.
 /// The seven (duration, jerk) phases of a rest-to-rest S-curve: jerk
 /// ramps `tj` at ±`j`, constant acceleration `tc`, cruise `tv`.
 fn s_curve(tj: f64, tc: f64, tv: f64, j: f64) -> [(f64, f64); 7] {
@@ -107,6 +105,8 @@ fn s_curve(tj: f64, tc: f64, tv: f64, j: f64) -> [(f64, f64); 7] {
     ]
 }
 
+/// Position, velocity, acceleration and jerk at `t` of a profile that starts
+/// at rest at 0 and runs through `phases` (duration, jerk); none past the end.
 fn integrate(phases: &[(f64, f64); 7], t: f64) -> Option<[f64; 4]> {
     let (mut s, mut v, mut a) = (0.0, 0.0, 0.0);
     let mut left = t.max(0.0);
