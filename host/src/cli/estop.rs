@@ -33,18 +33,19 @@ pub struct EstopArgs {
 
 pub fn run(args: &EstopArgs) -> CliResult {
     let iface = args.drives.iface.as_str();
-    if let Some(n) = &args.drives.nodes {
-        triquint_cli_common::parse::parse_axis_nodes("--nodes", n)?;
-    }
+    // A bad --nodes is refused before anything is sent; a machine file that
+    // cannot be read must not keep the frame from going out: it only says
+    // which drives must confirm.
+    let ids = match args.drives.ids() {
+        Err(e) if args.drives.nodes.is_some() => return Err(e),
+        ids => ids,
+    };
     if !(1..=MAX_WAIT_MS).contains(&args.wait) {
         return Err(CliError::bad_input(format!(
             "--wait {}: must be 1 to {MAX_WAIT_MS} ms",
             args.wait
         )));
     }
-    // A machine file that cannot be read must not keep the frame from going
-    // out: it only says which drives must confirm.
-    let ids = args.drives.ids();
     let mut port = open(iface)?;
     let watch = emergency_stop(
         &mut port,
