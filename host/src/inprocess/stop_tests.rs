@@ -140,7 +140,8 @@ impl Run {
     /// Sends Stop now and runs to the end: the stopped run's figures.
     fn stop(mut self, plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
         self.session.feed(Feed::Stop);
-        self.sent_ns = Some(self.sim.now_ns());
+        let sent = self.sim.now_ns();
+        self.sent_ns = Some(sent);
         let outcome = loop {
             if let Some(o) = self.advance() {
                 break o;
@@ -149,13 +150,11 @@ impl Run {
         };
         let Run {
             mut sim,
-            sent_ns,
             accel,
             own_ramp_ns,
             ..
         } = self;
         sim.run_until(sim.now_ns() + SETTLE_NS).unwrap();
-        let sent = sent_ns.expect("the Stop was sent");
         let idle_at = sim
             .nodes
             .iter()
