@@ -2,8 +2,9 @@
 //!
 //! It shares no algebra with [`crate::dynamics`]: energies are written body by
 //! body (strut centre-of-mass velocity plus the rod's angular velocity
-//! ω = d × ḋ / l²), the Cartesian mass matrix M(r) comes from the kinetic
-//! energy by polarisation, and its derivatives by central differences.
+//! ω = d × ḋ / l²), the Cartesian mass matrix M(r) is the same energy's
+//! quadratic form written term by term, and its derivatives come by central
+//! differences.
 //! Lagrange's equations in the platform coordinates r give Q = M r̈ + Ṁ ṙ −
 //! ½ ∂(ṙᵀMṙ)/∂r + ∇V, and virtual work maps Q to joint forces: F = J⁻ᵀ Q.
 //!
@@ -45,18 +46,30 @@ pub fn potential_energy(m: &Model<f64>, pose: &Pose<f64>) -> f64 {
     v * m.gravity
 }
 
-/// Cartesian mass matrix M(r): T = ½ ṙᵀ M ṙ, by polarisation of the kinetic energy.
+/// Cartesian mass matrix M(r): T = ½ ṙᵀ M ṙ, body by body as in
+/// [`kinetic_energy`], each body's velocity a linear map of ṙ (q̇_i = w_i·ṙ):
+/// the platform m_p·I, each strut (m_s/4)·AᵢᵀAᵢ with Aᵢ = I + e_z w_iᵀ for its
+/// centre and (I⊥/l⁴)·CᵢᵀCᵢ with Cᵢ = [d_i]×(I − e_z w_iᵀ) for its rotation,
+/// each slider and rotor (m_sl + I_r·ratio²)·w_i w_iᵀ.
 pub fn mass_matrix(m: &Model<f64>, pose: &Pose<f64>) -> Matrix3<f64> {
-    let energy = |rd: Vector3<f64>| kinetic_energy(m, pose, &pose.joint_velocity(&rd));
-    let e = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let diag = e.map(energy);
-    Matrix3::from_fn(|a, b| {
-        if a == b {
-            2.0 * diag[a]
-        } else {
-            energy(e[a] + e[b]) - diag[a] - diag[b]
-        }
-    })
+    let mut mass = Matrix3::identity() * m.platform_mass;
+    let i_perp = m.strut_mass * m.l2 / 12.0;
+    let spin = i_perp / (m.l2 * m.l2);
+    let axial = m.slider_mass + m.rotor_inertia * m.ratio * m.ratio;
+    for i in 0..3 {
+        let d = pose.struts[i];
+        let w = d / d.z;
+        let ez_w = Matrix3::from_rows(&[
+            Vector3::zeros().transpose(),
+            Vector3::zeros().transpose(),
+            w.transpose(),
+        ]);
+        let a = Matrix3::identity() + ez_w;
+        let c = d.cross_matrix() * (Matrix3::identity() - ez_w);
+        mass +=
+            a.tr_mul(&a) * (0.25 * m.strut_mass) + c.tr_mul(&c) * spin + w * w.transpose() * axial;
+    }
+    mass
 }
 
 /// Step of the central differences (m): truncation ~h², round-off ~ε/h, both < 1e-9.
@@ -143,5 +156,28 @@ mod tests {
         let tau = inverse_dynamics(&m, &q, &qd, &qdd).unwrap();
         let back = forward_dynamics(&m, &q, &qd, &tau, &Vector3::zeros()).unwrap();
         assert!((back - qdd).norm() < 1e-6, "{back} vs {qdd}");
+    }
+
+    #[test]
+    fn mass_matrix_is_the_kinetic_energys_quadratic_form() {
+        let m = Robot::default().model::<f64>();
+        for r in [
+            Vector3::new(0.0, 0.0, 0.60),
+            Vector3::new(0.02, -0.03, 0.62),
+            Vector3::new(-0.09, 0.09, 0.68),
+        ] {
+            let pose = Pose::from_cartesian(&m, r).unwrap();
+            let mass = mass_matrix(&m, &pose);
+            assert!((mass - mass.transpose()).norm() < 1e-12 * mass.norm());
+            for rd in [
+                Vector3::new(0.1, -0.2, 0.05),
+                Vector3::new(0.0, 0.0, 1.0),
+                Vector3::new(-0.3, 0.4, -0.2),
+            ] {
+                let t = kinetic_energy(&m, &pose, &pose.joint_velocity(&rd));
+                let quad = 0.5 * rd.dot(&(mass * rd));
+                assert!((quad - t).abs() <= 1e-12 * t, "{r} {rd}: {quad} vs {t}");
+            }
+        }
     }
 }
