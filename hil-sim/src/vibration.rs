@@ -129,20 +129,39 @@ pub fn dominant_hz(x: &[(f64, f64)]) -> Option<f64> {
         })
         .collect();
     let (lo, hi, step) = SCAN_HZ;
+    // Each sample's phasor e^{iωt} is carried from one frequency to the
+    // next by the constant rotation e^{i·2π·step·t} (no sin and cos per
+    // sample and frequency), and set afresh every REANCHOR frequencies so
+    // the products' rounding cannot build up.
+    const REANCHOR: usize = 256;
+    let phasor = |f: f64, t: f64| (2.0 * std::f64::consts::PI * f * t).sin_cos();
+    let rot: Vec<(f64, f64)> = w.iter().map(|&(t, _)| phasor(step, t)).collect();
+    let mut p: Vec<(f64, f64)> = Vec::with_capacity(n);
     let mut best: Option<(f64, f64)> = None;
-    let mut f = lo;
-    while f <= hi {
-        let wt = 2.0 * std::f64::consts::PI * f;
+    let mut k = 0usize;
+    loop {
+        let f = lo + k as f64 * step;
+        if f > hi + 1e-9 {
+            break;
+        }
+        if k % REANCHOR == 0 {
+            p.clear();
+            p.extend(w.iter().map(|&(t, _)| phasor(f, t)));
+        } else {
+            for (z, r) in p.iter_mut().zip(&rot) {
+                *z = (z.0 * r.1 + z.1 * r.0, z.1 * r.1 - z.0 * r.0);
+            }
+        }
         let (mut re, mut im) = (0.0, 0.0);
-        for &(t, v) in &w {
-            re += v * (wt * t).cos();
-            im += v * (wt * t).sin();
+        for (&(_, v), &(sin, cos)) in w.iter().zip(&p) {
+            re += v * cos;
+            im += v * sin;
         }
-        let p = re * re + im * im;
-        if best.is_none_or(|b| p > b.1) {
-            best = Some((f, p));
+        let pw = re * re + im * im;
+        if best.is_none_or(|b| pw > b.1) {
+            best = Some((f, pw));
         }
-        f += step;
+        k += 1;
     }
     best.filter(|b| b.1 > 0.0).map(|b| b.0)
 }
