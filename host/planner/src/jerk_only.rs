@@ -19,7 +19,7 @@
 // Index loops mirror the maths.
 #![allow(clippy::needless_range_loop)]
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, LU};
 
 use crate::problem::Problem;
 
@@ -95,12 +95,21 @@ impl Problem {
         if nv < m {
             return None;
         }
+        // The forms at u = 0, ½ and 1 of every segment, which the
+        // conditions, the first cuts and every round's exact maxima use.
+        const NODES: [f64; 3] = [0.0, 0.5, 1.0];
+        let nodes: Vec<[(DVector<f64>, f64); 3]> =
+            (0..nseg).map(|k| NODES.map(|u| form(k, u))).collect();
+        let form_at = |k: usize, u: f64| match NODES.iter().position(|&v| v == u) {
+            Some(i) => nodes[k][i].clone(),
+            None => form(k, u),
+        };
         let mut et = DMatrix::<f64>::zeros(nv, nv);
         for (r, (a, b)) in conds.iter().enumerate() {
-            let (fa, _) = form(a.0, a.1);
+            let (fa, _) = form_at(a.0, a.1);
             let mut row = fa;
             if let Some((k, u)) = b {
-                row -= form(*k, *u).0;
+                row -= &nodes[*k][NODES.iter().position(|&v| v == *u)?].0;
             }
             et.set_column(r, &row);
         }
@@ -118,7 +127,7 @@ impl Problem {
         let xp = DVector::from_column_slice(xp);
         let mut rows: Vec<Row> = Vec::new();
         let cut_at = |k: usize, u: f64, rows: &mut Vec<Row>| {
-            let (a, c) = form(k, u);
+            let (a, c) = form_at(k, u);
             let ar = basis.tr_mul(&a);
             let b = a.dot(&xp) + c;
             rows.extend([1.0, -1.0].map(|sign| Row::new(&ar, b, sign)));
@@ -133,11 +142,11 @@ impl Problem {
         }
         // The jerk quadratic of segment k at x: (J(0), c1, c2).
         let quad = |k: usize, x: &DVector<f64>| {
-            let at = |u: f64| {
-                let (a, c) = form(k, u);
+            let at = |i: usize| {
+                let (a, c) = &nodes[k][i];
                 a.dot(x) + c
             };
-            let (j0, jm, j1) = (at(0.0), at(0.5), at(1.0));
+            let (j0, jm, j1) = (at(0), at(1), at(2));
             (
                 j0,
                 -3.0 * j0 + 4.0 * jm - j1,
@@ -166,7 +175,7 @@ impl Problem {
         // The optimal vertex's rows: after a round's new cuts, the dual
         // simplex restarts from it (a few pivots, where the primal method
         // walks up from one active row again).
-        let mut vertex: Option<Vec<usize>> = None;
+        let mut vertex: Option<Vertex> = None;
         for _ in 0..ROUNDS {
             let warm = vertex.take().and_then(|b| dual_simplex(&rows, b));
             let (z_lp, s_lp, at) = match warm {
@@ -216,37 +225,65 @@ impl Problem {
     }
 }
 
-/// An optimal (z, s), and the rows of its vertex when it is one.
-type Optimum = (DVector<f64>, f64, Option<Vec<usize>>);
+/// An optimal (z, s), and its vertex when it is one.
+type Optimum = (DVector<f64>, f64, Option<Vertex>);
+
+/// An optimal vertex: its rows, and the dual simplex's work there when it
+/// found it (the next rounds' start, which only the new rows change).
+struct Vertex {
+    basis: Vec<usize>,
+    at: Option<Factored>,
+}
+
+/// G_B's transpose factored, the vertex y and its multipliers λ, and how
+/// many rows were priced at y (none of them enters).
+struct Factored {
+    gbt: LU<f64, Dyn, Dyn>,
+    y: DVector<f64>,
+    lambda: DVector<f64>,
+    priced: usize,
+}
 
 /// min s subject to σ_i(a_i·z + b_i) ≤ s by the dual simplex method from
-/// `basis`, the rows of an optimal vertex before rows were added: its
+/// `vertex`, an optimal vertex before rows were added: its
 /// multipliers stay feasible (≥ 0, summing to one), the most violated row
 /// enters and the ratio test picks the row that leaves. s at any such
 /// basis is a lower bound, so the exact check after the LP still
 /// certifies. None on anything unexpected (the caller solves from scratch).
-fn dual_simplex(rows: &[Row], mut basis: Vec<usize>) -> Option<Optimum> {
+fn dual_simplex(rows: &[Row], vertex: Vertex) -> Option<Optimum> {
+    let Vertex { mut basis, at } = vertex;
+    let mut known = at;
     let dim = rows.first()?.g.len();
     if basis.len() != dim {
         return None;
     }
     let mut cost = DVector::zeros(dim);
     cost[dim - 1] = 1.0;
+    let mut in_basis = vec![false; rows.len()];
+    for &b in &basis {
+        *in_basis.get_mut(b)? = true;
+    }
     for _ in 0..(4 * dim + 20) {
-        let gb = DMatrix::from_fn(dim, dim, |r, c| rows[basis[r]].g[c]);
-        let y = gb
-            .clone()
-            .lu()
-            .solve(&DVector::from_fn(dim, |r, _| rows[basis[r]].rhs))?;
-        let gbt = gb.transpose().lu();
-        let lambda = gbt.solve(&-&cost)?;
+        let (gbt, y, lambda, priced) = match known.take() {
+            Some(f) => (f.gbt, f.y, f.lambda, f.priced),
+            None => {
+                let gb = DMatrix::from_fn(dim, dim, |r, c| rows[basis[r]].g[c]);
+                let y = gb
+                    .clone()
+                    .lu()
+                    .solve(&DVector::from_fn(dim, |r, _| rows[basis[r]].rhs))?;
+                let gbt = gb.transpose().lu();
+                let lambda = gbt.solve(&-&cost)?;
+                (gbt, y, lambda, 0)
+            }
+        };
         if lambda.iter().any(|&l| l.is_nan() || l < -1e-12) {
             return None;
         }
         let scale = y.amax().max(1e-300);
         let mut enter: Option<(usize, f64)> = None;
-        for (i, row) in rows.iter().enumerate() {
-            if basis.contains(&i) {
+        for (i, row) in rows.iter().enumerate().skip(priced) {
+            if in_basis[i] {
                 continue;
             }
             let v = (row.g.dot(&y) - row.rhs) / row.norm;
@@ -256,7 +293,21 @@ fn dual_simplex(rows: &[Row], mut basis: Vec<usize>) -> Option<Optimum> {
         }
         let Some((r, _)) = enter else {
             let d = dim - 1;
-            return Some((y.rows(0, d).into_owned(), y[d], Some(basis)));
+            let (z, s) = (y.rows(0, d).into_owned(), y[d]);
+            let at = Factored {
+                gbt,
+                y,
+                lambda,
+                priced: rows.len(),
+            };
+            return Some((
+                z,
+                s,
+                Some(Vertex {
+                    basis,
+                    at: Some(at),
+                }),
+            ));
         };
         // λ_B − t w with G_Bᵀ w = G_rᵀ: the first multiplier to reach zero leaves.
         let w = gbt.solve(&rows[r].g)?;
@@ -269,7 +320,9 @@ fn dual_simplex(rows: &[Row], mut basis: Vec<usize>) -> Option<Optimum> {
                 }
             }
         }
-        basis[leave?.0] = r;
+        let out = std::mem::replace(&mut basis[leave?.0], r);
+        in_basis[out] = false;
+        in_basis[r] = true;
     }
     None
 }
@@ -329,7 +382,10 @@ fn chebyshev(rows: &[Row], z: DVector<f64>) -> Option<Optimum> {
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
             if lmin >= -1e-12 {
-                let vertex = (w == dim).then_some(active);
+                let vertex = (w == dim).then_some(Vertex {
+                    basis: active,
+                    at: None,
+                });
                 return Some((y.rows(0, d).into_owned(), y[d], vertex));
             }
             let i = active.remove(worst);

@@ -118,6 +118,58 @@ pub(crate) struct Evaluation {
     pub(crate) violation: f64,
     pub(crate) binding: Limited,
     pub(crate) cuts: Vec<Cut>,
+    /// The largest relative closeness to a limit so far (for `binding`).
+    closest: f64,
+}
+
+impl Evaluation {
+    fn new() -> Evaluation {
+        Evaluation {
+            jerk: 0.0,
+            violation: 0.0,
+            binding: Limited::Jerk,
+            cuts: Vec::new(),
+            closest: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Adds a segment's figures (its cuts go in separately); segments in
+    /// order give the same figures whatever else was evaluated.
+    fn absorb(&mut self, seg: &SegmentFigures) {
+        self.jerk = self.jerk.max(seg.jerk);
+        for &(q, rel) in seg.notes() {
+            if rel > self.closest {
+                self.closest = rel;
+                self.binding = q;
+            }
+            self.violation = self.violation.max(rel);
+        }
+    }
+
+    fn finish(mut self) -> Evaluation {
+        self.violation = self.violation.max(0.0);
+        self
+    }
+}
+
+/// One segment's figures in an [`Evaluation`]: its largest jerk, and each
+/// limit's relative excess (negative when inside) in the order found.
+struct SegmentFigures {
+    jerk: f64,
+    /// Per joint travel, velocity and acceleration, then torque per axis.
+    notes: [(Limited, f64); 12],
+    len: usize,
+}
+
+impl SegmentFigures {
+    fn note(&mut self, q: Limited, rel: f64) {
+        self.notes[self.len] = (q, rel);
+        self.len += 1;
+    }
+
+    fn notes(&self) -> &[(Limited, f64)] {
+        &self.notes[..self.len]
+    }
 }
 
 impl Problem {
@@ -209,108 +261,149 @@ impl Problem {
         x: &[Vec<f64>; 3],
         torque_samples: usize,
     ) -> Evaluation {
-        let mut fig = Evaluation {
-            jerk: 0.0,
-            violation: 0.0,
-            binding: Limited::Jerk,
-            cuts: Vec::new(),
-        };
-        let mut closest = f64::NEG_INFINITY;
-        let mut note = |fig: &mut Evaluation, q: Limited, rel: f64| {
-            if rel > closest {
-                closest = rel;
-                fig.binding = q;
-            }
-            fig.violation = fig.violation.max(rel);
-        };
+        let mut fig = Evaluation::new();
         for k in 0..self.nseg() {
-            let hk = h[k];
-            for j in 0..3 {
-                let c = self.knots.coefficients(&x[j], j, k, hk);
-                let vel = derivative(&c);
-                let acc = derivative(&vel);
-                let jerk = derivative(&acc);
-                fig.jerk = fig.jerk.max(argmax_abs_on_interval(&jerk, 0.0, hk).1);
-                // Travel only counts when left: a position inside it is no
-                // closer to binding than the others (and changes nothing).
-                let near = self.near_travel(&c, &vel, j, hk);
-                if let Some((lo, hi, span)) = self.travel_of(j)
-                    && !near.is_empty()
-                {
-                    let mut worst = f64::NEG_INFINITY;
-                    for &(t, p) in &near {
-                        let u = t / hk;
-                        if u > KNOT_U && u < 1.0 - KNOT_U {
-                            fig.cuts.push(Cut {
-                                q: Limited::Travel,
-                                j,
-                                k,
-                                u,
-                            });
-                        }
-                        worst = worst.max((p - hi).max(lo - p) / span);
+            let seg = self.segment_figures(h, x, k, torque_samples, &mut fig.cuts);
+            fig.absorb(&seg);
+        }
+        fig.finish()
+    }
+
+    /// [`Problem::evaluation`] of a point that [`feasible`] accepts, else
+    /// the first segment found to break a limit. Segment `first` (where the
+    /// last point broke one) is checked first: a bisection's infeasible
+    /// points then cost one segment, not all of them.
+    pub(crate) fn feasible_evaluation(
+        &self,
+        h: &[f64],
+        x: &[Vec<f64>; 3],
+        first: usize,
+    ) -> Result<Evaluation, usize> {
+        let breaks = |s: &SegmentFigures| {
+            s.jerk > self.limits.jerk * (1.0 + 1e-9) || s.notes().iter().any(|n| n.1 > 1e-9)
+        };
+        let first = first.min(self.nseg().saturating_sub(1));
+        let mut early_cuts = Vec::new();
+        let early = self.segment_figures(h, x, first, self.torque_samples, &mut early_cuts);
+        if breaks(&early) {
+            return Err(first);
+        }
+        // The figures and cuts go in in segment order, as the evaluation's do.
+        let mut fig = Evaluation::new();
+        for k in 0..self.nseg() {
+            if k == first {
+                fig.cuts.append(&mut early_cuts);
+                fig.absorb(&early);
+                continue;
+            }
+            let seg = self.segment_figures(h, x, k, self.torque_samples, &mut fig.cuts);
+            if breaks(&seg) {
+                return Err(k);
+            }
+            fig.absorb(&seg);
+        }
+        Ok(fig.finish())
+    }
+
+    /// Segment k's figures in the evaluation; its cuts are appended to `cuts`.
+    fn segment_figures(
+        &self,
+        h: &[f64],
+        x: &[Vec<f64>; 3],
+        k: usize,
+        torque_samples: usize,
+        cuts: &mut Vec<Cut>,
+    ) -> SegmentFigures {
+        let mut fig = SegmentFigures {
+            jerk: 0.0,
+            notes: [(Limited::Jerk, 0.0); 12],
+            len: 0,
+        };
+        let hk = h[k];
+        for j in 0..3 {
+            let c = self.knots.coefficients(&x[j], j, k, hk);
+            let vel = derivative(&c);
+            let acc = derivative(&vel);
+            let jerk = derivative(&acc);
+            fig.jerk = fig.jerk.max(argmax_abs_on_interval(&jerk, 0.0, hk).1);
+            // Travel only counts when left: a position inside it is no
+            // closer to binding than the others (and changes nothing).
+            let near = self.near_travel(&c, &vel, j, hk);
+            if let Some((lo, hi, span)) = self.travel_of(j)
+                && !near.is_empty()
+            {
+                let mut worst = f64::NEG_INFINITY;
+                for &(t, p) in &near {
+                    let u = t / hk;
+                    if u > KNOT_U && u < 1.0 - KNOT_U {
+                        cuts.push(Cut {
+                            q: Limited::Travel,
+                            j,
+                            k,
+                            u,
+                        });
                     }
-                    if worst > 0.0 {
-                        note(&mut fig, Limited::Travel, worst);
-                    }
+                    worst = worst.max((p - hi).max(lo - p) / span);
                 }
-                if self.jerk_only {
-                    continue;
-                }
-                for (q, poly, rate) in [
-                    (Limited::Velocity, &vel, &acc),
-                    (Limited::Acceleration, &acc, &jerk),
-                ] {
-                    let lim = self.limit(q);
-                    let mut best: f64 = 0.0;
-                    let ts = roots_in(rate, 0.0, hk);
-                    for t in ts.into_iter().chain([0.0, hk]) {
-                        let v = eval(poly, t).abs();
-                        best = best.max(v);
-                        if v >= CUT_THRESHOLD * lim {
-                            fig.cuts.push(Cut { q, j, k, u: t / hk });
-                        }
-                    }
-                    note(&mut fig, q, best / lim - 1.0);
+                if worst > 0.0 {
+                    fig.note(Limited::Travel, worst);
                 }
             }
             if self.jerk_only {
                 continue;
             }
-            // Torque on a grid; cuts at each axis's local maxima of |τ|.
-            // Samples from the power coefficients: one Horner pass per joint.
-            let coeffs = [0, 1, 2].map(|j| self.knots.coefficients(&x[j], j, k, hk));
-            let taus: Vec<Vector3<f64>> = (0..=torque_samples)
-                .map(|i| {
-                    let t = hk * i as f64 / torque_samples as f64;
-                    let m = coeffs.map(|c| eval_poly(&c, t));
-                    let v = |r: usize| Vector3::new(m[0][r], m[1][r], m[2][r]);
-                    dynamics::torque(&self.model, &v(0), &v(1), &v(2))
-                        .unwrap_or(Vector3::repeat(f64::INFINITY))
-                })
-                .collect();
-            let lim = self.limits.torque;
-            for axis in 0..3 {
-                let a = |i: usize| taus[i][axis].abs();
+            for (q, poly, rate) in [
+                (Limited::Velocity, &vel, &acc),
+                (Limited::Acceleration, &acc, &jerk),
+            ] {
+                let lim = self.limit(q);
                 let mut best: f64 = 0.0;
-                for i in 0..=torque_samples {
-                    best = best.max(a(i));
-                    let left = i == 0 || a(i) >= a(i - 1);
-                    let right = i == torque_samples || a(i) >= a(i + 1);
-                    if left && right && a(i) >= CUT_THRESHOLD * lim {
-                        let u = i as f64 / torque_samples as f64;
-                        fig.cuts.push(Cut {
-                            q: Limited::Torque,
-                            j: axis,
-                            k,
-                            u,
-                        });
+                let ts = roots_in(rate, 0.0, hk);
+                for t in ts.into_iter().chain([0.0, hk]) {
+                    let v = eval(poly, t).abs();
+                    best = best.max(v);
+                    if v >= CUT_THRESHOLD * lim {
+                        cuts.push(Cut { q, j, k, u: t / hk });
                     }
                 }
-                note(&mut fig, Limited::Torque, best / lim - 1.0);
+                fig.note(q, best / lim - 1.0);
             }
         }
-        fig.violation = fig.violation.max(0.0);
+        if self.jerk_only {
+            return fig;
+        }
+        // Torque on a grid; cuts at each axis's local maxima of |τ|.
+        // Samples from the power coefficients: one Horner pass per joint.
+        let coeffs = [0, 1, 2].map(|j| self.knots.coefficients(&x[j], j, k, hk));
+        let taus: Vec<Vector3<f64>> = (0..=torque_samples)
+            .map(|i| {
+                let t = hk * i as f64 / torque_samples as f64;
+                let m = coeffs.map(|c| eval_poly(&c, t));
+                let v = |r: usize| Vector3::new(m[0][r], m[1][r], m[2][r]);
+                dynamics::torque(&self.model, &v(0), &v(1), &v(2))
+                    .unwrap_or(Vector3::repeat(f64::INFINITY))
+            })
+            .collect();
+        let lim = self.limits.torque;
+        for axis in 0..3 {
+            let a = |i: usize| taus[i][axis].abs();
+            let mut best: f64 = 0.0;
+            for i in 0..=torque_samples {
+                best = best.max(a(i));
+                let left = i == 0 || a(i) >= a(i - 1);
+                let right = i == torque_samples || a(i) >= a(i + 1);
+                if left && right && a(i) >= CUT_THRESHOLD * lim {
+                    let u = i as f64 / torque_samples as f64;
+                    cuts.push(Cut {
+                        q: Limited::Torque,
+                        j: axis,
+                        k,
+                        u,
+                    });
+                }
+            }
+            fig.note(Limited::Torque, best / lim - 1.0);
+        }
         fig
     }
 

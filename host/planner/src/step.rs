@@ -6,7 +6,7 @@
 
 use crate::inner::Method;
 use crate::lp::{Lp, LpFailure};
-use crate::problem::{Cut, Problem, Solution};
+use crate::problem::{Cut, Evaluation, Problem, Solution};
 use crate::program::add_new_cuts;
 
 /// Cutting-plane rounds of a trust-region step's program, and when judging
@@ -20,8 +20,8 @@ const FLOOR_GAIN: f64 = 1e-4;
 /// A step of the minimum-time descent: new intervals, knot derivatives,
 /// and the LPs it took.
 pub(crate) struct TimeStep {
-    pub(crate) h: Vec<f64>,
-    pub(crate) x: [Vec<f64>; 3],
+    /// The new point with its exact figures.
+    pub(crate) point: Solution,
     pub(crate) solves: u64,
 }
 
@@ -34,12 +34,13 @@ struct StepRounds {
     failed: Option<LpFailure>,
 }
 
-/// A solved step program: its solution, its intervals, and its knot
-/// derivatives on C3 there.
+/// A solved step program: its solution, its intervals, its knot
+/// derivatives on C3 there, and their evaluation.
 struct StepPoint {
     sol: Vec<f64>,
     h: Vec<f64>,
     x: [Vec<f64>; 3],
+    fig: Evaluation,
 }
 
 impl Problem {
@@ -88,6 +89,7 @@ impl Problem {
                 sol,
                 h: h_new,
                 x: x_new,
+                ..
             }) = rounds.last
             else {
                 delta *= 0.25;
@@ -190,9 +192,10 @@ impl Problem {
             };
             let (h, x) = self.step_point(&cur.h, &sol);
             let before = cuts.len();
-            add_new_cuts(cuts, &self.evaluation(&h, &x, self.torque_samples).cuts);
+            let fig = self.evaluation(&h, &x, self.torque_samples);
+            add_new_cuts(cuts, &fig.cuts);
             let settled = cuts.len() == before;
-            out.last = Some(StepPoint { sol, h, x });
+            out.last = Some(StepPoint { sol, h, x, fig });
             if settled {
                 break;
             }
@@ -248,10 +251,16 @@ impl Problem {
         if let Some(failure) = rounds.failed {
             return Err(failure);
         }
-        let StepPoint { h, x, .. } = rounds.last.ok_or(LpFailure::Cancelled)?;
+        let StepPoint { h, x, fig, .. } = rounds.last.ok_or(LpFailure::Cancelled)?;
         Ok(TimeStep {
-            h,
-            x,
+            point: Solution {
+                h,
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: 0,
+            },
             solves: rounds.solves,
         })
     }
@@ -294,9 +303,9 @@ mod tests {
         let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
         let step = p.time_step(&cur, delta, &mut cuts, STEP_ROUNDS).unwrap();
         let before: f64 = cur.h.iter().sum();
-        let after: f64 = step.h.iter().sum();
+        let after: f64 = step.point.h.iter().sum();
         assert!(after < before, "{after} ≥ {before}");
-        for (a, b) in step.h.iter().zip(&cur.h) {
+        for (a, b) in step.point.h.iter().zip(&cur.h) {
             assert!((a - b).abs() <= delta * b * (1.0 + 1e-6) + 1e-12);
         }
     }

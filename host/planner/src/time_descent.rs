@@ -3,7 +3,8 @@
 //! Every iterate meets every limit. A step solves the LP linearised in h
 //! ([`Problem::time_step`]); its point, whose limits are right only to first
 //! order in the change of h, is then time-scaled to the shortest total time
-//! at which it meets every limit exactly ([`shortest_scaling`]). The scaling
+//! at which it meets every limit exactly
+//! ([`shortest_scaling`](crate::time_scaling::shortest_scaling)). The scaling
 //! absorbs the second-order error that stalls a plain SLP on Σh
 //! (docs/planner-speed.md), and the step is accepted on that exact time.
 //! The cuts a step's rounds find start the next step's program: the
@@ -11,7 +12,7 @@
 
 use crate::problem::{Cut, Problem, Solution};
 use crate::program::add_new_cuts;
-use crate::time_scaling::shortest_scaling;
+use crate::time_scaling::shortest_scaling_cuts;
 
 /// Steps at most.
 const MAX_STEPS: usize = 80;
@@ -34,11 +35,15 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
     // The cuts the last step's rounds found, at extrema of points near the
     // next step's: they start its program beside the current point's own.
     let mut carried: Vec<Cut> = Vec::new();
+    // The cuts at the current point's extrema, once its evaluation is known.
+    let mut cur_cuts: Option<Vec<Cut>> = None;
     for _ in 0..MAX_STEPS {
         let t_cur: f64 = cur.h.iter().sum();
         let mut p = template.clone();
         p.total_time = t_cur;
-        let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
+        let own =
+            cur_cuts.get_or_insert_with(|| p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts);
+        let mut cuts = own.clone();
         add_new_cuts(&mut cuts, &carried);
         let initial = cuts.len();
         let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS);
@@ -51,27 +56,28 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
             continue;
         };
         solves += step.solves;
-        let (h, x) = (step.h, step.x);
-        let promised = t_cur - h.iter().sum::<f64>();
+        // Its exact figures: the step's last round evaluated it.
+        let exact = step.point;
+        let promised = t_cur - exact.h.iter().sum::<f64>();
         // A promised gain near the plan's microsecond rounding is not
         // worth the steps: such a tail of steps gains almost nothing
         // together (docs/planner-speed.md).
         if promised <= PROMISE_FLOOR * t_cur {
             break;
         }
-        let exact = p.evaluate(&h, &x);
-        let cand = shortest_scaling(&p, &exact);
+        let cand = shortest_scaling_cuts(&p, &exact);
         let actual = cand
             .as_ref()
-            .map_or(f64::NEG_INFINITY, |c| t_cur - c.h.iter().sum::<f64>());
+            .map_or(f64::NEG_INFINITY, |c| t_cur - c.0.h.iter().sum::<f64>());
         let rho = actual / promised;
-        if let (Some(c), true) = (cand, rho > 0.1) {
+        if let (Some((c, c_cuts)), true) = (cand, rho > 0.1) {
             stalled = if actual < STALL_GAIN * t_cur {
                 stalled + 1
             } else {
                 0
             };
             cur = c;
+            cur_cuts = c_cuts;
             if rho > 0.75 {
                 delta = (delta * 2.0).min(0.5);
             } else if rho < 0.25 {
@@ -94,6 +100,7 @@ mod tests {
     use crate::inner::{Method, ROUNDS};
     use crate::problem::feasible;
     use crate::search_tests::{example_problem, uneven_intervals};
+    use crate::time_scaling::shortest_scaling;
 
     #[test]
     fn the_descent_shortens_and_every_iterate_is_feasible() {

@@ -3,7 +3,7 @@
 //! jerk ÷ α³), evaluated as it is or re-solved at the new intervals.
 
 use crate::inner::{Method, ROUNDS};
-use crate::problem::{Problem, Solution, feasible};
+use crate::problem::{Cut, Problem, Solution, feasible};
 
 /// Knot derivatives of a shape time-scaled by α: velocities ÷ α, accelerations ÷ α².
 pub(crate) fn scaled_x(x: &[Vec<f64>; 3], alpha: f64) -> [Vec<f64>; 3] {
@@ -28,22 +28,49 @@ pub(crate) fn scaled_x(x: &[Vec<f64>; 3], alpha: f64) -> [Vec<f64>; 3] {
 /// part as α⁻², so the feasible scalings are (in practice) a half-line:
 /// bracketed, then bisected to a relative 1e-9.
 pub(crate) fn shortest_scaling(p: &Problem, s: &Solution) -> Option<Solution> {
-    let at = |alpha: f64| {
+    shortest_scaling_cuts(p, s).map(|(sol, _)| sol)
+}
+
+/// [`shortest_scaling`], with the cuts of the scaled solution's evaluation
+/// when it evaluated it (not when it is `s` itself).
+pub(crate) fn shortest_scaling_cuts(
+    p: &Problem,
+    s: &Solution,
+) -> Option<(Solution, Option<Vec<Cut>>)> {
+    // The segment that broke a limit at the last scaling tried: the next
+    // infeasible one most likely breaks there too.
+    let mut broken = 0;
+    let mut at = |alpha: f64| {
         let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-        p.evaluate(&h, &scaled_x(&s.x, alpha))
+        let x = scaled_x(&s.x, alpha);
+        match p.feasible_evaluation(&h, &x, broken) {
+            Ok(f) => Some((
+                Solution {
+                    h,
+                    x,
+                    jerk: f.jerk,
+                    violation: f.violation,
+                    binding: f.binding,
+                    lp_solves: 0,
+                },
+                Some(f.cuts),
+            )),
+            Err(k) => {
+                broken = k;
+                None
+            }
+        }
     };
-    let ok = |sol: &Solution| feasible(p, sol);
-    let (mut lo, mut hi, mut best) = if ok(s) {
+    let (mut lo, mut hi, mut best) = if feasible(p, s) {
         // No shape meets the jerk limit faster than (J / J_max)^(1/3).
         let lo = (s.jerk / p.limits.jerk).cbrt().min(1.0);
-        (lo * (1.0 - 1e-12), 1.0, s.clone())
+        (lo * (1.0 - 1e-12), 1.0, (s.clone(), None))
     } else {
         let mut alpha = 1.0;
         let mut found = None;
         for _ in 0..30 {
             alpha *= 1.0 + (0.5 * s.violation).clamp(1e-4, 0.5);
-            let sol = at(alpha);
-            if ok(&sol) {
+            if let Some(sol) = at(alpha) {
                 found = Some(sol);
                 break;
             }
@@ -52,18 +79,22 @@ pub(crate) fn shortest_scaling(p: &Problem, s: &Solution) -> Option<Solution> {
     };
     while hi - lo > 1e-9 * hi {
         let mid = 0.5 * (lo + hi);
-        let sol = at(mid);
-        if ok(&sol) {
-            hi = mid;
-            best = sol;
-        } else {
-            lo = mid;
+        match at(mid) {
+            Some(sol) => {
+                hi = mid;
+                best = sol;
+            }
+            None => lo = mid,
         }
     }
-    Some(Solution {
-        lp_solves: s.lp_solves,
-        ..best
-    })
+    let (best, cuts) = best;
+    Some((
+        Solution {
+            lp_solves: s.lp_solves,
+            ..best
+        },
+        cuts,
+    ))
 }
 
 /// A solution's shape time-scaled to total time `t` (velocities ÷ α,
