@@ -287,6 +287,77 @@ mod tests {
         }
     }
 
+    /// A stop ramp sized for the path ahead, measured, not built: at each
+    /// of 400 instants of the committed test plans, the largest of the
+    /// drives' own per-segment ramps over the segments a stop from there
+    /// can pass through (those overlapping the next T_s/2 of plan time at
+    /// σ = 1, which the Underrun rule makes every node hold), against the
+    /// configured T_s; and how many segments end within 100 ms of plan
+    /// time (`APPLY_LATE_MAX_US`), the ones a late node may already have
+    /// dropped (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
+    #[test]
+    fn stop_ramp_for_the_path_ahead() {
+        use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
+        use triquint_shared::protocol::stop_ramp::segment_ramps;
+        let s = DriveSettings::default();
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let plan = committed_plan(name);
+            let c = DriveConfigs::for_plan(&plan, &s).unwrap();
+            let (cap, ts) = (c.override_cap as f32, c.stop_time_s);
+            let jl = plan.limits.jerk.min(s.ceilings.jerk) as f32;
+            let ceiling = s.ceilings.jerk as f32;
+            // Each segment's plan-time span (s) and its own controlled ramp.
+            let mut start = 0.0;
+            let segs: Vec<(f64, f64, f64)> = plan
+                .wire_segments()
+                .unwrap()
+                .iter()
+                .map(|w| {
+                    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
+                    let (r, _) = segment_ramps(v, a, j, jl, ceiling, cap).unwrap();
+                    let end = start + w.duration_us as f64 * 1e-6;
+                    let row = (start, end, r as f64);
+                    start = end;
+                    row
+                })
+                .collect();
+            let total = start;
+            let n = 400;
+            let (mut sum, mut worst, mut best, mut shorter) = (0.0, 0.0f64, f64::MAX, 0);
+            for i in 0..n {
+                let t = total * i as f64 / n as f64;
+                let ahead = segs
+                    .iter()
+                    .filter(|&&(a, b, _)| b > t && a < t + 0.5 * ts)
+                    .map(|x| x.2)
+                    .fold(0.0, f64::max);
+                // Never longer than the configured ramp (every segment's
+                // own is within it), never shorter than the segment it is in.
+                let own = segs.iter().find(|&&(a, b, _)| a <= t && t < b).unwrap().2;
+                assert!(ahead <= ts * (1.0 + 1e-6) && ahead >= own, "{name} at {t}");
+                let r = ahead / ts;
+                sum += r;
+                worst = worst.max(r);
+                best = best.min(r);
+                shorter += usize::from(r < 0.99);
+            }
+            let late = segs
+                .iter()
+                .map(|&(_, end, _)| {
+                    segs.iter()
+                        .filter(|&&(_, e, _)| e > end - 0.1 * cap as f64 && e <= end)
+                        .count()
+                })
+                .max()
+                .unwrap();
+            eprintln!(
+                "{name}: T_s {ts:.3} s over {} segments; the path ahead's ramp / T_s at {n} instants: mean {:.3}, min {best:.3}, max {worst:.3}, below 0.99 at {shorter}; at most {late} segments end within 100 ms at the cap {cap:.3}",
+                segs.len(),
+                sum / n as f64,
+            );
+        }
+    }
+
     /// What bounds the drives' stop ramp on the committed test plans: the
     /// per-segment rule now (v, a, j over the whole segment and its three
     /// joints) against the same f32 node rule over each joint's maxima on
