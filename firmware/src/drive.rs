@@ -279,6 +279,42 @@ impl<const Q: usize> Drive<Q> {
         )
     }
 
+    /// The ramp for a stop from host time `t` that the host dated
+    /// (`dated_100us` × 100 µs, docs/protocol.md "A ramp for the path
+    /// ahead"), if it is shorter than `full_ns` (the ramp every transition
+    /// runs with) and covers the own ramps of every queued segment the
+    /// stop passes through; else `full_ns`. Only from a constant σ: a
+    /// transition begun in another one is sized against `full_ns`.
+    // Cold, out of line: only the tick that takes a dated stop runs it.
+    #[cold]
+    #[inline(never)]
+    fn dated_ramp_ns(&self, t: i64, dated_100us: u16, full_ns: i64, quick: bool) -> i64 {
+        let dated_us = dated_100us as u32 * 100;
+        let dated = dated_us as i64 * 1000;
+        if dated == 0 || dated >= full_ns || self.scaling.in_transition() {
+            return full_ns;
+        }
+        let s = self.scaling.constant_plan_time_ns(t);
+        let q16 = self.scaling.target_q16();
+        // At σ ≤ 1 the stop covers T/2 of plan time (no multiply).
+        let end = s + if q16 <= UNIT_Q16 {
+            dated >> 1
+        } else {
+            TimeScaling::stop_distance_ns(dated, q16)
+        };
+        // The queue is in plan order: from the front up to the window's end.
+        for q in self.queue.iter() {
+            if q.start_ns >= end {
+                break;
+            }
+            let own = if quick { q.ramps_us.1 } else { q.ramps_us.0 };
+            if own > dated_us && q.start_ns + q.duration_us as i64 * 1000 > s {
+                return full_ns;
+            }
+        }
+        dated
+    }
+
     /// The largest of the queued segments' own stop ramps, controlled and
     /// quick (ns).
     pub fn queue_ramps_ns(&self) -> (i64, i64) {
@@ -553,12 +589,27 @@ impl<const Q: usize> Drive<Q> {
     #[cold]
     #[inline(never)]
     fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64, ready: Option<&Retarget>) {
+        self.begin_stop_dated(reason, quick, t, ready, 0);
+    }
+
+    /// [`Drive::begin_stop_at`] with the ramp a Stop, QuickStop or FeedHold
+    /// carries for its instant (`dated_100us`, 0 for none): see
+    /// [`Drive::dated_ramp_ns`].
+    fn begin_stop_dated(
+        &mut self,
+        reason: StopReason,
+        quick: bool,
+        t: i64,
+        ready: Option<&Retarget>,
+        dated_100us: u16,
+    ) {
         let Some(a) = self.active else {
             return;
         };
         if self.state == State::Running {
             let (stop, quick_ns) = self.ramps_ns(&a);
             let ramp = if quick { quick_ns } else { stop };
+            let ramp = self.dated_ramp_ns(t, dated_100us, ramp, quick);
             self.scaling.retarget_ready(t, 0, ramp, ready);
             self.stop_reason = Some(reason);
             if reason != StopReason::Hold {

@@ -182,6 +182,12 @@ impl TimeScaling {
         self.constant_at(dt)
     }
 
+    /// Plan time (ns) at host time `t_ns`, for a constant phase only (not
+    /// advanced past a transition's end: the caller knows there is none).
+    pub fn constant_plan_time_ns(&self, t_ns: i64) -> i64 {
+        self.constant_at(t_ns - self.t0_ns).s_ns
+    }
+
     fn constant_at(&self, dt: i64) -> Scaled {
         let dt = dt.max(0);
         let (s_ns, sigma) = match self.target_q16 {

@@ -89,12 +89,26 @@ fn q_at(z: f64, x: f64) -> Vector3<f64> {
 /// Rest-to-rest segments of equal joint steps, `h` seconds each: equal
 /// steps make the end jerk 60Δ/h³ equal on both sides of every knot (C3).
 fn segments(n: usize, h: f64) -> Vec<WireSegment> {
+    segments_of(&std::vec![h; n])
+}
+
+/// [`segments`] with durations `hs`, each segment rest to rest, its step
+/// scaled by (h/h_max)³ so that the end jerks still match (C3): a longer
+/// segment is the faster one.
+fn segments_of(hs: &[f64]) -> Vec<WireSegment> {
+    let n = hs.len();
     let q0 = q_at(0.62, 0.0);
     let step = q_at(0.63, 0.01) - q0;
+    let longest = hs.iter().copied().fold(0.0, f64::max);
+    let mut ends = std::vec![q0];
+    for h in hs {
+        let last = ends[ends.len() - 1];
+        ends.push(last + step * (h / longest).powi(3));
+    }
     (0..n)
         .map(|i| {
-            let a = q0 + step * i as f64;
-            let b = q0 + step * (i + 1) as f64;
+            let h = hs[i];
+            let (a, b) = (ends[i], ends[i + 1]);
             let mut coeffs = [[0.0; 6]; 3];
             for j in 0..3 {
                 let d = b[j] - a[j];
@@ -204,13 +218,18 @@ impl Rig {
     /// The last answer (result, value) to a command sent to `node`'s
     /// address (0: broadcast), if any.
     fn command_to(&mut self, c: CommandCode, arg: u32, node: u8) -> Option<(u8, u32)> {
+        self.command_with(c, arg, 0, node)
+    }
+
+    /// [`Rig::command_to`] with `arg2`.
+    fn command_with(&mut self, c: CommandCode, arg: u32, arg2: u16, node: u8) -> Option<(u8, u32)> {
         let n = self.sent.len();
         self.token = self.token.wrapping_add(1);
         self.rx(Command {
             command: c as u8,
             token: self.token,
             arg,
-            arg2: 0,
+            arg2,
         }
         .to_frame(node));
         self.sent[n..]
@@ -577,6 +596,66 @@ fn a_too_short_configured_stop_ramp_cannot_make_the_stop_harder() {
         "stop jerk {} > {ceiling}",
         r.max_stop_jerk
     );
+}
+
+/// A Stop dated with a ramp for the path ahead runs it when it covers the
+/// own ramps of the segments the stop passes through, and the full ramp
+/// when it does not (docs/protocol.md, "A ramp for the path ahead").
+#[test]
+fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
+    // Two gentle segments, then two with the same jerk at 4× the speed.
+    let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
+    let rig = || {
+        let mut r = Rig::with_stop_time(0.05);
+        (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
+        r
+    };
+    let gentle = Rig::loaded_with(rig(), &segs[..2])
+        .node
+        .drive
+        .queue_ramps_ns()
+        .0;
+    // The stop's length from Stop to Idle (ms) and its peak joint jerk.
+    let stop_with = |dated_100us: u16| {
+        let mut r = Rig::loaded_with(rig(), &segs);
+        let full = r.node.drive.queue_ramps_ns().0;
+        r.start();
+        r.run(150);
+        assert_eq!(r.node.state(), State::Running);
+        let t = r.command_with(CommandCode::Stop, 0, dated_100us, 0);
+        assert_eq!(t.map(|a| a.0), Some(0));
+        let mut ms = 0;
+        while r.node.state() == State::Stopping && ms < 10_000 {
+            r.tick();
+            ms += 1;
+        }
+        assert_eq!(r.node.state(), State::Idle);
+        (ms, full, r.max_stop_jerk)
+    };
+    let covering = ((gentle + 99_999) / 100_000) as u16;
+    let (ms, full, jerk) = stop_with(covering);
+    std::eprintln!(
+        "full ramp {:.3} s, the gentle segments' {:.3} s; a stop dated {covering} × 100 µs took {ms} ms, peak jerk {jerk:.3} m/s³",
+        full as f64 * 1e-9,
+        gentle as f64 * 1e-9
+    );
+    assert!(gentle < full / 2, "{gentle} against {full}");
+    let dated_ms = covering as i64 / 10;
+    assert!(
+        (ms as i64 - dated_ms).abs() <= 2,
+        "{ms} ms against {dated_ms}"
+    );
+    assert!(jerk <= 8.0, "{jerk}");
+    // Too short for the segment it begins in, absent, or not shorter than
+    // the full ramp: the full ramp.
+    let full_ms = full / 1_000_000;
+    for dated in [covering / 2, 0, (full / 100_000 + 1) as u16] {
+        let (ms, _, _) = stop_with(dated);
+        assert!(
+            (ms as i64 - full_ms).abs() <= 2,
+            "dated {dated}: {ms} ms against {full_ms}"
+        );
+    }
 }
 
 #[test]

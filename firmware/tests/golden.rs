@@ -412,7 +412,9 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         r.top_up(&segs, &mut next);
         r.tick();
     }
-    r.command(CommandCode::FeedHold, 0);
+    // A hold dated with a ramp for the path ahead (the tick scans the
+    // queue for it): 150 ms, covering these gentle segments.
+    r.command2(CommandCode::FeedHold, 0, 1_500);
     r.run_us(250_000);
     // Commands in the middle of a transition (200 ms ramps): a hold at 20 %
     // of the resume ramp, a resume at 30 % of that hold's ramp, an override

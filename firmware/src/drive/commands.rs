@@ -67,7 +67,8 @@ impl<const Q: usize> Drive<Q> {
                 match (self.state, self.active) {
                     (State::Running, _) => {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.begin_stop_at(StopReason::Commanded, quick, t, data.retarget());
+                        let r = data.retarget();
+                        self.begin_stop_dated(StopReason::Commanded, quick, t, r, c.arg2);
                         FaultCode::None
                     }
                     (State::Stopping, Some(a)) => {
@@ -115,7 +116,8 @@ impl<const Q: usize> Drive<Q> {
                 State::Running => {
                     if self.stop_reason != Some(StopReason::Hold) {
                         let t = self.apply_ns(c.arg, local_us);
-                        self.begin_stop_at(StopReason::Hold, false, t, data.retarget());
+                        let r = data.retarget();
+                        self.begin_stop_dated(StopReason::Hold, false, t, r, c.arg2);
                     }
                     FaultCode::None
                 }
