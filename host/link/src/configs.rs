@@ -287,7 +287,8 @@ mod tests {
         }
     }
 
-    /// A stop ramp sized for the path ahead, measured, not built: at each
+    /// The ramp for the path ahead that stops carry (session/path_ramps.rs
+    /// with its ±20 ms margin; here without): at each
     /// of 400 instants of the committed test plans, the largest of the
     /// drives' own per-segment ramps over the segments a stop from there
     /// can pass through (those overlapping the next T_s/2 of plan time at

@@ -320,13 +320,16 @@ fn stops_end_on_the_path_with(
         .iter()
         .max_by(|a, b| a.off_path_m.total_cmp(&b.off_path_m))
         .map_or(0.0, |r| r.at_s);
+    // Stops the host dated with a ramp for the path ahead are shorter.
+    let mean_stop = runs.iter().map(|r| r.stop_s).sum::<f64>() / runs.len().max(1) as f64;
     eprintln!(
         "{name}: {n} stops, T_s {:.3} s: worst off path {:.2} µm (Stop at {worst_at:.3} s; at rest {:.2} µm), \
-         worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
+         mean stop {mean_stop:.3} s (×{:.3} of T_s), worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
          rest speed {:.1e} m/s, drives' own ramp up to {:.3} s; {} unsafe",
         configs.stop_time_s,
         worst(|r| r.off_path_m) * 1e6,
         worst(|r| r.rest_off_path_m) * 1e6,
+        mean_stop / configs.stop_time_s,
         worst(|r| r.stop_s),
         worst(|r| r.jerk),
         b.jerk,

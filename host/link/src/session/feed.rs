@@ -46,12 +46,22 @@ impl Feed {
 
     /// The command frame's fields for host time `t_us` (wrapping).
     pub fn command(self, token: u8, t_us: u64) -> Command {
+        self.command_dated(token, t_us, 0)
+    }
+
+    /// [`Feed::command`], a stop or hold carrying the ramp `dated_100us`
+    /// for the path ahead of its instant (0: the drives' full ramp).
+    pub fn command_dated(self, token: u8, t_us: u64, dated_100us: u16) -> Command {
+        let arg2 = match self {
+            Feed::Stop | Feed::QuickStop | Feed::Hold => dated_100us,
+            _ => self.arg2(),
+        };
         Command {
             command: self.code() as u8,
             token,
             // 0 means "on receipt": the one host time that cannot be sent.
             arg: (t_us as u32).max(1),
-            arg2: self.arg2(),
+            arg2,
         }
     }
 }
@@ -67,6 +77,9 @@ pub(crate) struct FeedState {
     pub override_permille: Option<u32>,
     /// A drive acknowledged a stop (or reported Stopping without a fault).
     pub stopped: bool,
+    /// A hold, resume or override was seen or sent: the host's plan clock
+    /// is an estimate, not the drives' plan time.
+    clock_inexact: bool,
     /// Each drive's answer to the session's own feed commands, by token.
     answers: Vec<(u8, [Option<CommandAnswer>; AXES])>,
 }
@@ -84,8 +97,10 @@ impl FeedState {
         token
     }
 
-    /// Sends what was queued, ahead of everything, at host time `now`.
-    pub fn send(&mut self, now: u64, out: &mut Outbox) {
+    /// Sends what was queued, ahead of everything, at host time `now`;
+    /// a stop or hold with the ramp `dated` gives it (100 µs units, 0 for
+    /// the drives' full ramp).
+    pub fn send(&mut self, now: u64, out: &mut Outbox, dated: impl Fn(Feed) -> u16) {
         for (f, token) in self.pending.drain(..).rev() {
             match f {
                 Feed::Override(pm) => self.overrides.push((token, pm)),
@@ -93,12 +108,19 @@ impl FeedState {
                 Feed::Stop | Feed::QuickStop => self.stopped = true,
                 _ => {}
             }
-            out.push_front(f.command(token, now).to_frame(0));
+            // Once the plan time is no longer exact (a hold or an override
+            // sent), every later transition takes the full ramp.
+            let d = if self.clock_inexact { 0 } else { dated(f) };
+            if matches!(f, Feed::Hold | Feed::Resume | Feed::Override(_)) {
+                self.clock_inexact = true;
+            }
+            out.push_front(f.command_dated(token, now, d).to_frame(0));
         }
     }
 
     /// A Command frame of another station.
     pub fn seen(&mut self, c: &Command) {
+        self.clock_inexact = true;
         if c.command == CommandCode::Override as u8 {
             self.overrides.push((c.token, c.arg2));
             if self.overrides.len() > 16 {

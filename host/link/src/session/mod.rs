@@ -15,6 +15,7 @@ mod feed;
 pub mod nodes;
 mod options;
 mod outbox;
+mod path_ramps;
 mod plan_clock;
 mod start;
 mod stream;
@@ -36,6 +37,7 @@ use self::configure::Configuration;
 use self::feed::FeedState;
 use self::nodes::Nodes;
 use self::outbox::Outbox;
+use self::path_ramps::PathRamps;
 use self::plan_clock::PlanClock;
 use self::start::StartSequence;
 use self::stream::Stream;
@@ -132,6 +134,8 @@ pub struct Session {
     /// Streamability of the plan by the configuration (its capacity is
     /// the drives', known once they acknowledge a segment).
     stream_rule: StreamRule,
+    /// The ramp a stop carries for the path ahead of its instant.
+    path_ramps: PathRamps,
 }
 
 /// Where a plan starts.
@@ -178,6 +182,7 @@ impl Session {
         configs: [DriveConfig; AXES],
         opts: SessionOptions,
     ) -> Self {
+        let path_ramps = PathRamps::new(&segments, &configs[0]);
         let stream = Stream::new(segments, opts.fd, opts.compact);
         let override_cap = configs[0].override_cap.max(1.0) as f64;
         let c = &configs[0];
@@ -189,6 +194,7 @@ impl Session {
         );
         Self {
             stream_rule,
+            path_ramps,
             plan_end_us: stream.plan_end_us(),
             opts,
             phase: Phase::Discover,
@@ -389,7 +395,16 @@ impl Session {
         // Time sync, fast until every node is synced.
         let synced = self.nodes.all(|v| v.sync_ok);
         self.sync.poll(now, synced, &self.opts, &mut self.out);
-        self.feed.send(now, &mut self.out);
+        // A stop while the plan runs carries the ramp for the path ahead
+        // of the clock's estimate (the clock as of the last poll: the
+        // estimate's margin covers a poll's interval).
+        let running = matches!(self.phase, Phase::Stream | Phase::Finish) && !self.clock.held;
+        let (ramps, plan_us) = (&self.path_ramps, self.clock.plan_us() as f64);
+        self.feed.send(now, &mut self.out, |f| match f {
+            Feed::Stop | Feed::Hold if running => ramps.dated(plan_us, false),
+            Feed::QuickStop if running => ramps.dated(plan_us, true),
+            _ => 0,
+        });
         self.clock.override_permille = self.feed.override_permille;
         self.clock.update(now, self.start.start_us, &self.nodes);
         let before_start = !matches!(self.phase, Phase::Stream | Phase::Finish | Phase::Done);
