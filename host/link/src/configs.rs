@@ -126,6 +126,17 @@ fn largest(plan: &Plan) -> Result<[f64; 3], PlanConfigError> {
     Ok(out)
 }
 
+/// A plan committed under testdata/protocol/plans/ (tests).
+#[cfg(test)]
+pub(crate) fn committed_plan(name: &str) -> Plan {
+    let text = std::fs::read_to_string(format!(
+        "{}/../../testdata/protocol/plans/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("a test plan");
+    serde_json::from_str(&text).expect("a plan")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -218,16 +229,6 @@ mod tests {
         assert!(j > 0.1 && v > 0.0 && a > 0.0);
         let from = DriveConfigs::from_maxima(&plan.robot, &plan.limits, &s, v, a, j);
         assert!(honest.stop_time_s >= from.stop_time_s);
-    }
-
-    /// A plan committed under testdata/protocol/plans/.
-    fn committed_plan(name: &str) -> Plan {
-        let text = std::fs::read_to_string(format!(
-            "{}/../../testdata/protocol/plans/{name}.json",
-            env!("CARGO_MANIFEST_DIR")
-        ))
-        .expect("a test plan");
-        serde_json::from_str(&text).expect("a plan")
     }
 
     #[test]

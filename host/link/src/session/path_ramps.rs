@@ -84,23 +84,13 @@ impl PathRamps {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use triquint_shared::plan::Plan;
+    use crate::configs::{DriveConfigs, committed_plan};
     use triquint_shared::protocol::DriveSettings;
-
-    fn plan(name: &str) -> Plan {
-        let text = std::fs::read_to_string(format!(
-            "{}/../../testdata/protocol/plans/{name}.json",
-            env!("CARGO_MANIFEST_DIR")
-        ))
-        .expect("a test plan");
-        serde_json::from_str(&text).expect("a plan")
-    }
 
     #[test]
     fn never_longer_than_the_full_ramp_and_never_below_the_segment_it_is_in() {
-        let p = plan("case2-spline");
-        let configs =
-            crate::configs::DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
+        let p = committed_plan("case2-spline");
+        let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
         let w = p.wire_segments().unwrap();
         let r = PathRamps::new(&w, &configs.nodes[0]);
         let total = r.segments.last().unwrap().1;
