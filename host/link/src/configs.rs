@@ -299,8 +299,7 @@ mod tests {
     /// dropped (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
     #[test]
     fn stop_ramp_for_the_path_ahead() {
-        use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
-        use triquint_shared::protocol::stop_ramp::segment_ramps;
+        use triquint_shared::protocol::segment_maxima::wire_ramps;
         let s = DriveSettings::default();
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
             let plan = committed_plan(name);
@@ -315,8 +314,7 @@ mod tests {
                 .unwrap()
                 .iter()
                 .map(|w| {
-                    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
-                    let (r, _) = segment_ramps(v, a, j, jl, ceiling, cap).unwrap();
+                    let (r, _) = wire_ramps(w, jl, ceiling, cap).unwrap();
                     let end = start + w.duration_us as f64 * 1e-6;
                     let row = (start, end, r as f64);
                     start = end;

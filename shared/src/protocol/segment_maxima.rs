@@ -94,6 +94,15 @@ pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
     [m[0] * ih, m[1] * ih * ih, m[2] * ih * ih * ih]
 }
 
+/// The controlled and quick stop ramps (s) a drive sizes for the wire
+/// segment `w` on receipt ([`segment_ramps`] over its own maxima), with
+/// jerk limit `jerk_limit`, ceiling `ceiling` and override cap `cap`;
+/// `None` if a drive would refuse it for its stop.
+pub fn wire_ramps(w: &WireSegment, jerk_limit: f32, ceiling: f32, cap: f32) -> Option<(f32, f32)> {
+    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
+    segment_ramps(v, a, j, jerk_limit, ceiling, cap)
+}
+
 /// The controlled and quick stop ramps (s) the drives need for the whole
 /// of `segments` (the largest of each segment's own,
 /// [`segment_ramps`]) with jerk limit `jerk_limit`, ceiling `ceiling` and
@@ -106,8 +115,7 @@ pub fn plan_ramps<'a>(
 ) -> Option<(f32, f32)> {
     let mut out = (0.0f32, 0.0f32);
     for w in segments {
-        let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
-        let (s, q) = segment_ramps(v, a, j, jerk_limit, ceiling, cap)?;
+        let (s, q) = wire_ramps(w, jerk_limit, ceiling, cap)?;
         out = (out.0.max(s), out.1.max(q));
     }
     Some(out)

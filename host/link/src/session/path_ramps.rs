@@ -6,8 +6,7 @@
 //! they hold in that window, so a wrong estimate of where the plan is
 //! costs the shorter stop, never a harder one.
 
-use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
-use triquint_shared::protocol::stop_ramp::segment_ramps;
+use triquint_shared::protocol::segment_maxima::wire_ramps;
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
 /// Room on each side of the host's estimate of the plan time (µs): its
@@ -18,7 +17,7 @@ const ESTIMATE_MARGIN_US: f64 = 20_000.0;
 /// The unit of the command's ramp field (µs).
 const UNIT_US: u64 = 100;
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct PathRamps {
     /// Each segment's plan-time span (µs) and its own controlled and quick
     /// ramps (µs).
@@ -36,8 +35,7 @@ impl PathRamps {
         let rows = segments
             .iter()
             .map(|w| {
-                let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
-                let ramps = segment_ramps(v, a, j, c.max_jerk, c.ceiling_jerk, c.override_cap)
+                let ramps = wire_ramps(w, c.max_jerk, c.ceiling_jerk, c.override_cap)
                     .map_or([f64::INFINITY; 2], |(s, q)| {
                         [s as f64 * 1e6, q as f64 * 1e6]
                     });
