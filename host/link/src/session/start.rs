@@ -1,7 +1,8 @@
 //! The arm/start sequence: once every node has its first segments, Arm to
 //! all (resent with the same token to a node that has not answered, see
 //! [`ARM_RESENDS`]); once every node armed, Start at a common time
-//! `start_lead_us` ahead, resent to a silent node while that time is still
+//! ahead of now by the larger of `start_lead_us` and a few Arm round trips
+//! ([`start_lead_us`]), resent to a silent node while that time is still
 //! ahead ([`START_RETRY_US`]).
 
 use triquint_shared::protocol::{CommandCode, FaultCode};
@@ -20,6 +21,24 @@ pub const ARM_RESENDS: u32 = 2;
 /// repeat window: a drive that missed Start would stop every axis (`PeerLost`).
 pub const START_RETRY_US: u64 = 10_000;
 
+/// The Start's lead in Arm round trips: a drive slowed down (a loaded
+/// host, a busy bus, an emulated CPU) answered Arm late and would receive
+/// a Start with a fixed lead after its time (`StartInPast`).
+pub const START_LEAD_ROUND_TRIPS: u64 = 4;
+
+/// The longest lead: a round trip beyond this is a fault, not latency.
+pub const MAX_START_LEAD_US: u64 = 500_000;
+
+/// How far ahead the start time goes: `floor_us` (the session's
+/// `start_lead_us`) or [`START_LEAD_ROUND_TRIPS`] times the Arm's round
+/// trip if longer, at most [`MAX_START_LEAD_US`] (never below the floor).
+pub fn start_lead_us(floor_us: u64, arm_round_trip_us: u64) -> u64 {
+    arm_round_trip_us
+        .saturating_mul(START_LEAD_ROUND_TRIPS)
+        .min(MAX_START_LEAD_US)
+        .max(floor_us)
+}
+
 /// A command sent to every node, and how often it went out again.
 #[derive(Clone, Copy, Debug, Default)]
 struct Pending {
@@ -32,6 +51,8 @@ struct Pending {
 pub(crate) struct StartSequence {
     arm: Pending,
     start: Pending,
+    /// Host time (µs) the first Arm went out.
+    arm_first_us: u64,
     /// Host time (µs) of the start (0 before).
     pub start_us: u64,
 }
@@ -45,6 +66,7 @@ impl StartSequence {
             sent_at: now,
             resends: 0,
         };
+        self.arm_first_us = now;
     }
 
     /// Each node's answer to the Arm.
@@ -95,7 +117,8 @@ impl StartSequence {
                 code: Some(code),
             });
         }
-        let start = now + opts.start_lead_us;
+        let lead = start_lead_us(opts.start_lead_us, now.saturating_sub(self.arm_first_us));
+        let start = now + lead;
         let token = out.command(0, CommandCode::Start, start as u32);
         self.start = Pending {
             token,
@@ -124,5 +147,21 @@ impl StartSequence {
         }
         self.start.sent_at = now;
         self.start.resends += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_start_lead_follows_a_slow_arm_round_trip_within_bounds() {
+        // A prompt answer keeps the floor.
+        assert_eq!(start_lead_us(50_000, 2_000), 50_000);
+        // A slow one: four round trips.
+        assert_eq!(start_lead_us(50_000, 30_000), 120_000);
+        // Never beyond the ceiling, never below the floor.
+        assert_eq!(start_lead_us(50_000, 10_000_000), MAX_START_LEAD_US);
+        assert_eq!(start_lead_us(800_000, 10_000_000), 800_000);
     }
 }
