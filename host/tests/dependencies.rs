@@ -3,9 +3,10 @@
 //! every kind (normal, build and dev), and what those bring along (their
 //! normal and build dependencies, as cargo does).
 //!
-//! - `triquint-shared` imports nothing of ours;
+//! - `triquint-shared` and `triquint-module-graph` import nothing of ours;
 //! - `triquint-firmware`, `triquint-link`, `triquint-planner` and
-//!   `triquint-cli-common` use only `triquint-shared`: in particular the
+//!   `triquint-cli-common` use only `triquint-shared` (the firmware and the
+//!   planner the module graph in their layer tests): in particular the
 //!   bus side and the planner never the simulator;
 //! - `triquint-sim` may use the firmware, the link and the CLI helpers, but
 //!   not the planner, the plots or the host.
@@ -19,9 +20,17 @@ use std::process::Command;
 /// Each ruled crate and the crates of ours it may use.
 const RULES: &[(&str, &[&str])] = &[
     ("triquint-shared", &[]),
-    ("triquint-firmware", &["triquint-shared"]),
+    ("triquint-module-graph", &[]),
+    // The module graph only in their layer tests.
+    (
+        "triquint-firmware",
+        &["triquint-shared", "triquint-module-graph"],
+    ),
     ("triquint-link", &["triquint-shared"]),
-    ("triquint-planner", &["triquint-shared"]),
+    (
+        "triquint-planner",
+        &["triquint-shared", "triquint-module-graph"],
+    ),
     ("triquint-cli-common", &["triquint-shared"]),
     (
         "triquint-sim",

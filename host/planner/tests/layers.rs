@@ -12,6 +12,8 @@ use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use triquint_module_graph::{block_end, layer_violations, module_of, rust_files, without_tests};
+
 /// Bottom first. A new module goes where its dependencies allow.
 const LAYERS: &[&str] = &[
     "error",        // PlanError
@@ -56,80 +58,6 @@ fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
 }
 
-fn module_of(rel: &Path) -> String {
-    let first = rel
-        .components()
-        .next()
-        .unwrap()
-        .as_os_str()
-        .to_string_lossy();
-    first.trim_end_matches(".rs").to_string()
-}
-
-/// The end (exclusive) of the block whose `{` is the first at or after `from`.
-fn block_end(text: &str, from: usize) -> usize {
-    let Some(open) = text[from..].find('{') else {
-        return text.len();
-    };
-    let mut depth = 0;
-    for (k, c) in text[from + open..].char_indices() {
-        match c {
-            '{' => depth += 1,
-            '}' => {
-                depth -= 1;
-                if depth == 0 {
-                    return from + open + k + 1;
-                }
-            }
-            _ => {}
-        }
-    }
-    text.len()
-}
-
-/// The text outside `#[cfg(test)]` items (a test module, a test-only `use`),
-/// each item replaced by its line breaks so that line numbers stay the file's.
-fn without_tests(text: &str) -> String {
-    let mut out = String::new();
-    let mut rest = text;
-    while let Some(i) = rest.find("#[cfg(test)]") {
-        out.push_str(&rest[..i]);
-        let after = &rest[i..];
-        let semi = after.find(';').unwrap_or(after.len());
-        let brace = after.find('{').unwrap_or(after.len());
-        let end = if semi < brace {
-            semi + 1
-        } else {
-            block_end(after, 0)
-        };
-        out.extend(after[..end].chars().filter(|c| *c == '\n'));
-        rest = &after[end..];
-    }
-    out.push_str(rest);
-    out
-}
-
-/// First segments of every `crate::` path, with their line numbers.
-fn crate_paths(text: &str) -> Vec<(usize, String)> {
-    let mut v = Vec::new();
-    for (n, line) in text.lines().enumerate() {
-        let mut rest = line;
-        while let Some(i) = rest.find("crate::") {
-            let before = rest[..i].chars().last();
-            rest = &rest[i + "crate::".len()..];
-            if before.is_some_and(|c| c == '$' || c == '_' || c.is_alphanumeric()) {
-                continue;
-            }
-            let name: String = rest
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect();
-            v.push((n + 1, name));
-        }
-    }
-    v
-}
-
 fn identifier_after(text: &str) -> String {
     text.chars()
         .take_while(|c| c.is_alphanumeric() || *c == '_')
@@ -169,41 +97,19 @@ fn core_methods(text: &str) -> Vec<String> {
     out
 }
 
-fn files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in fs::read_dir(dir).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_dir() {
-            files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
-/// Every violation in the sources under `root`.
+/// Every violation in the sources under `root`: the layers' paths, then
+/// calls of a core method added by a layer above.
 fn violations(root: &Path) -> Vec<String> {
-    let mut all = Vec::new();
-    files(root, &mut all);
-    all.sort();
-    let mut bad = Vec::new();
-    // (file, module, level, text outside tests)
+    let mut bad = layer_violations(root, LAYERS);
+    // (file, module, level, text outside tests) of every listed module.
     let mut sources = Vec::new();
-    for path in all {
+    for path in rust_files(root) {
         let rel = path.strip_prefix(root).unwrap().to_path_buf();
-        let module = module_of(&rel);
-        // The crate root, and the crate's test modules (`#[cfg(test)] mod x_tests`).
-        if module == "lib" || module.ends_with("_tests") {
-            continue;
+        let module = module_of(root, &path).first().cloned().unwrap_or_default();
+        if let Some(level) = LAYERS.iter().position(|m| *m == module) {
+            let text = without_tests(&fs::read_to_string(&path).unwrap());
+            sources.push((rel, module, level, text));
         }
-        let Some(level) = LAYERS.iter().position(|m| *m == module) else {
-            bad.push(format!(
-                "{}: module `{module}` is not in LAYERS",
-                rel.display()
-            ));
-            continue;
-        };
-        let text = without_tests(&fs::read_to_string(&path).unwrap());
-        sources.push((rel, module, level, text));
     }
     // The level that adds each core method, and every fn name per level.
     let mut adds: BTreeMap<String, usize> = BTreeMap::new();
@@ -218,23 +124,6 @@ fn violations(root: &Path) -> Vec<String> {
     // to call them on without a path to it (checked above).
     let core_floor = adds.values().copied().min().unwrap_or(usize::MAX);
     for (rel, module, level, text) in &sources {
-        for (line, target) in crate_paths(text) {
-            match LAYERS.iter().position(|m| *m == target) {
-                Some(t) if t < *level => {}
-                Some(t) if t == *level => bad.push(format!(
-                    "{}:{line}: crate::{target} inside `{module}` (use self:: or super::)",
-                    rel.display()
-                )),
-                Some(_) => bad.push(format!(
-                    "{}:{line}: `{module}` points up to crate::{target}",
-                    rel.display()
-                )),
-                None => bad.push(format!(
-                    "{}:{line}: crate::{target} is not a module path (name the module)",
-                    rel.display()
-                )),
-            }
-        }
         for (method, &at) in &adds {
             // A name that this layer or one below declares as well may be
             // that function (another type's method): not a call upwards.
@@ -254,6 +143,8 @@ fn violations(root: &Path) -> Vec<String> {
             }
         }
     }
+    // File by file, each file's paths before its calls.
+    bad.sort_by_key(|m| m.split(':').next().unwrap_or("").to_string());
     bad
 }
 
