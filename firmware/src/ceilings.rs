@@ -7,7 +7,7 @@
 
 use triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN;
 use triquint_shared::protocol::segment_maxima::maxima;
-use triquint_shared::protocol::stop_ramp::segment_ramps;
+use triquint_shared::protocol::stop_ramp::segment_ramps_and_at_unit;
 use triquint_shared::protocol::{DriveConfig, Reject};
 
 use crate::f32_cast::ramp_us;
@@ -35,7 +35,16 @@ impl Maxima {
     /// its override cap (`stop_ramp::segment_ramps`). None within the
     /// longest ramp: `StopAboveCeiling`.
     pub fn ramps_us(&self, cfg: &DriveConfig) -> Result<(u32, u32), Reject> {
-        let (s, q) = segment_ramps(
+        self.ramps_and_at_unit_us(cfg).map(|[full, _]| full)
+    }
+
+    /// [`Maxima::ramps_us`] and, from the same pass, the segment's own
+    /// ramps for a stop from σ ≤ 1 (never longer;
+    /// `stop_ramp::segment_ramps_and_at_unit`): what a stop carrying a
+    /// ramp for the path ahead is held to.
+    pub fn ramps_and_at_unit_us(&self, cfg: &DriveConfig) -> Result<[(u32, u32); 2], Reject> {
+        let us = |(s, q): (f32, f32)| (ramp_us(s), ramp_us(q));
+        let (full, at_unit) = segment_ramps_and_at_unit(
             self.v,
             self.a,
             self.j,
@@ -44,7 +53,7 @@ impl Maxima {
             cfg.override_cap,
         )
         .ok_or(Reject::StopAboveCeiling)?;
-        Ok((ramp_us(s), ramp_us(q)))
+        Ok([us(full), us(at_unit)])
     }
 
     /// Held to `cfg`'s ceilings (with [`RELATIVE_LIMIT_MARGIN`]):
@@ -99,6 +108,7 @@ mod tests {
             last: false,
             crc: 0,
             ramps_us: (0, 0),
+            unit_ramps_us: (0, 0),
         }
     }
 

@@ -291,23 +291,27 @@ impl<const Q: usize> Drive<Q> {
     fn dated_ramp_ns(&self, t: i64, dated_100us: u16, full_ns: i64, quick: bool) -> i64 {
         let dated_us = dated_100us as u32 * 100;
         let dated = dated_us as i64 * 1000;
-        if dated == 0 || dated >= full_ns || self.scaling.in_transition() {
+        // Held to the segments' ramps for stops from σ ≤ 1 only.
+        if dated == 0
+            || dated >= full_ns
+            || self.scaling.in_transition()
+            || self.scaling.target_q16() > UNIT_Q16
+        {
             return full_ns;
         }
         let s = self.scaling.constant_plan_time_ns(t);
-        let q16 = self.scaling.target_q16();
-        // At σ ≤ 1 the stop covers T/2 of plan time (no multiply).
-        let end = s + if q16 <= UNIT_Q16 {
-            dated >> 1
-        } else {
-            TimeScaling::stop_distance_ns(dated, q16)
-        };
+        // At σ ≤ 1 the stop covers at most T/2 of plan time.
+        let end = s + (dated >> 1);
         // The queue is in plan order: from the front up to the window's end.
         for q in self.queue.iter() {
             if q.start_ns >= end {
                 break;
             }
-            let own = if quick { q.ramps_us.1 } else { q.ramps_us.0 };
+            let own = if quick {
+                q.unit_ramps_us.1
+            } else {
+                q.unit_ramps_us.0
+            };
             if own > dated_us && q.start_ns + q.duration_us as i64 * 1000 > s {
                 return full_ns;
             }

@@ -14,7 +14,7 @@ pub struct Seg {
     pub seq: u16,
     /// Plan time at the segment start (ns).
     pub start_ns: i64,
-    /// Duration h (µs): 104 bytes a queue slot, not 120 with h in ns and
+    /// Duration h (µs): 112 bytes a queue slot, not 128 with h in ns and
     /// 1/h² and 1/h³ stored.
     pub duration_us: u32,
     /// 1/h (s⁻¹).
@@ -28,6 +28,9 @@ pub struct Seg {
     /// The drive's own stop ramps for it, controlled and quick (µs;
     /// `Maxima::ramps_us`, set on the receive side).
     pub ramps_us: (u32, u32),
+    /// Its own ramps for a stop from σ ≤ 1, controlled and quick (µs;
+    /// `Maxima::ramps_and_at_unit_us`): what a dated stop is held to.
+    pub unit_ramps_us: (u32, u32),
 }
 
 impl Seg {
@@ -42,6 +45,7 @@ impl Seg {
             last: w.flags & FLAG_LAST != 0,
             crc: w.body_crc(),
             ramps_us: (0, 0),
+            unit_ramps_us: (0, 0),
         }
     }
 
@@ -102,7 +106,7 @@ pub fn scale(m: &JointMotion<f32>, sigma: f32, sigma_d: f32, sigma_dd: f32) -> J
 #[cfg(test)]
 mod tests {
     #[test]
-    fn a_queue_slot_is_104_bytes() {
-        assert_eq!(core::mem::size_of::<super::Seg>(), 104);
+    fn a_queue_slot_is_112_bytes() {
+        assert_eq!(core::mem::size_of::<super::Seg>(), 112);
     }
 }

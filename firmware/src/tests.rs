@@ -658,6 +658,75 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
     }
 }
 
+/// With an override cap above 1, a dated stop from σ = 1 is held to the
+/// segments' ramps for stops from σ ≤ 1, shorter than their ramps for
+/// every transition up to the cap; from σ above 1 it runs the full ramp.
+#[test]
+fn a_dated_stop_is_held_to_the_ramps_of_stops_from_unit_sigma() {
+    use crate::ceilings::Maxima;
+    use crate::segment::Seg;
+    let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
+    let rig = || {
+        let mut r = Rig::with_stop_time(0.05);
+        (r.cfg.max_jerk, r.cfg.ceiling_jerk, r.cfg.override_cap) = (5.0, 8.0, 1.5);
+        r
+    };
+    // The first two segments' own ramps: for every transition, for stops
+    // from σ ≤ 1.
+    let (mut cap_us, mut unit_us) = (0, 0);
+    let cfg = rig().cfg;
+    for w in &segs[..2] {
+        let [full, at_unit] = Maxima::of(&Seg::from_wire(w, 0))
+            .ramps_and_at_unit_us(&cfg)
+            .unwrap();
+        cap_us = cap_us.max(full.0);
+        unit_us = unit_us.max(at_unit.0);
+    }
+    assert!(
+        unit_us * 10 < cap_us * 9,
+        "{unit_us} µs against {cap_us} µs"
+    );
+    let stop_with = |dated_100us: u16, override_permille: u16| {
+        let mut r = Rig::loaded_with(rig(), &segs);
+        let full = r.node.drive.queue_ramps_ns().0;
+        r.start();
+        r.run(50);
+        if override_permille != 1000 {
+            let a = r.command_with(CommandCode::Override, 0, override_permille, 0);
+            assert_eq!(a.map(|a| a.0), Some(0));
+        }
+        // Past the override's ramp, still in the second segment.
+        r.run(600);
+        assert_eq!(r.node.state(), State::Running);
+        assert!(!r.node.drive.scaling().in_transition());
+        let t = r.command_with(CommandCode::Stop, 0, dated_100us, 0);
+        assert_eq!(t.map(|a| a.0), Some(0));
+        let mut ms = 0;
+        while r.node.state() == State::Stopping && ms < 10_000 {
+            r.tick();
+            ms += 1;
+        }
+        assert_eq!(r.node.state(), State::Idle);
+        (ms as i64, full / 1_000_000, r.max_stop_jerk)
+    };
+    let unit = unit_us.div_ceil(100) as u16;
+    let (ms, full_ms, jerk) = stop_with(unit, 1000);
+    std::eprintln!(
+        "ramps of the first segments: {cap_us} µs up to the cap, {unit_us} µs from σ ≤ 1; a stop dated {unit} × 100 µs took {ms} ms, peak jerk {jerk:.3} m/s³"
+    );
+    assert!((ms - unit as i64 / 10).abs() <= 2, "{ms} ms against {unit}");
+    assert!(jerk <= 8.0, "{jerk}");
+    // Shorter than that, or at σ = 1.05: the full ramp (at σ = 1.05 it
+    // lasts T·1.05).
+    let (ms, _, _) = stop_with(unit - 5, 1000);
+    assert!((ms - full_ms).abs() <= 2, "{ms} ms against {full_ms}");
+    let (ms, _, _) = stop_with(unit, 1050);
+    assert!(
+        (ms - full_ms * 105 / 100).abs() <= 2,
+        "{ms} ms against {full_ms}·1.05"
+    );
+}
+
 #[test]
 fn commanded_stop_feed_hold_resume_and_emergencies() {
     let segs = segments(4, 0.3);

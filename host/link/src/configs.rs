@@ -289,17 +289,17 @@ mod tests {
     }
 
     /// The ramp for the path ahead that stops carry (session/path_ramps.rs
-    /// with its ±20 ms margin; here without): at each
-    /// of 400 instants of the committed test plans, the largest of the
-    /// drives' own per-segment ramps over the segments a stop from there
-    /// can pass through (those overlapping the next T_s/2 of plan time at
-    /// σ = 1, which the Underrun rule makes every node hold), against the
+    /// with its ±20 ms margin; here without): at each of 400 instants of
+    /// the committed test plans, the largest of the drives' own
+    /// per-segment ramps for a stop from σ ≤ 1 over the segments a stop
+    /// from there can pass through (those overlapping the next T_s/2 of
+    /// plan time at σ = 1, which the Underrun rule makes every node hold), against the
     /// configured T_s; and how many segments end within 100 ms of plan
     /// time (`APPLY_LATE_MAX_US`), the ones a late node may already have
     /// dropped (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
     #[test]
     fn stop_ramp_for_the_path_ahead() {
-        use triquint_shared::protocol::segment_maxima::wire_ramps;
+        use triquint_shared::protocol::segment_maxima::wire_stop_ramps_at_unit;
         let s = DriveSettings::default();
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
             let plan = committed_plan(name);
@@ -314,7 +314,7 @@ mod tests {
                 .unwrap()
                 .iter()
                 .map(|w| {
-                    let (r, _) = wire_ramps(w, jl, ceiling, cap).unwrap();
+                    let (r, _) = wire_stop_ramps_at_unit(w, jl, ceiling, cap).unwrap();
                     let end = start + w.duration_us as f64 * 1e-6;
                     let row = (start, end, r as f64);
                     start = end;

@@ -5,7 +5,7 @@
 //! never shorter than a drive's.
 
 use super::WireSegment;
-use super::stop_ramp::segment_ramps;
+use super::stop_ramp::{segment_ramps, segment_ramps_and_at_unit};
 
 /// Bisection steps on u ∈ [0, 1]: f32's 24-bit mantissa.
 const BISECT_STEPS: usize = 24;
@@ -101,6 +101,18 @@ pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
 pub fn wire_ramps(w: &WireSegment, jerk_limit: f32, ceiling: f32, cap: f32) -> Option<(f32, f32)> {
     let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
     segment_ramps(v, a, j, jerk_limit, ceiling, cap)
+}
+
+/// A wire segment's own ramps for a stop from σ ≤ 1 (controlled, quick;
+/// s), as a drive computes them for it (`segment_ramps_and_at_unit`).
+pub fn wire_stop_ramps_at_unit(
+    w: &WireSegment,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+) -> Option<(f32, f32)> {
+    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
+    segment_ramps_and_at_unit(v, a, j, jerk_limit, ceiling, cap).map(|(_, at_unit)| at_unit)
 }
 
 /// The controlled and quick stop ramps (s) the drives need for the whole

@@ -231,46 +231,87 @@ fn raise([fixed, b, c]: [f32; 3], budget: f32, tk: &mut Ramp) -> Option<()> {
 /// to [`MAX_RAMP_S`] does (the segment's own jerk at the cap leaves no
 /// room) or an input is not a finite number ≥ 0.
 pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
-    let ok = |x: f32| x.is_finite() && x >= 0.0;
-    if !(ok(v) && ok(a) && ok(j) && budgets.iter().all(|b| ok(*b)) && ok(cap) && cap >= 1.0) {
+    segment_ramp_and_at_unit(v, a, j, budgets, cap).map(|[full, _]| full)
+}
+
+/// [`segment_ramp`] and, in the same pass, the ramps with which a stop
+/// (to σ = 0) from a constant σ ≤ 1 keeps the joint jerk within each of
+/// `budgets`: the same bound on the one band Δσ = 1 from σ = 1, which
+/// bounds every stop from σ₀ ≤ 1 term by term (σ ≤ 1 − S, |σ̇| ≤ S′/T and
+/// |σ̈| = |S″|/T² at ρ = √σ₀). That band's nodes are each below the
+/// cap's band holding Δσ = 1, so its ramp is never longer, and raising
+/// from it gives [`segment_ramp`]'s bit for bit. `[full, at_unit]`.
+pub fn segment_ramp_and_at_unit(
+    v: f32,
+    a: f32,
+    j: f32,
+    budgets: [f32; 2],
+    cap: f32,
+) -> Option<[[f32; 2]; 2]> {
+    if !inputs_ok(v, a, j, budgets, cap) {
         return None;
     }
     let ds_n = COARSE_DS_CELLS as f32;
-    let slack = RHO_SLACK as f32;
     let t0 = MIN_RAMP_S as f32;
     let mut t: [Ramp; 2] = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
+    raise_band([v, a, j], budgets, 1.0, 1.0, 1.0, &mut t)?;
+    let at_unit = t;
     // The full stops first: they need the longest ramps, so later cells
     // seldom raise it (a raise costs a division and a square root).
     for i in (0..COARSE_DS_CELLS).rev() {
         let d0 = cap * i as f32 / ds_n;
         let d1 = cap * (i + 1) as f32 / ds_n;
-        // |σ̇|·T ≤ S′·m1, |σ̈|·T² ≤ |S″|·m2 (m1 grows with Δσ, m2 falls).
-        let m1 = slack * sqrt_f32(d1).min(1.0);
-        let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
-        let (am1, vm2) = (3.0 * a * m1, v * m2);
-        // On this band F ≤ j·g³ + am1·g·S′/T + vm2·|S″|/T², g = cap − d0·S
-        // (0 ≤ g ≤ cap). Its second derivatives in u, term by term:
-        // (g³)″ = 6g·g′² + 3g²·g″, (g·S′)″ = g·S‴ − 3·d0·S′S″, |S″|″ = ±S⁗.
-        let r = [
-            j * (6.0 * cap * d0 * d0 * S1_MAX * S1_MAX + 3.0 * cap * cap * d0 * S2_MAX),
-            am1 * (cap * S3_MAX + 3.0 * d0 * S1S2_MAX),
-            vm2 * S4_MAX,
-        ]
-        .map(|x| x * INTERPOLATION);
-        for [s, s1, s2] in U_NODES {
-            let sigma = cap - d0 * s;
-            let node = [
-                j * sigma * sigma * sigma + r[0],
-                am1 * sigma * s1 + r[1],
-                vm2 * s2 + r[2],
-            ];
-            for (budget, tk) in budgets.iter().zip(t.iter_mut()) {
-                raise(node, *budget, tk)?;
-            }
+        raise_band([v, a, j], budgets, cap, d0, d1, &mut t)?;
+    }
+    let seconds = |t: [Ramp; 2]| t.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    let full = seconds(t);
+    full.iter()
+        .all(|x| *x <= MAX_RAMP_S)
+        .then_some([full, seconds(at_unit)])
+}
+
+fn inputs_ok(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> bool {
+    let ok = |x: f32| x.is_finite() && x >= 0.0;
+    ok(v) && ok(a) && ok(j) && budgets.iter().all(|b| ok(*b)) && ok(cap) && cap >= 1.0
+}
+
+/// Raises `t` to keep F within `budgets` on the band Δσ ∈ [d0, d1] of
+/// transitions from σ ≤ `cap`; `None` when the segment's own jerk leaves
+/// no room.
+fn raise_band(
+    [v, a, j]: [f32; 3],
+    budgets: [f32; 2],
+    cap: f32,
+    d0: f32,
+    d1: f32,
+    t: &mut [Ramp; 2],
+) -> Option<()> {
+    let slack = RHO_SLACK as f32;
+    // |σ̇|·T ≤ S′·m1, |σ̈|·T² ≤ |S″|·m2 (m1 grows with Δσ, m2 falls).
+    let m1 = slack * sqrt_f32(d1).min(1.0);
+    let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
+    let (am1, vm2) = (3.0 * a * m1, v * m2);
+    // On this band F ≤ j·g³ + am1·g·S′/T + vm2·|S″|/T², g = cap − d0·S
+    // (0 ≤ g ≤ cap). Its second derivatives in u, term by term:
+    // (g³)″ = 6g·g′² + 3g²·g″, (g·S′)″ = g·S‴ − 3·d0·S′S″, |S″|″ = ±S⁗.
+    let r = [
+        j * (6.0 * cap * d0 * d0 * S1_MAX * S1_MAX + 3.0 * cap * cap * d0 * S2_MAX),
+        am1 * (cap * S3_MAX + 3.0 * d0 * S1S2_MAX),
+        vm2 * S4_MAX,
+    ]
+    .map(|x| x * INTERPOLATION);
+    for [s, s1, s2] in U_NODES {
+        let sigma = cap - d0 * s;
+        let node = [
+            j * sigma * sigma * sigma + r[0],
+            am1 * sigma * s1 + r[1],
+            vm2 * s2 + r[2],
+        ];
+        for (budget, tk) in budgets.iter().zip(t.iter_mut()) {
+            raise(node, *budget, tk)?;
         }
     }
-    let out = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
-    out.iter().all(|x| *x <= MAX_RAMP_S).then_some(out)
+    Some(())
 }
 
 /// The controlled and quick stop ramps (s) of a segment with maxima `v`,
@@ -284,8 +325,23 @@ pub fn segment_ramps(
     ceiling: f32,
     cap: f32,
 ) -> Option<(f32, f32)> {
-    let [s, q] = segment_ramp(v, a, j, budgets(j, jerk_limit, ceiling, cap), cap)?;
-    Some((s, q))
+    segment_ramps_and_at_unit(v, a, j, jerk_limit, ceiling, cap).map(|(full, _)| full)
+}
+
+/// [`segment_ramps`] and the segment's ramps for a stop from σ ≤ 1 with
+/// the same budgets ([`segment_ramp_and_at_unit`]): what a stop carrying a
+/// ramp for the path ahead is held to. `(full, at_unit)`, each
+/// (controlled, quick).
+pub fn segment_ramps_and_at_unit(
+    v: f32,
+    a: f32,
+    j: f32,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+) -> Option<((f32, f32), (f32, f32))> {
+    let [f, u] = segment_ramp_and_at_unit(v, a, j, budgets(j, jerk_limit, ceiling, cap), cap)?;
+    Some(((f[0], f[1]), (u[0], u[1])))
 }
 
 /// The stop ramp by the bound that takes every peak at once: the joint
@@ -419,6 +475,57 @@ mod tests {
             }
         }
         assert!(checked > 150, "{checked}");
+    }
+
+    /// The largest F over the stops (to σ = 0) a drive may run from a
+    /// constant σ₀ ≤ 1 at ramp `t` (ρ = √σ₀), sampled densely.
+    fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
+        let mut worst = 0.0f64;
+        for i in 1..=100 {
+            let s0 = i as f64 / 100.0;
+            let tt = t * libm::sqrt(s0);
+            for k in 0..=2000 {
+                let u = k as f64 / 2000.0;
+                let sigma = s0 * (1.0 - s(u));
+                let sd = s0 * s1(u) / tt;
+                let sdd = s0 * s2(u) / (tt * tt);
+                worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
+            }
+        }
+        worst
+    }
+
+    /// The ramp for stops from σ ≤ 1 keeps each within the budget, is never
+    /// longer than the ramp for every transition up to the cap, and is
+    /// shorter where the cap is above 1.
+    #[test]
+    fn the_stop_ramp_at_unit_is_a_bound_and_never_longer() {
+        let (mut checked, mut shorter) = (0, 0);
+        for v in [0.02, 0.5, 2.0] {
+            for a in [0.1, 1.2, 6.0] {
+                for j in [0.0, 1.0, 4.0] {
+                    for cap in [1.0, 1.4, 3.0] {
+                        let bs = budgets(j as f32, 5.0, 40.0, cap as f32);
+                        let (vf, af, jf) = (v as f32, a as f32, j as f32);
+                        let Some([full, unit]) =
+                            segment_ramp_and_at_unit(vf, af, jf, bs, cap as f32)
+                        else {
+                            continue;
+                        };
+                        // Raising from the ramp at σ ≤ 1 changes nothing.
+                        assert_eq!(segment_ramp(vf, af, jf, bs, cap as f32), Some(full));
+                        for ((t, b), f) in unit.iter().zip(bs).zip(full) {
+                            let w = worst_stop_jerk_at_most_unit(v, a, j, *t as f64);
+                            assert!(w <= b as f64 * (1.0 + 1e-6), "{v} {a} {j} {cap}: {w} > {b}");
+                            assert!(*t <= f, "{v} {a} {j} {cap}: {t} > {f}");
+                            shorter += usize::from(cap > 1.0 && *t < 0.99 * f);
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked >= 80 && shorter > 40, "{checked} {shorter}");
     }
 
     #[test]

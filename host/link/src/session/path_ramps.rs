@@ -1,12 +1,13 @@
 //! The stop ramp a Stop, QuickStop or FeedHold carries for the path ahead
 //! of its instant (docs/protocol.md, "A ramp for the path ahead"): the
-//! largest of the drives' own ramps (the same f32 rule on the same wire
-//! segments, `segment_ramps`) over the segments a stop from there can pass
-//! through. The drives run it only if it covers the ramps of the segments
-//! they hold in that window, so a wrong estimate of where the plan is
+//! largest of the drives' own ramps for a stop from σ ≤ 1 (the same f32
+//! rule on the same wire segments, `segment_ramps_and_at_unit`) over the
+//! segments a stop from there can pass through. The drives run it only at
+//! σ ≤ 1 and only if it covers those ramps of the segments they hold in
+//! that window, so a wrong estimate of where the plan is, or a σ above 1,
 //! costs the shorter stop, never a harder one.
 
-use triquint_shared::protocol::segment_maxima::wire_ramps;
+use triquint_shared::protocol::segment_maxima::{wire_ramps, wire_stop_ramps_at_unit};
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
 /// Room on each side of the host's estimate of the plan time (µs): its
@@ -20,12 +21,10 @@ const UNIT_US: u64 = 100;
 #[derive(Clone, Debug)]
 pub(crate) struct PathRamps {
     /// Each segment's plan-time span (µs) and its own controlled and quick
-    /// ramps (µs).
+    /// ramps for a stop from σ ≤ 1 (µs).
     segments: Vec<(f64, f64, [f64; 2])>,
     /// The ramps every transition runs with (µs): the configured ones.
     full_us: [f64; 2],
-    /// The override cap σ the stop distance is sized for.
-    cap: f64,
 }
 
 impl PathRamps {
@@ -35,12 +34,16 @@ impl PathRamps {
         let rows = segments
             .iter()
             .map(|w| {
-                let ramps = wire_ramps(w, c.max_jerk, c.ceiling_jerk, c.override_cap)
-                    .map_or([f64::INFINITY; 2], |(s, q)| {
+                let us = |r: Option<(f32, f32)>| {
+                    r.map_or([f64::INFINITY; 2], |(s, q)| {
                         [s as f64 * 1e6, q as f64 * 1e6]
-                    });
+                    })
+                };
+                let (jl, ceiling, cap) = (c.max_jerk, c.ceiling_jerk, c.override_cap);
+                let ramps = us(wire_ramps(w, jl, ceiling, cap));
+                let at_unit = us(wire_stop_ramps_at_unit(w, jl, ceiling, cap));
                 let end = start + w.duration_us as f64;
-                let row = (start, end, ramps);
+                let row = (start, end, at_unit);
                 start = end;
                 full_us = [full_us[0].max(ramps[0]), full_us[1].max(ramps[1])];
                 row
@@ -49,20 +52,20 @@ impl PathRamps {
         Self {
             segments: rows,
             full_us,
-            cap: (c.override_cap as f64).max(1.0),
         }
     }
 
     /// The command's ramp field (100 µs units, rounded up) for a stop
-    /// (`quick`: the quick stop's) at estimated plan time `plan_us`: the
-    /// largest own ramp over the segments a stop from within
-    /// [`ESTIMATE_MARGIN_US`] of it can pass through at σ up to the cap;
-    /// 0 (the drives' full ramp) when that is not shorter.
+    /// (`quick`: the quick stop's) at estimated plan time `plan_us` and σ
+    /// ≤ 1: the largest own ramp for such a stop over the segments a stop
+    /// from within [`ESTIMATE_MARGIN_US`] of it can pass through; 0 (the
+    /// drives' full ramp) when that is not shorter.
     pub fn dated(&self, plan_us: f64, quick: bool) -> u16 {
         let k = usize::from(quick);
         let full = self.full_us[k];
         let lo = plan_us - ESTIMATE_MARGIN_US;
-        let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * full * self.cap * self.cap;
+        // A stop from σ ≤ 1 covers at most half its ramp of plan time.
+        let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * full;
         let ahead = self
             .segments
             .iter()
@@ -111,5 +114,159 @@ mod tests {
             }
         }
         assert!(shorter > 0);
+    }
+
+    /// The shortest time in which one joint at speed `v` and acceleration
+    /// `a` can come to rest (speed and acceleration 0) with |jerk| ≤ `b`
+    /// and no other limit: jerk −b then +b (or the mirror), closed form.
+    fn one_joint_stop_s(v: f64, a: f64, b: f64) -> f64 {
+        // Jerk −b for t1 then +b for t2: a1 = a − b·t1 ≤ 0 ends it at rest
+        // when a1² = (a² + 2bv)/2, t1 = (a − a1)/b and t2 = −a1/b.
+        let down = |v: f64, a: f64| {
+            let sq = 0.5 * (a * a + 2.0 * b * v);
+            let a1 = -sq.max(0.0).sqrt();
+            (sq >= 0.0 && a >= a1).then(|| (a - 2.0 * a1) / b)
+        };
+        let t = [down(v, a), down(-v, -a)];
+        t.into_iter().flatten().fold(f64::INFINITY, f64::min)
+    }
+
+    #[test]
+    fn one_joint_stops_in_closed_form() {
+        // From 0.5 m/s at rest acceleration with jerk 5: 2·√(v/b).
+        assert!((one_joint_stop_s(0.5, 0.0, 5.0) - 2.0 * 0.1f64.sqrt()).abs() < 1e-12);
+        // Already decelerating at the rate that ends at rest: one phase.
+        assert!((one_joint_stop_s(0.1, -1.0, 5.0) - 0.2).abs() < 1e-12);
+        assert_eq!(one_joint_stop_s(0.0, 0.0, 5.0), 0.0);
+        assert!((one_joint_stop_s(-0.5, 0.0, 5.0) - one_joint_stop_s(0.5, 0.0, 5.0)).abs() < 1e-15);
+    }
+
+    /// A stop from σ = 1 at plan time `t0` (s) that lasts `t` (s) with the
+    /// shape `rate(u)` = (S′(u), S″(u)), σ = 1 − S(u): the largest joint
+    /// |jerk| along it, q‴σ³ + 3q″σσ̇ + q′σ̈ with the signs as they are,
+    /// sampled on 1 000 steps.
+    fn stop_peak_jerk(
+        p: &triquint_shared::plan::Plan,
+        t0: f64,
+        t: f64,
+        rate: impl Fn(f64) -> (f64, f64),
+    ) -> f64 {
+        let steps = 1000;
+        let dt = t / steps as f64;
+        let (mut s, mut sigma, mut peak) = (t0, 1.0f64, 0.0f64);
+        for k in 0..=steps {
+            let u = k as f64 / steps as f64;
+            let (s1, s2) = rate(u);
+            let (sd, sdd) = (-s1 / t, -s2 / (t * t));
+            let Some(js) = p.at(s.min(p.duration())) else {
+                break;
+            };
+            for i in 0..3 {
+                let j = js.jerk[i] * sigma.powi(3) + 3.0 * js.a[i] * sigma * sd + js.v[i] * sdd;
+                peak = peak.max(j.abs());
+            }
+            // Midpoint rule for σ and the plan time it advances.
+            let (s1m, _) = rate((u + 0.5 / steps as f64).min(1.0));
+            let sigma_mid = sigma - 0.5 * dt * s1m / t;
+            s += sigma_mid * dt;
+            sigma = (sigma - dt * s1m / t).max(0.0);
+        }
+        peak
+    }
+
+    /// The shortest stop of a shape within jerk `b` from `t0` (bisection on
+    /// its length; `None` if none up to 4 s).
+    fn shortest_of_shape(
+        p: &triquint_shared::plan::Plan,
+        t0: f64,
+        b: f64,
+        rate: &dyn Fn(f64) -> (f64, f64),
+    ) -> Option<f64> {
+        let (mut lo, mut hi) = (0.01, 4.0);
+        if stop_peak_jerk(p, t0, hi, rate) > b {
+            return None;
+        }
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if stop_peak_jerk(p, t0, mid, rate) > b {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(hi)
+    }
+
+    /// Where the stop's length goes, at 40 instants of each committed plan
+    /// (σ = 1, the plan's largest budget b): the ramp for the path ahead;
+    /// the smoothstep sized for that instant with the jerk's true signs
+    /// (the best any sizing of this shape can do); σ̈ bang-bang (−c then
+    /// +c′, switching at the best of nine fractions), sized the same way;
+    /// and the lower bound on any stop (`--nocapture`).
+    #[test]
+    fn where_the_stop_length_goes() {
+        use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
+        use triquint_shared::protocol::stop_ramp::budgets;
+        let smooth = |u: f64| {
+            (
+                30.0 * u * u * (1.0 - u) * (1.0 - u),
+                60.0 * u * (1.0 - u) * (1.0 - 2.0 * u),
+            )
+        };
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let p = committed_plan(name);
+            let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
+            let c = &configs.nodes[0];
+            let w = p.wire_segments().unwrap();
+            let r = PathRamps::new(&w, c);
+            let b = w
+                .iter()
+                .map(|s| {
+                    let [_, _, j] = maxima(&s.normalised_f32(), inv_h(s.duration_us));
+                    budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0]
+                })
+                .fold(0.0f32, f32::max) as f64;
+            let total = p.duration();
+            let n = 40;
+            let mut sums = [0.0f64; 4];
+            let mut counted = 0;
+            for i in 1..n {
+                let t0 = total * i as f64 / n as f64;
+                let js = p.at(t0).unwrap();
+                let bound = (0..3)
+                    .map(|k| one_joint_stop_s(js.v[k], js.a[k], b))
+                    .fold(0.0, f64::max);
+                if bound < 1e-3 {
+                    continue;
+                }
+                let dated = match r.dated(t0 * 1e6, false) {
+                    0 => r.full_us[0],
+                    u => u as f64 * UNIT_US as f64,
+                } * 1e-6;
+                let best_smooth = shortest_of_shape(&p, t0, b, &smooth).unwrap();
+                let best_bang = (1..10)
+                    .filter_map(|k| {
+                        let l = k as f64 / 10.0;
+                        let bang = move |u: f64| {
+                            if u < l {
+                                (2.0 * u / l, 2.0 / l)
+                            } else {
+                                (2.0 * (1.0 - u) / (1.0 - l), -2.0 / (1.0 - l))
+                            }
+                        };
+                        shortest_of_shape(&p, t0, b, &bang)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                for (sum, x) in sums.iter_mut().zip([dated, best_smooth, best_bang, bound]) {
+                    *sum += x;
+                }
+                counted += 1;
+            }
+            let m = sums.map(|x| x / counted as f64);
+            eprintln!(
+                "{name} (b {b:.3} m/s³, {counted} instants), mean stop: path-ahead ramp {:.3} s, smoothstep sized for the instant {:.3} s, bang-bang sized for the instant {:.3} s, lower bound {:.3} s",
+                m[0], m[1], m[2], m[3]
+            );
+        }
     }
 }
