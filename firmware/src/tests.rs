@@ -222,6 +222,20 @@ impl Rig {
     }
 
     /// [`Rig::command_to`] with `arg2`.
+    /// A Stop carrying `dated_100us` while Running: the ticks (ms) from it
+    /// to Idle.
+    fn dated_stop_ms(&mut self, dated_100us: u16) -> i64 {
+        let t = self.command_with(CommandCode::Stop, 0, dated_100us, 0);
+        assert_eq!(t.map(|a| a.0), Some(0));
+        let mut ms = 0;
+        while self.node.state() == State::Stopping && ms < 10_000 {
+            self.tick();
+            ms += 1;
+        }
+        assert_eq!(self.node.state(), State::Idle);
+        ms
+    }
+
     fn command_with(&mut self, c: CommandCode, arg: u32, arg2: u16, node: u8) -> Option<(u8, u32)> {
         let n = self.sent.len();
         self.token = self.token.wrapping_add(1);
@@ -622,14 +636,7 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
         r.start();
         r.run(150);
         assert_eq!(r.node.state(), State::Running);
-        let t = r.command_with(CommandCode::Stop, 0, dated_100us, 0);
-        assert_eq!(t.map(|a| a.0), Some(0));
-        let mut ms = 0;
-        while r.node.state() == State::Stopping && ms < 10_000 {
-            r.tick();
-            ms += 1;
-        }
-        assert_eq!(r.node.state(), State::Idle);
+        let ms = r.dated_stop_ms(dated_100us);
         (ms, full, r.max_stop_jerk)
     };
     let covering = ((gentle + 99_999) / 100_000) as u16;
@@ -641,10 +648,7 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
     );
     assert!(gentle < full / 2, "{gentle} against {full}");
     let dated_ms = covering as i64 / 10;
-    assert!(
-        (ms as i64 - dated_ms).abs() <= 2,
-        "{ms} ms against {dated_ms}"
-    );
+    assert!((ms - dated_ms).abs() <= 2, "{ms} ms against {dated_ms}");
     assert!(jerk <= 8.0, "{jerk}");
     // Too short for the segment it begins in, absent, or not shorter than
     // the full ramp: the full ramp.
@@ -652,7 +656,7 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
     for dated in [covering / 2, 0, (full / 100_000 + 1) as u16] {
         let (ms, _, _) = stop_with(dated);
         assert!(
-            (ms as i64 - full_ms).abs() <= 2,
+            (ms - full_ms).abs() <= 2,
             "dated {dated}: {ms} ms against {full_ms}"
         );
     }
@@ -699,15 +703,8 @@ fn a_dated_stop_is_held_to_the_ramps_of_stops_from_unit_sigma() {
         r.run(600);
         assert_eq!(r.node.state(), State::Running);
         assert!(!r.node.drive.scaling().in_transition());
-        let t = r.command_with(CommandCode::Stop, 0, dated_100us, 0);
-        assert_eq!(t.map(|a| a.0), Some(0));
-        let mut ms = 0;
-        while r.node.state() == State::Stopping && ms < 10_000 {
-            r.tick();
-            ms += 1;
-        }
-        assert_eq!(r.node.state(), State::Idle);
-        (ms as i64, full / 1_000_000, r.max_stop_jerk)
+        let ms = r.dated_stop_ms(dated_100us);
+        (ms, full / 1_000_000, r.max_stop_jerk)
     };
     let unit = unit_us.div_ceil(100) as u16;
     let (ms, full_ms, jerk) = stop_with(unit, 1000);
