@@ -40,3 +40,68 @@ pub const PWM_HZ: u32 = 20_000;
 /// CAN bit rates (bit/s): arbitration and CAN-FD data phase.
 pub const CAN_BITRATE: u32 = 1_000_000;
 pub const CAN_FD_BITRATE: u32 = 5_000_000;
+/// The FDCAN kernel clock: PLL Q of `clocks()` in main.rs.
+pub const FDCAN_CLOCK_HZ: u32 = 85_000_000;
+
+/// A CAN bit in time quanta of the kernel clock over `prescaler`: the
+/// sync quantum, `seg1` before the sample point, `seg2` after it.
+pub struct BitTiming {
+    pub prescaler: u16,
+    pub seg1: u8,
+    pub seg2: u8,
+    pub sjw: u8,
+}
+
+impl BitTiming {
+    /// Kernel clock periods a bit.
+    pub const fn periods(&self) -> u32 {
+        self.prescaler as u32 * (1 + self.seg1 as u32 + self.seg2 as u32)
+    }
+
+    /// The bit rate from `clock_hz`, if exact.
+    pub const fn bitrate(&self, clock_hz: u32) -> Option<u32> {
+        if clock_hz.is_multiple_of(self.periods()) {
+            Some(clock_hz / self.periods())
+        } else {
+            None
+        }
+    }
+
+    /// Sample point (per mille of the bit).
+    pub const fn sample_permille(&self) -> u32 {
+        1000 * (1 + self.seg1 as u32) / (1 + self.seg1 as u32 + self.seg2 as u32)
+    }
+}
+
+/// Arbitration: 85 quanta a bit, sampled at 80 %. Written out because
+/// embassy's search for a timing (at most 10 quanta a bit at 1 Mbit/s and
+/// above) finds none for 5 Mbit/s from 85 MHz (17 quanta, a prime), and
+/// `set_fd_data_bitrate` would panic at start-up. One prescaler for both
+/// phases, as transceiver delay compensation wants.
+pub const CAN_NOMINAL_TIMING: BitTiming = BitTiming {
+    prescaler: 1,
+    seg1: 67,
+    seg2: 17,
+    sjw: 17,
+};
+/// Data phase: 17 quanta a bit, sampled at 82 %; SJW below seg2.
+pub const CAN_DATA_TIMING: BitTiming = BitTiming {
+    prescaler: 1,
+    seg1: 13,
+    seg2: 3,
+    sjw: 2,
+};
+const _: () = {
+    let (n, d) = (&CAN_NOMINAL_TIMING, &CAN_DATA_TIMING);
+    assert!(matches!(n.bitrate(FDCAN_CLOCK_HZ), Some(CAN_BITRATE)));
+    assert!(matches!(d.bitrate(FDCAN_CLOCK_HZ), Some(CAN_FD_BITRATE)));
+    // The FDCAN's fields: nominal seg1, seg2, SJW 1–128 (embassy's range),
+    // data seg1 1–31, seg2 1–15, SJW below seg2, prescalers 1–31.
+    assert!(n.seg1 >= 1 && n.seg1 <= 128 && n.seg2 >= 1 && n.seg2 <= 128);
+    assert!(n.sjw >= 1 && n.sjw <= n.seg2);
+    assert!(d.seg1 >= 1 && d.seg1 <= 31 && d.seg2 >= 1 && d.seg2 <= 15);
+    assert!(d.sjw >= 1 && d.sjw < d.seg2);
+    assert!(n.prescaler == d.prescaler && d.prescaler >= 1 && d.prescaler <= 31);
+    assert!(n.sample_permille() >= 750 && n.sample_permille() <= 875);
+    assert!(d.sample_permille() >= 700 && d.sample_permille() <= 875);
+};

@@ -131,8 +131,30 @@ pub async fn transmit(mut tx: CanTx<'static>, mut from_tick: Consumer<'static, F
     }
 }
 
-/// Bit rates and CAN-FD with bit-rate switch.
+/// Bit rates and CAN-FD with bit-rate switch, from the board's timings
+/// (`board::CAN_NOMINAL_TIMING`, `board::CAN_DATA_TIMING`).
 pub fn configure(c: &mut can::CanConfigurator<'static>) {
-    c.set_bitrate(crate::board::CAN_BITRATE);
-    c.set_fd_data_bitrate(crate::board::CAN_FD_BITRATE, true);
+    use crate::board::{CAN_DATA_TIMING as D, CAN_NOMINAL_TIMING as N};
+    use can::config::{DataBitTiming, FrameTransmissionConfig, NominalBitTiming};
+    use core::num::{NonZeroU8, NonZeroU16};
+    // Non-zero by the board's compile-time checks.
+    let u8nz = |x: u8| NonZeroU8::new(x).unwrap_or(NonZeroU8::MIN);
+    let u16nz = |x: u16| NonZeroU16::new(x).unwrap_or(NonZeroU16::MIN);
+    let mut config = c
+        .config()
+        .set_nominal_bit_timing(NominalBitTiming {
+            prescaler: u16nz(N.prescaler),
+            seg1: u8nz(N.seg1),
+            seg2: u8nz(N.seg2),
+            sync_jump_width: u8nz(N.sjw),
+        })
+        .set_data_bit_timing(DataBitTiming {
+            transceiver_delay_compensation: true,
+            prescaler: u16nz(D.prescaler),
+            seg1: u8nz(D.seg1),
+            seg2: u8nz(D.seg2),
+            sync_jump_width: u8nz(D.sjw),
+        });
+    config.frame_transmit = FrameTransmissionConfig::AllowFdCanAndBRS;
+    c.set_config(config);
 }
