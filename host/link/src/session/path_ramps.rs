@@ -1,7 +1,7 @@
 //! The stop ramp a Stop, QuickStop or FeedHold carries for the path ahead
 //! of its instant (docs/protocol.md, "A ramp for the path ahead"): the
 //! largest of the drives' own ramps (the same f32 rule on the same wire
-//! segments, `segment_ramps`) over the segments a stop from there can pass
+//! segments, `wire_ramps`) over the segments a stop from there can pass
 //! through. The drives run it only if it covers the ramps of the segments
 //! they hold in that window, so a wrong estimate of where the plan is
 //! costs the shorter stop, never a harder one.
