@@ -6,54 +6,55 @@
 //! a code naming which.
 
 use triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN;
-use triquint_shared::protocol::segment_maxima::maxima;
-use triquint_shared::protocol::stop_ramp::segment_ramps_and_at_unit;
+use triquint_shared::protocol::segment_maxima::{
+    PieceMaxima, overall, piece_maxima, piece_ramps_and_at_unit,
+};
 use triquint_shared::protocol::{DriveConfig, Reject};
 
 use crate::f32_cast::ramp_us;
 use crate::segment::Seg;
 
 /// Largest |q′|, |q″|, |q‴| over the three joints of a segment (m/s,
-/// m/s², m/s³), exact up to f32 rounding.
+/// m/s², m/s³), exact up to f32 rounding, and each joint's on each piece.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Maxima {
     pub v: f32,
     pub a: f32,
     pub j: f32,
+    pub pieces: PieceMaxima,
 }
 
 impl Maxima {
-    /// Of a queued segment (`segment_maxima::maxima`, the host's too).
+    /// Of a queued segment (`segment_maxima::piece_maxima`, the host's too).
     pub fn of(seg: &Seg) -> Self {
-        let [v, a, j] = maxima(&seg.b, seg.inv_h);
-        Self { v, a, j }
+        let pieces = piece_maxima(&seg.b, seg.inv_h);
+        let [v, a, j] = overall(&pieces);
+        Self { v, a, j, pieces }
     }
 
     /// The drive's own stop ramps for this segment (controlled, quick; µs,
     /// as the configured ramps are rounded): within
     /// the stop budgets of `cfg`'s jerk limit held to its jerk ceiling, at
-    /// its override cap (`stop_ramp::segment_ramps`). None within the
-    /// longest ramp: `StopAboveCeiling`.
+    /// its override cap, over each joint's maxima on each piece
+    /// (`segment_maxima::piece_ramps`). None within the longest ramp:
+    /// `StopAboveCeiling`.
     pub fn ramps_us(&self, cfg: &DriveConfig) -> Result<(u32, u32), Reject> {
         self.ramps_and_at_unit_us(cfg).map(|[full, _]| full)
     }
 
     /// [`Maxima::ramps_us`] and, from the same pass, the segment's own
     /// ramps for a stop from σ ≤ 1 (never longer;
-    /// `stop_ramp::segment_ramps_and_at_unit`): what a stop carrying a
+    /// `segment_maxima::piece_ramps_and_at_unit`): what a stop carrying a
     /// ramp for the path ahead is held to.
     pub fn ramps_and_at_unit_us(&self, cfg: &DriveConfig) -> Result<[(u32, u32); 2], Reject> {
-        let us = |(s, q): (f32, f32)| (ramp_us(s), ramp_us(q));
-        let (full, at_unit) = segment_ramps_and_at_unit(
-            self.v,
-            self.a,
-            self.j,
+        let r = piece_ramps_and_at_unit(
+            &self.pieces,
             cfg.max_jerk,
             cfg.ceiling_jerk,
             cfg.override_cap,
         )
         .ok_or(Reject::StopAboveCeiling)?;
-        Ok([us(full), us(at_unit)])
+        Ok(r.map(|(s, q)| (ramp_us(s), ramp_us(q))))
     }
 
     /// Held to `cfg`'s ceilings (with [`RELATIVE_LIMIT_MARGIN`]):
@@ -146,6 +147,46 @@ mod tests {
                 // Never below the peak (beyond f32 rounding), never above it.
                 assert!(g >= d * (1.0 - 1e-5) - 1e-9, "{g} < {d}");
                 assert!(g <= d * (1.0 + 1e-5) + 1e-9, "{g} > {d}");
+            }
+        }
+    }
+
+    /// Each joint's maxima on each piece are its peaks there: never
+    /// below a sampled value (so every instant of the piece is within
+    /// them), never above the piece's largest beyond f32 rounding.
+    #[test]
+    fn piece_maxima_are_each_joints_peaks_on_each_piece() {
+        use triquint_shared::protocol::segment_maxima::PIECES;
+        let mut rng = ChaCha8Rng::seed_from_u64(35);
+        let n = 4_000;
+        for _ in 0..200 {
+            let b: [[f32; 6]; 3] =
+                core::array::from_fn(|_| core::array::from_fn(|_| rng.random_range(-0.2..0.2)));
+            let s = seg(b, rng.random_range(0.05..2.0));
+            let got = Maxima::of(&s).pieces;
+            let ih = s.inv_h as f64;
+            for (joint, b) in s.b.iter().enumerate() {
+                let b = b.map(|x| x as f64);
+                for p in 0..PIECES {
+                    let mut m = [0.0f64; 3];
+                    for i in p * n / PIECES..=(p + 1) * n / PIECES {
+                        let u = i as f64 / n as f64;
+                        let v = b[1]
+                            + u * (2.0 * b[2]
+                                + u * (3.0 * b[3] + u * (4.0 * b[4] + u * 5.0 * b[5])));
+                        let a = 2.0 * b[2] + u * (6.0 * b[3] + u * (12.0 * b[4] + u * 20.0 * b[5]));
+                        let j = 6.0 * b[3] + u * (24.0 * b[4] + u * 60.0 * b[5]);
+                        m[0] = m[0].max(v.abs() * ih);
+                        m[1] = m[1].max(a.abs() * ih * ih);
+                        m[2] = m[2].max(j.abs() * ih * ih * ih);
+                    }
+                    let g = got[joint * PIECES + p];
+                    for (g, d) in g.iter().zip(m) {
+                        let g = *g as f64;
+                        assert!(g >= d * (1.0 - 1e-5) - 1e-9, "{joint} {p}: {g} < {d}");
+                        assert!(g <= d * (1.0 + 1e-5) + 1e-9, "{joint} {p}: {g} > {d}");
+                    }
+                }
             }
         }
     }

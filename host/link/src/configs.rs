@@ -224,11 +224,22 @@ mod tests {
         tampered.max_abs.jerk = [1e-9; 3];
         assert_eq!(DriveConfigs::for_plan(&tampered, &s).unwrap(), honest);
         // The ramps are sized from the segments' own maxima: no shorter
-        // than a stop from them at σ = 1.
+        // than the drives' own for each segment, and longer than the
+        // floor the tampered summary would give.
+        use triquint_shared::protocol::segment_maxima::wire_ramps;
         let [v, a, j] = largest(&plan).unwrap();
         assert!(j > 0.1 && v > 0.0 && a > 0.0);
-        let from = DriveConfigs::from_maxima(&plan.robot, &plan.limits, &s, v, a, j);
-        assert!(honest.stop_time_s >= from.stop_time_s);
+        let (jl, ceiling) = (plan.limits.jerk.min(s.ceilings.jerk), s.ceilings.jerk);
+        for w in plan.wire_segments().unwrap() {
+            let (own, _) =
+                wire_ramps(&w, jl as f32, ceiling as f32, honest.override_cap as f32).unwrap();
+            assert!(
+                honest.stop_time_s >= own as f64,
+                "{} < {own}",
+                honest.stop_time_s
+            );
+        }
+        assert!(honest.stop_time_s > 0.05, "{}", honest.stop_time_s);
     }
 
     #[test]
@@ -359,12 +370,14 @@ mod tests {
     }
 
     /// What bounds the drives' stop ramp on the committed test plans: the
-    /// per-segment rule now (v, a, j over the whole segment and its three
-    /// joints) against the same f32 node rule over each joint's maxima on
-    /// K pieces of each segment and at each sampled instant, all with the
-    /// segment's own budgets; and a jerk-limited stop from the plan's
-    /// peak joint speed under its acceleration and jerk limits (printed
-    /// with `--nocapture`; docs/protocol.md, "Stop ramp").
+    /// rule now (each joint's maxima on each of the 4 pieces of a
+    /// segment) against the same f32 node rule over one triple per
+    /// segment (v, a, j over the whole segment and its three joints, the
+    /// rule before), over each joint's sampled maxima on K pieces and at
+    /// each sampled instant, all with the segment's own budgets; and a
+    /// jerk-limited stop from the plan's peak joint speed under its
+    /// acceleration and jerk limits (printed with `--nocapture`;
+    /// docs/protocol.md, "Stop ramp").
     #[test]
     fn stop_ramp_by_pieces_and_instants() {
         use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
@@ -379,11 +392,14 @@ mod tests {
             // K = 1, 2, 4, 16 pieces, then every one of 400 instants.
             let ks = [1usize, 2, 4, 16, 400];
             let mut t = [0.0f32; 5];
+            let mut one = 0.0f32;
             let n = 400;
             for w in plan.wire_segments().unwrap() {
                 let b = w.normalised_f32();
                 let ih = inv_h(w.duration_us) as f64;
-                let bs = budgets(maxima(&b, ih as f32)[2], jl, ceiling, cap);
+                let [v, a, j] = maxima(&b, ih as f32);
+                let bs = budgets(j, jl, ceiling, cap);
+                one = one.max(segment_ramp(v, a, j, bs, cap).unwrap()[0]);
                 for c in &b {
                     let c = c.map(|x| x as f64);
                     let at = |i: usize| {
@@ -419,7 +435,8 @@ mod tests {
             };
             let now = c.stop_time_s;
             eprintln!(
-                "{name}: T_s now {now:.3} s; per joint on 1/2/4/16 pieces {:.3}/{:.3}/{:.3}/{:.3} s; per instant {:.3} s (x{:.3}); jerk-limited stop from v {v:.3} m/s {optimal:.3} s (now x{:.2}, per instant x{:.2})",
+                "{name}: T_s now {now:.3} s, by one triple per segment {one:.3} s (x{:.3}); sampled per joint on 1/2/4/16 pieces {:.3}/{:.3}/{:.3}/{:.3} s; per instant {:.3} s (x{:.3}); jerk-limited stop from v {v:.3} m/s {optimal:.3} s (now x{:.2}, per instant x{:.2})",
+                now / one as f64,
                 t[0],
                 t[1],
                 t[2],
@@ -429,9 +446,14 @@ mod tests {
                 now / optimal,
                 t[4] as f64 / optimal
             );
-            // Nested pieces never lengthen the ramp; none beats the
-            // jerk-limited stop.
-            assert!(t[0] as f64 <= now * (1.0 + 1e-6), "{name}");
+            // The exact maxima on 4 pieces are the sampled ones' bound,
+            // never above one triple per segment; nested pieces never
+            // lengthen the ramp; none beats the jerk-limited stop.
+            assert!(t[2] as f64 <= now * (1.0 + 1e-6), "{name}");
+            assert!(
+                now <= one as f64 * (1.0 + 1e-6) && t[0] <= one * (1.0 + 1e-6),
+                "{name}"
+            );
             for k in 2..4 {
                 assert!(t[k] <= t[k - 1] * (1.0 + 1e-6), "{name} {k}");
             }

@@ -5,7 +5,7 @@
 //! never shorter than a drive's.
 
 use super::WireSegment;
-use super::stop_ramp::{segment_ramps, segment_ramps_and_at_unit};
+use super::stop_ramp::{budgets, pieces_ramp_and_at_unit};
 
 /// Bisection steps on u ∈ [0, 1]: f32's 24-bit mantissa.
 const BISECT_STEPS: usize = 24;
@@ -43,6 +43,9 @@ fn root_in(c: &[f32], lo: f32, hi: f32) -> Option<f32> {
 /// The roots in (0, 1) of `c`, given the points (sorted, 0 and 1
 /// included) between which it is monotone, sorted and with 0 and 1: the
 /// points between which its antiderivative is monotone. Returns how many.
+// Out of line, as the stop ramp's helpers: one copy in the drives' flash,
+// which has little room left.
+#[inline(never)]
 fn roots(c: &[f32], pieces: &[f32], out: &mut [f32; 6]) -> usize {
     let inner = pieces.windows(2).filter_map(|w| match *w {
         [lo, hi] => root_in(c, lo, hi),
@@ -61,20 +64,50 @@ fn roots(c: &[f32], pieces: &[f32], out: &mut [f32; 6]) -> usize {
     n
 }
 
-/// Largest |c(u)| over the points.
-fn largest(c: &[f32], points: &[f32]) -> f32 {
-    points.iter().fold(0.0f32, |m, u| m.max(poly(c, *u).abs()))
+/// Pieces of equal length each segment is split into for its stop ramps:
+/// each joint's maxima on each piece bound the joint there.
+pub const PIECES: usize = 4;
+
+/// Each joint's largest |q′|, |q″|, |q‴| on each piece (joint-major).
+pub type PieceMaxima = [[f32; 3]; 3 * PIECES];
+
+/// Raises `out[p]` to the largest |c(u)| on each piece p: over the points
+/// (0, 1 and the points between which c is monotone, sorted) and the
+/// pieces' bounds, each bound counted on both sides.
+fn largest_by_piece(c: &[f32], points: &[f32], out: &mut [f32; PIECES]) {
+    let n = PIECES as f32;
+    for u in points {
+        let p = ((*u * n) as usize).min(PIECES - 1);
+        if let Some(o) = out.get_mut(p) {
+            raise(o, poly(c, *u).abs());
+        }
+    }
+    for k in 1..PIECES {
+        let x = poly(c, k as f32 / n).abs();
+        for o in out.iter_mut().skip(k - 1).take(2) {
+            raise(o, x);
+        }
+    }
 }
 
-/// Largest |q′|, |q″|, |q‴| (m/s, m/s², m/s³) over the three joints of a
-/// segment of normalised coefficients `b` (u = t/h) and 1/h `inv_h`, exact
-/// up to f32 rounding: q‴ is a quadratic, so q″ is monotone between q⁗'s
-/// root and the ends, q′ between q‴'s roots; each derivative peaks at an
-/// end or at a root of the next.
-pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
+/// `m` raised to `x` (a NaN `x` leaves it), inline where `f32::max` is
+/// a library call on the drives.
+fn raise(m: &mut f32, x: f32) {
+    if x > *m {
+        *m = x;
+    }
+}
+
+/// Each joint's largest |q′|, |q″|, |q‴| (m/s, m/s², m/s³) on each of
+/// [`PIECES`] equal pieces of a segment of normalised coefficients `b`
+/// (u = t/h) and 1/h `inv_h`, exact up to f32 rounding: q‴ is a
+/// quadratic, so q″ is monotone between q⁗'s root and the ends, q′
+/// between q‴'s roots; on a piece each derivative peaks at one of its
+/// ends or at a root of the next inside it.
+pub fn piece_maxima(b: &[[f32; 6]; 3], inv_h: f32) -> PieceMaxima {
     let ih = inv_h;
-    let mut m = [0.0f32; 3];
-    for b in b {
+    let mut out = [[0.0f32; 3]; 3 * PIECES];
+    for (b, rows) in b.iter().zip(out.chunks_exact_mut(PIECES)) {
         let d1 = [b[1], 2.0 * b[2], 3.0 * b[3], 4.0 * b[4], 5.0 * b[5]];
         let d2 = [2.0 * b[2], 6.0 * b[3], 12.0 * b[4], 20.0 * b[5]];
         let d3 = [6.0 * b[3], 24.0 * b[4], 60.0 * b[5]];
@@ -87,37 +120,96 @@ pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
         let p3 = p3.get(..n3).unwrap_or(&[]);
         let n2 = roots(&d2, p3, &mut p2);
         let p2 = p2.get(..n2).unwrap_or(&[]);
-        m[0] = m[0].max(largest(&d1, p2));
-        m[1] = m[1].max(largest(&d2, p3));
-        m[2] = m[2].max(largest(&d3, p4));
+        let mut m = [[0.0f32; PIECES]; 3];
+        let [m1, m2, m3] = &mut m;
+        largest_by_piece(&d1, p2, m1);
+        largest_by_piece(&d2, p3, m2);
+        largest_by_piece(&d3, p4, m3);
+        for (p, row) in rows.iter_mut().enumerate() {
+            *row = [
+                m1.get(p).map_or(0.0, |x| x * ih),
+                m2.get(p).map_or(0.0, |x| x * ih * ih),
+                m3.get(p).map_or(0.0, |x| x * ih * ih * ih),
+            ];
+        }
     }
-    [m[0] * ih, m[1] * ih * ih, m[2] * ih * ih * ih]
+    out
+}
+
+/// The largest of each column over the pieces: the segment's maxima.
+#[inline(never)]
+pub fn overall(pieces: &[[f32; 3]]) -> [f32; 3] {
+    let mut m = [0.0f32; 3];
+    for p in pieces {
+        for (m, x) in m.iter_mut().zip(p) {
+            raise(m, *x);
+        }
+    }
+    m
+}
+
+/// Largest |q′|, |q″|, |q‴| (m/s, m/s², m/s³) over the three joints of a
+/// segment ([`piece_maxima`] over all its pieces).
+pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
+    overall(&piece_maxima(b, inv_h))
+}
+
+/// The controlled and quick stop ramps (s) of a segment with piece maxima
+/// `pieces` on a drive with jerk limit `jerk_limit`, ceiling `ceiling`
+/// and override cap `cap`: the budgets from the segment's own largest
+/// |q‴|, the ramps over every joint's every piece ([`pieces_ramp`]).
+pub fn piece_ramps(
+    pieces: &PieceMaxima,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+) -> Option<(f32, f32)> {
+    piece_ramps_and_at_unit(pieces, jerk_limit, ceiling, cap).map(|[full, _]| full)
+}
+
+/// [`piece_ramps`] and, from the same pass, the segment's own ramps for
+/// a stop from σ ≤ 1 ([`pieces_ramp_and_at_unit`]): what a stop carrying
+/// a ramp for the path ahead is held to. `[full, at_unit]`, each
+/// (controlled, quick).
+pub fn piece_ramps_and_at_unit(
+    pieces: &PieceMaxima,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+) -> Option<[(f32, f32); 2]> {
+    let j = overall(pieces)[2];
+    let r = pieces_ramp_and_at_unit(pieces, budgets(j, jerk_limit, ceiling, cap), cap)?;
+    Some(r.map(|[s, q]| (s, q)))
 }
 
 /// The controlled and quick stop ramps (s) a drive sizes for the wire
-/// segment `w` on receipt ([`segment_ramps`] over its own maxima), with
+/// segment `w` on receipt ([`piece_ramps`] over its own piece maxima), with
 /// jerk limit `jerk_limit`, ceiling `ceiling` and override cap `cap`;
 /// `None` if a drive would refuse it for its stop.
 pub fn wire_ramps(w: &WireSegment, jerk_limit: f32, ceiling: f32, cap: f32) -> Option<(f32, f32)> {
-    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
-    segment_ramps(v, a, j, jerk_limit, ceiling, cap)
+    piece_ramps(
+        &piece_maxima(&w.normalised_f32(), inv_h(w.duration_us)),
+        jerk_limit,
+        ceiling,
+        cap,
+    )
 }
 
 /// A wire segment's own ramps for a stop from σ ≤ 1 (controlled, quick;
-/// s), as a drive computes them for it (`segment_ramps_and_at_unit`).
+/// s), as a drive computes them for it ([`piece_ramps_and_at_unit`]).
 pub fn wire_stop_ramps_at_unit(
     w: &WireSegment,
     jerk_limit: f32,
     ceiling: f32,
     cap: f32,
 ) -> Option<(f32, f32)> {
-    let [v, a, j] = maxima(&w.normalised_f32(), inv_h(w.duration_us));
-    segment_ramps_and_at_unit(v, a, j, jerk_limit, ceiling, cap).map(|(_, at_unit)| at_unit)
+    let pieces = piece_maxima(&w.normalised_f32(), inv_h(w.duration_us));
+    piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap).map(|[_, at_unit]| at_unit)
 }
 
 /// The controlled and quick stop ramps (s) the drives need for the whole
 /// of `segments` (the largest of each segment's own,
-/// [`segment_ramps`]) with jerk limit `jerk_limit`, ceiling `ceiling` and
+/// [`wire_ramps`]) with jerk limit `jerk_limit`, ceiling `ceiling` and
 /// override cap `cap`; `None` if a drive would refuse a segment for it.
 pub fn plan_ramps<'a>(
     segments: impl IntoIterator<Item = &'a WireSegment>,

@@ -21,6 +21,10 @@
 //! Unlike a bound that takes every peak at once (3a·1.875/T + v·5.774/T²
 //! over and above j), this uses that σ̇ peaks where σ is already lower and
 //! that the plan's own jerk term shrinks with σ³.
+//!
+//! The drives' f32 rule ([`pieces_ramp`]) takes one such triple per joint
+//! and piece of a segment: each instant a stop passes through is within
+//! its piece's triple, and F grows with each of v, a and j.
 
 use super::config::{SMOOTHSTEP_MAX_D1, SMOOTHSTEP_MAX_D2};
 
@@ -135,20 +139,30 @@ const F32_SLACK: f32 = 1.0e-4;
 /// The longest ramp a drive runs (s): a segment that needs more is refused.
 pub const MAX_RAMP_S: f32 = 4.0;
 
-/// S, S′ and |S″| at the grid's nodes u = k/24 (the last two rounded
-/// up), computed once at compile time. |S″| has kinks only at 0, ½ and 1,
-/// all nodes: each cell's terms are C² on it.
-const U_NODES: [[f32; 3]; COARSE_U_CELLS + 1] = u_nodes();
+/// Nodes u = k/24 up to ½: past it each node's terms are at most its
+/// mirror's (σ lower, S′ and |S″| the same), so the mirror bounds it.
+const HALF_NODES: usize = COARSE_U_CELLS / 2 + 1;
 
-const fn u_nodes() -> [[f32; 3]; COARSE_U_CELLS + 1] {
-    let mut t = [[0.0f32; 3]; COARSE_U_CELLS + 1];
+/// S at the nodes u = k/24 up to ½, and S′ and |S″| there, each the
+/// larger of its values at u and 1 − u, rounded up: computed once at
+/// compile time. |S″| has kinks only at 0, ½ and 1, all nodes: each
+/// cell's terms are C² on it.
+const U_NODES: [[f32; 3]; HALF_NODES] = u_nodes();
+
+const fn max_f32(x: f32, y: f32) -> f32 {
+    if x > y { x } else { y }
+}
+
+const fn u_nodes() -> [[f32; 3]; HALF_NODES] {
+    let mut t = [[0.0f32; 3]; HALF_NODES];
     let mut k = 0;
-    while k <= COARSE_U_CELLS {
-        let u = k as f32 / COARSE_U_CELLS as f32;
+    while k < HALF_NODES {
+        let n = COARSE_U_CELLS as f32;
+        let (u, m) = (k as f32 / n, (COARSE_U_CELLS - k) as f32 / n);
         t[k] = [
             s_f32(u),
-            s1_f32(u) * (1.0 + F32_SLACK),
-            s2_f32(u) * (1.0 + F32_SLACK),
+            max_f32(s1_f32(u), s1_f32(m)) * (1.0 + F32_SLACK),
+            max_f32(s2_f32(u), s2_f32(m)) * (1.0 + F32_SLACK),
         ];
         k += 1;
     }
@@ -196,122 +210,295 @@ pub fn budgets(j: f32, jerk_limit: f32, ceiling: f32, cap: f32) -> [f32; 2] {
     ]
 }
 
-/// The ramp so far with 1/T and 1/T².
-type Ramp = [f32; 3];
+/// A group of consecutive nodes screened together: from, to, and S at
+/// its first node with the largest S′ and |S″| over it.
+type Group = (usize, usize, [f32; 3]);
 
-/// Raises `tk` to the shortest ramp T with fixed + b/T + c/T² within
-/// `budget`; `None` when fixed leaves no room.
-fn raise([fixed, b, c]: [f32; 3], budget: f32, tk: &mut Ramp) -> Option<()> {
-    let room = budget - fixed;
-    if room <= 0.0 {
-        return None;
+/// The groups, the middle ones first: they hold the nodes that bind.
+const GROUPS: [Group; 4] = groups([(4, 7), (0, 4), (7, 10), (10, HALF_NODES)]);
+
+const fn groups<const G: usize>(ranges: [(usize, usize); G]) -> [Group; G] {
+    let mut out = [(0, 0, [0.0; 3]); G];
+    let mut g = 0;
+    while g < G {
+        let (from, to) = ranges[g];
+        let mut k = from;
+        let (mut s1, mut s2) = (0.0f32, 0.0f32);
+        while k < to {
+            s1 = max_f32(s1, U_NODES[k][1]);
+            s2 = max_f32(s2, U_NODES[k][2]);
+            k += 1;
+        }
+        out[g] = (from, to, [U_NODES[from][0], s1, s2]);
+        g += 1;
     }
-    // Within the budget at the ramp so far: no longer needed.
-    if b * tk[1] + c * tk[2] <= room {
-        return Some(());
+    out
+}
+
+/// At most this many triples (v, a, j) are sized apart; more are merged
+/// into the last (their largest of each, as sound).
+pub const MAX_TRIPLES: usize = 12;
+
+/// Whether every number of `xs` is finite and at least 0 (not NaN).
+#[inline(never)]
+fn finite_and_positive(xs: &[f32]) -> bool {
+    for x in xs {
+        if !(*x >= 0.0 && *x < f32::INFINITY) {
+            return false;
+        }
     }
-    let cell = (b + sqrt_f32(b * b + 4.0 * room * c)) / (2.0 * room);
-    if cell > tk[0] {
-        let inv = 1.0 / cell;
-        *tk = [cell, inv, inv * inv];
+    true
+}
+
+/// Whether `x` is at most `y` in each of v, a and j.
+#[inline(always)]
+fn dominated(x: &[f32; 3], y: &[f32; 3]) -> bool {
+    x[0] <= y[0] && x[1] <= y[1] && x[2] <= y[2]
+}
+
+/// The triples of `triples` no other one dominates (F grows with each of
+/// v, a and j, so a dominated triple never needs the longer ramp), in the
+/// first slots, and how many.
+#[inline(never)]
+fn frontier(triples: &[[f32; 3]]) -> ([[f32; 3]; MAX_TRIPLES], usize) {
+    let mut kept = [[0.0f32; 3]; MAX_TRIPLES];
+    let mut n = 0;
+    for t in triples {
+        let Some(front) = kept.get_mut(..n) else {
+            break;
+        };
+        if front.iter().any(|k| dominated(t, k)) {
+            continue;
+        }
+        // Those `t` dominates make room, in order.
+        let mut m = 0;
+        for i in 0..n {
+            if let Some(&k) = kept.get(i)
+                && !dominated(&k, t)
+            {
+                if let Some(slot) = kept.get_mut(m) {
+                    *slot = k;
+                }
+                m += 1;
+            }
+        }
+        n = m;
+        if let Some(slot) = kept.get_mut(n) {
+            *slot = *t;
+            n += 1;
+        } else if let Some(k) = kept.last_mut() {
+            *k = [k[0].max(t[0]), k[1].max(t[1]), k[2].max(t[2])];
+        }
     }
-    Some(())
+    (kept, n)
 }
 
 /// The ramps (s) with which every transition from a constant σ ≤ `cap`
-/// keeps the joint jerk of a segment with maxima `v`, `a`, `j` within each
-/// of `budgets`: [`stop_time`]'s rule in f32, the one function both the
-/// drives (for each segment they accept) and the host (over the plan) run.
+/// keeps the joint jerk within each of `budgets` (controlled, quick) for
+/// each triple of `triples` (a joint's largest |q′|, |q″|, |q‴| over a
+/// piece of a segment, or the segment's over its joints): [`stop_time`]'s
+/// rule in f32, the one function both the drives (for each segment they
+/// accept) and the host (over the plan) run.
+///
 /// On each of 8 bands of Δσ, F is bounded by the smooth function of u
 /// with σ at the band's smallest Δσ, σ̇'s factor at its largest and σ̈'s at
-/// its smallest; that function is bounded by its values at the 25 nodes
+/// its smallest; that function is bounded by its values at the nodes
 /// u = k/24 plus h²/8 times a bound on its second derivative (so the
 /// bound is tight to second order in h, where one that takes each term's
-/// largest value on a cell loses to first order). `None` when no ramp up
-/// to [`MAX_RAMP_S`] does (the segment's own jerk at the cap leaves no
-/// room) or an input is not a finite number ≥ 0.
-pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
-    segment_ramp_and_at_unit(v, a, j, budgets, cap).map(|[full, _]| full)
+/// largest value on a cell loses to first order). A triple another
+/// dominates is skipped: the ramp is the same as over every triple.
+/// `None` when no ramp up to [`MAX_RAMP_S`] does (a triple's own jerk at
+/// the cap leaves no room) or an input is not a finite number ≥ 0.
+pub fn pieces_ramp(triples: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
+    pieces_ramp_and_at_unit(triples, budgets, cap).map(|[full, _]| full)
 }
 
-/// [`segment_ramp`] and, in the same pass, the ramps with which a stop
-/// (to σ = 0) from a constant σ ≤ 1 keeps the joint jerk within each of
-/// `budgets`: the same bound on the one band Δσ = 1 from σ = 1, which
-/// bounds every stop from σ₀ ≤ 1 term by term (σ ≤ 1 − S, |σ̇| ≤ S′/T and
-/// |σ̈| = |S″|/T² at ρ = √σ₀). That band's nodes are each below the
-/// cap's band holding Δσ = 1, so its ramp is never longer, and raising
-/// from it gives [`segment_ramp`]'s bit for bit. `[full, at_unit]`.
-pub fn segment_ramp_and_at_unit(
-    v: f32,
-    a: f32,
-    j: f32,
+/// [`pieces_ramp`] and the ramps with which a stop (to σ = 0) from a
+/// constant σ ≤ 1 keeps the joint jerk within each of `budgets` for each
+/// triple: the same bound on the one band Δσ = 1 from σ = 1, which bounds
+/// every stop from σ₀ ≤ 1 term by term (σ ≤ 1 − S, |σ̇| ≤ S′/T and |σ̈| =
+/// |S″|/T² at ρ = √σ₀), sized first: the full ramps are raised from it,
+/// so it is never longer. `[full, at_unit]`.
+pub fn pieces_ramp_and_at_unit(
+    triples: &[[f32; 3]],
     budgets: [f32; 2],
     cap: f32,
 ) -> Option<[[f32; 2]; 2]> {
-    if !inputs_ok(v, a, j, budgets, cap) {
+    if !(finite_and_positive(triples.as_flattened())
+        && finite_and_positive(&budgets)
+        && finite_and_positive(&[cap])
+        && cap >= 1.0)
+    {
         return None;
     }
-    let ds_n = COARSE_DS_CELLS as f32;
+    let (kept, n) = frontier(triples);
+    let kept = kept.get(..n).unwrap_or(&[]);
     let t0 = MIN_RAMP_S as f32;
-    let mut t: [Ramp; 2] = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
-    raise_band([v, a, j], budgets, 1.0, 1.0, 1.0, &mut t)?;
-    let at_unit = t;
-    // The full stops first: they need the longest ramps, so later cells
+    // Each ramp so far, with 1/T and 1/T².
+    let mut t = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
+    let mut band = Band::default();
+    // Stops from σ ≤ 1 first, the one band; every transition's ramp is
+    // then raised from theirs, which bounds some of those transitions too.
+    band.set(1.0, 1.0, 1.0);
+    for (tk, b) in t.iter_mut().zip(budgets) {
+        band.size(kept, b, tk)?;
+    }
+    let at_unit = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    // The full stops first: they need the longest ramps, so later bands
     // seldom raise it (a raise costs a division and a square root).
     for i in (0..COARSE_DS_CELLS).rev() {
-        let d0 = cap * i as f32 / ds_n;
-        let d1 = cap * (i + 1) as f32 / ds_n;
-        raise_band([v, a, j], budgets, cap, d0, d1, &mut t)?;
-    }
-    let seconds = |t: [Ramp; 2]| t.map(|tk| tk[0] * (1.0 + F32_SLACK));
-    let full = seconds(t);
-    full.iter()
-        .all(|x| *x <= MAX_RAMP_S)
-        .then_some([full, seconds(at_unit)])
-}
-
-fn inputs_ok(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> bool {
-    let ok = |x: f32| x.is_finite() && x >= 0.0;
-    ok(v) && ok(a) && ok(j) && budgets.iter().all(|b| ok(*b)) && ok(cap) && cap >= 1.0
-}
-
-/// Raises `t` to keep F within `budgets` on the band Δσ ∈ [d0, d1] of
-/// transitions from σ ≤ `cap`; `None` when the segment's own jerk leaves
-/// no room.
-fn raise_band(
-    [v, a, j]: [f32; 3],
-    budgets: [f32; 2],
-    cap: f32,
-    d0: f32,
-    d1: f32,
-    t: &mut [Ramp; 2],
-) -> Option<()> {
-    let slack = RHO_SLACK as f32;
-    // |σ̇|·T ≤ S′·m1, |σ̈|·T² ≤ |S″|·m2 (m1 grows with Δσ, m2 falls).
-    let m1 = slack * sqrt_f32(d1).min(1.0);
-    let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
-    let (am1, vm2) = (3.0 * a * m1, v * m2);
-    // On this band F ≤ j·g³ + am1·g·S′/T + vm2·|S″|/T², g = cap − d0·S
-    // (0 ≤ g ≤ cap). Its second derivatives in u, term by term:
-    // (g³)″ = 6g·g′² + 3g²·g″, (g·S′)″ = g·S‴ − 3·d0·S′S″, |S″|″ = ±S⁗.
-    let r = [
-        j * (6.0 * cap * d0 * d0 * S1_MAX * S1_MAX + 3.0 * cap * cap * d0 * S2_MAX),
-        am1 * (cap * S3_MAX + 3.0 * d0 * S1S2_MAX),
-        vm2 * S4_MAX,
-    ]
-    .map(|x| x * INTERPOLATION);
-    for [s, s1, s2] in U_NODES {
-        let sigma = cap - d0 * s;
-        let node = [
-            j * sigma * sigma * sigma + r[0],
-            am1 * sigma * s1 + r[1],
-            vm2 * s2 + r[2],
-        ];
-        for (budget, tk) in budgets.iter().zip(t.iter_mut()) {
-            raise(node, *budget, tk)?;
+        let ds_n = COARSE_DS_CELLS as f32;
+        band.set(cap, cap * i as f32 / ds_n, cap * (i + 1) as f32 / ds_n);
+        for (tk, b) in t.iter_mut().zip(budgets) {
+            band.size(kept, b, tk)?;
         }
     }
+    let full = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    full.iter()
+        .all(|x| *x <= MAX_RAMP_S)
+        .then_some([full, at_unit])
+}
+
+// The helpers below are out of line (`inline(never)`): unrolled, they
+// would not fit the drives' flash.
+
+/// One band of Δσ: its nodes' coefficients of j, a/T and v/T², and the
+/// screens' (each group's at least every node's in it, the band's at
+/// least every group's).
+#[derive(Default)]
+struct Band {
+    c: Coefficients,
+    tops: [[f32; 3]; GROUPS.len()],
+    top: [f32; 3],
+    /// The nodes, computed for a group when a triple first needs them.
+    nodes: [[f32; 3]; HALF_NODES],
+    ready: u8,
+}
+
+impl Band {
+    /// The band Δσ ∈ [d0, d1] of transitions from σ ≤ `cap`, its nodes
+    /// not computed yet.
+    #[inline(never)]
+    fn set(&mut self, cap: f32, d0: f32, d1: f32) {
+        let slack = RHO_SLACK as f32;
+        // |σ̇|·T ≤ S′·m1/3, |σ̈|·T² ≤ |S″|·m2 (m1 grows with Δσ, m2 falls).
+        let m1 = 3.0 * slack * sqrt_f32(d1).min(1.0);
+        let m2 = slack * if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
+        // On this band F ≤ j·g³ + a·m1·g·S′/T + v·m2·|S″|/T², g = cap − d0·S
+        // (0 ≤ g ≤ cap). Its second derivatives in u, term by term:
+        // (g³)″ = 6g·g′² + 3g²·g″, (g·S′)″ = g·S‴ − 3·d0·S′S″, |S″|″ = ±S⁗.
+        let r = [
+            6.0 * cap * d0 * d0 * S1_MAX * S1_MAX + 3.0 * cap * cap * d0 * S2_MAX,
+            m1 * (cap * S3_MAX + 3.0 * d0 * S1S2_MAX),
+            m2 * S4_MAX,
+        ]
+        .map(|x| x * INTERPOLATION);
+        self.c = Coefficients { cap, d0, m1, m2, r };
+        self.ready = 0;
+        self.top = [0.0; 3];
+        // σ is largest at a group's first node.
+        for (top, (_, _, u)) in self.tops.iter_mut().zip(GROUPS) {
+            *top = self.c.node(u);
+            for (m, x) in self.top.iter_mut().zip(top.iter()) {
+                if *x > *m {
+                    *m = *x;
+                }
+            }
+        }
+    }
+
+    /// Raises the ramp `tk` (with 1/T, 1/T²) until every triple of `kept`
+    /// is within `budget` at every node of this band; `None` when one's
+    /// own jerk leaves no room.
+    #[inline(never)]
+    fn size(&mut self, kept: &[[f32; 3]], budget: f32, tk: &mut [f32; 3]) -> Option<()> {
+        for &[v, a, j] in kept {
+            let (mut ax, mut vx) = (a * tk[1], v * tk[2]);
+            if jerk(&self.top, j, ax, vx) <= budget {
+                continue;
+            }
+            for g in 0..GROUPS.len() {
+                let (Some(top), Some(&(from, to, _))) = (self.tops.get(g), GROUPS.get(g)) else {
+                    break;
+                };
+                if jerk(top, j, ax, vx) <= budget {
+                    continue;
+                }
+                let (Some(ps), Some(us)) = (self.nodes.get_mut(from..to), U_NODES.get(from..to))
+                else {
+                    continue;
+                };
+                if self.ready & (1 << g) == 0 {
+                    for (p, u) in ps.iter_mut().zip(us) {
+                        *p = self.c.node(*u);
+                    }
+                    self.ready |= 1 << g;
+                }
+                for p in ps.iter() {
+                    if jerk(p, j, ax, vx) > budget {
+                        raise(p, &[v, a, j], budget, tk)?;
+                        (ax, vx) = (a * tk[1], v * tk[2]);
+                    }
+                }
+            }
+        }
+        Some(())
+    }
+}
+
+/// A band's factors: the cap, its smallest Δσ, σ̇'s and σ̈'s factors and
+/// the interpolation margins of the three terms.
+#[derive(Default)]
+struct Coefficients {
+    cap: f32,
+    d0: f32,
+    m1: f32,
+    m2: f32,
+    r: [f32; 3],
+}
+
+impl Coefficients {
+    /// The coefficients of j, a/T and v/T² at a node of S, S′, |S″| `u`.
+    #[inline(never)]
+    fn node(&self, [s, s1, s2]: [f32; 3]) -> [f32; 3] {
+        let sigma = self.cap - self.d0 * s;
+        let r = self.r;
+        [
+            sigma * sigma * sigma + r[0],
+            self.m1 * sigma * s1 + r[1],
+            self.m2 * s2 + r[2],
+        ]
+    }
+}
+
+/// F with the coefficients `p` for j, a/T (`ax`) and v/T² (`vx`).
+#[inline(always)]
+fn jerk(p: &[f32; 3], j: f32, ax: f32, vx: f32) -> f32 {
+    j * p[0] + ax * p[1] + vx * p[2]
+}
+
+/// Raises `tk` (the ramp with 1/T, 1/T²) to the shortest T with
+/// j·p₀ + a·p₁/T + v·p₂/T² within `budget` for the triple (v, a, j);
+/// `None` when j·p₀ leaves no room.
+#[inline(never)]
+fn raise(p: &[f32; 3], [v, a, j]: &[f32; 3], budget: f32, tk: &mut [f32; 3]) -> Option<()> {
+    let room = budget - j * p[0];
+    if room <= 0.0 {
+        return None;
+    }
+    let (b, c) = (a * p[1], v * p[2]);
+    let cell = (b + sqrt_f32(b * b + 4.0 * room * c)) / (2.0 * room);
+    if cell > tk[0] {
+        let x = 1.0 / cell;
+        *tk = [cell, x, x * x];
+    }
     Some(())
+}
+
+/// [`pieces_ramp`] for one triple: a segment's maxima `v`, `a`, `j` over
+/// its joints.
+pub fn segment_ramp(v: f32, a: f32, j: f32, budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
+    pieces_ramp(&[[v, a, j]], budgets, cap)
 }
 
 /// The controlled and quick stop ramps (s) of a segment with maxima `v`,
@@ -325,23 +512,8 @@ pub fn segment_ramps(
     ceiling: f32,
     cap: f32,
 ) -> Option<(f32, f32)> {
-    segment_ramps_and_at_unit(v, a, j, jerk_limit, ceiling, cap).map(|(full, _)| full)
-}
-
-/// [`segment_ramps`] and the segment's ramps for a stop from σ ≤ 1 with
-/// the same budgets ([`segment_ramp_and_at_unit`]): what a stop carrying a
-/// ramp for the path ahead is held to. `(full, at_unit)`, each
-/// (controlled, quick).
-pub fn segment_ramps_and_at_unit(
-    v: f32,
-    a: f32,
-    j: f32,
-    jerk_limit: f32,
-    ceiling: f32,
-    cap: f32,
-) -> Option<((f32, f32), (f32, f32))> {
-    let [f, u] = segment_ramp_and_at_unit(v, a, j, budgets(j, jerk_limit, ceiling, cap), cap)?;
-    Some(((f[0], f[1]), (u[0], u[1])))
+    let [s, q] = segment_ramp(v, a, j, budgets(j, jerk_limit, ceiling, cap), cap)?;
+    Some((s, q))
 }
 
 /// The stop ramp by the bound that takes every peak at once: the joint
@@ -361,33 +533,25 @@ pub fn stop_time_separate_peaks(v: f64, a: f64, j: f64, jerk_limit: f64, cap: f6
 mod tests {
     use super::*;
 
-    /// The largest F over transitions from a constant σ at ramp `t`, each
-    /// `(σ₀, Δσ, ρ)` (to σ₀ − Δσ over t·ρ), sampled on 2 001 points.
-    fn worst_of(v: f64, a: f64, j: f64, t: f64, runs: impl Iterator<Item = [f64; 3]>) -> f64 {
+    /// The largest F over the transitions a drive may run from a constant
+    /// σ at ramp `t`, sampled densely, each with the shortest ρ the drive
+    /// accepts (√Δσ below 1, else Δσ).
+    fn worst_jerk(v: f64, a: f64, j: f64, cap: f64, t: f64) -> f64 {
         let mut worst = 0.0f64;
-        for [s0, ds, rho] in runs {
+        for i in 1..=400 {
+            let ds = cap * i as f64 / 400.0;
+            // The drive's ρ: the smallest of its candidates, at most this.
+            let rho = if ds >= 1.0 { ds } else { libm::sqrt(ds) };
             let tt = t * rho;
             for k in 0..=2000 {
                 let u = k as f64 / 2000.0;
-                let sigma = s0 - ds * s(u);
+                let sigma = cap - ds * s(u);
                 let sd = ds * s1(u) / tt;
                 let sdd = ds * s2(u) / (tt * tt);
                 worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
             }
         }
         worst
-    }
-
-    /// The largest F over the transitions a drive may run from a constant
-    /// σ at ramp `t`, sampled densely, each with the shortest ρ the drive
-    /// accepts (√Δσ below 1, else Δσ).
-    fn worst_jerk(v: f64, a: f64, j: f64, cap: f64, t: f64) -> f64 {
-        let runs = (1..=400).map(|i| {
-            let ds = cap * i as f64 / 400.0;
-            // The drive's ρ: the smallest of its candidates, at most this.
-            [cap, ds, if ds >= 1.0 { ds } else { libm::sqrt(ds) }]
-        });
-        worst_of(v, a, j, t, runs)
     }
 
     #[test]
@@ -488,11 +652,19 @@ mod tests {
     /// The largest F over the stops (to σ = 0) a drive may run from a
     /// constant σ₀ ≤ 1 at ramp `t` (ρ = √σ₀), sampled densely.
     fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
-        let runs = (1..=100).map(|i| {
+        let mut worst = 0.0f64;
+        for i in 1..=100 {
             let s0 = i as f64 / 100.0;
-            [s0, s0, libm::sqrt(s0)]
-        });
-        worst_of(v, a, j, t, runs)
+            let tt = t * libm::sqrt(s0);
+            for k in 0..=2000 {
+                let u = k as f64 / 2000.0;
+                let sigma = s0 * (1.0 - s(u));
+                let sd = s0 * s1(u) / tt;
+                let sdd = s0 * s2(u) / (tt * tt);
+                worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
+            }
+        }
+        worst
     }
 
     /// The ramp for stops from σ ≤ 1 keeps each within the budget, is never
@@ -506,14 +678,12 @@ mod tests {
                 for j in [0.0, 1.0, 4.0] {
                     for cap in [1.0, 1.4, 3.0] {
                         let bs = budgets(j as f32, 5.0, 40.0, cap as f32);
-                        let (vf, af, jf) = (v as f32, a as f32, j as f32);
-                        let Some([full, unit]) =
-                            segment_ramp_and_at_unit(vf, af, jf, bs, cap as f32)
+                        let triple = [[v as f32, a as f32, j as f32]];
+                        let Some([full, unit]) = pieces_ramp_and_at_unit(&triple, bs, cap as f32)
                         else {
                             continue;
                         };
-                        // Raising from the ramp at σ ≤ 1 changes nothing.
-                        assert_eq!(segment_ramp(vf, af, jf, bs, cap as f32), Some(full));
+                        assert_eq!(pieces_ramp(&triple, bs, cap as f32), Some(full));
                         for ((t, b), f) in unit.iter().zip(bs).zip(full) {
                             let w = worst_stop_jerk_at_most_unit(v, a, j, *t as f64);
                             assert!(w <= b as f64 * (1.0 + 1e-6), "{v} {a} {j} {cap}: {w} > {b}");
@@ -526,6 +696,71 @@ mod tests {
             }
         }
         assert!(checked >= 80 && shorter > 40, "{checked} {shorter}");
+    }
+
+    /// Over sets of triples (a joint's maxima on the pieces of a
+    /// segment): the ramps keep every transition within the budget for
+    /// each triple, and are the largest of each triple's own (the screens
+    /// and the dominated triples skipped change nothing).
+    #[test]
+    fn pieces_ramp_is_a_bound_for_every_triple_and_the_largest_of_their_own() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(35);
+        let mut checked = 0;
+        for _ in 0..60 {
+            let n = rng.random_range(1..=MAX_TRIPLES);
+            let scale = [
+                rng.random_range(0.01..1.0f32),
+                rng.random_range(0.1..3.0f32),
+                rng.random_range(0.0..4.0f32),
+            ];
+            let triples: std::vec::Vec<[f32; 3]> = (0..n)
+                .map(|_| scale.map(|m| m * rng.random_range(0.0..1.0f32)))
+                .collect();
+            let cap = [1.0f32, 1.3, 2.5][rng.random_range(0..3)];
+            let j = triples.iter().fold(0.0f32, |m, t| m.max(t[2]));
+            let bs = budgets(j, 5.0, [6.0f32, 40.0][rng.random_range(0..2)], cap);
+            let Some(r) = pieces_ramp(&triples, bs, cap) else {
+                assert!(
+                    triples
+                        .iter()
+                        .any(|t| segment_ramp(t[0], t[1], t[2], bs, cap).is_none())
+                );
+                continue;
+            };
+            for k in 0..2 {
+                let own = triples
+                    .iter()
+                    .map(|t| segment_ramp(t[0], t[1], t[2], bs, cap).unwrap()[k])
+                    .fold(0.0f32, f32::max);
+                assert!((r[k] - own).abs() <= 1e-5 * own, "{} vs {own}", r[k]);
+                for &[v, a, jt] in &triples {
+                    let w = worst_jerk(v as f64, a as f64, jt as f64, cap as f64, r[k] as f64);
+                    assert!(w <= bs[k] as f64 * (1.0 + 1e-6), "{w} > {}", bs[k]);
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 60, "{checked}");
+    }
+
+    /// More triples than are sized apart: the extra ones are merged into
+    /// the last, so the ramp is never shorter than each one's own.
+    #[test]
+    fn more_triples_than_kept_apart_are_merged_soundly() {
+        // Mutually undominated: v rises as a falls.
+        let triples: std::vec::Vec<[f32; 3]> = (0..20)
+            .map(|i| {
+                let x = i as f32 / 19.0;
+                [0.05 + 0.3 * x, 1.5 - 1.2 * x, 0.5]
+            })
+            .collect();
+        let bs = budgets(0.5, 5.0, 40.0, 1.2);
+        let r = pieces_ramp(&triples, bs, 1.2).unwrap();
+        for t in &triples {
+            let own = segment_ramp(t[0], t[1], t[2], bs, 1.2).unwrap();
+            assert!(r[0] >= own[0] && r[1] >= own[1], "{r:?} < {own:?}");
+        }
     }
 
     #[test]
