@@ -66,16 +66,64 @@ impl Problem {
         }
         let mut x = x0.clone();
         self.project(h, &mut x);
+        // The conditions' coefficients do not depend on the joint (only
+        // their constants do): one null space serves the three.
+        let basis = self.jerk_null_space(h)?;
         let mut out: [Vec<f64>; 3] = Default::default();
         for j in 0..3 {
-            out[j] = self.joint_direct(h, j, &x[j])?;
+            out[j] = self.joint_direct(h, j, &x[j], &basis)?;
         }
         self.project(h, &mut out);
         Some(out)
     }
 
-    /// One joint's min-max jerk from the C3-feasible `xp`.
-    fn joint_direct(&self, h: &[f64], j: usize, xp: &[f64]) -> Option<Vec<f64>> {
+    /// An orthonormal basis of the null space of E (the C3 and end-jerk
+    /// rows) at intervals `h`, from the full QR of Eᵀ padded to a square
+    /// matrix; None when E loses rank.
+    fn jerk_null_space(&self, h: &[f64]) -> Option<DMatrix<f64>> {
+        let nv = self.knots.vars();
+        let zero = vec![0.0; nv];
+        let coefficients = |k: usize, u: f64| {
+            let f = self.knots.functional(&zero, 0, k, u, 3, h[k]);
+            let mut a = DVector::zeros(nv);
+            for &(v, c) in f.dx() {
+                a[v] += c;
+            }
+            a
+        };
+        let conds = self.jerk_conditions();
+        let m = conds.len();
+        if nv < m {
+            return None;
+        }
+        let mut et = DMatrix::<f64>::zeros(nv, nv);
+        for (r, (a, b)) in conds.iter().enumerate() {
+            let mut row = coefficients(a.0, a.1);
+            if let Some((k, u)) = b {
+                row -= &coefficients(*k, *u);
+            }
+            et.set_column(r, &row);
+        }
+        let scale = et.amax().max(f64::MIN_POSITIVE);
+        let qr = et.qr();
+        let r = qr.r();
+        for i in 0..m {
+            if r[(i, i)].abs() <= 1e-10 * scale {
+                return None;
+            }
+        }
+        Some(qr.q().columns(m, nv - m).into_owned())
+    }
+
+    /// One joint's min-max jerk from the C3-feasible `xp`, in the
+    /// conditions' null space `basis`.
+    fn joint_direct(
+        &self,
+        h: &[f64],
+        j: usize,
+        xp: &[f64],
+        basis: &DMatrix<f64>,
+    ) -> Option<Vec<f64>> {
         let nv = self.knots.vars();
         let nseg = self.knots.segments();
         let zero = vec![0.0; nv];
@@ -88,15 +136,8 @@ impl Problem {
             }
             (a, f.value)
         };
-        // Null space of E (the C3 and end-jerk rows), from the full QR of
-        // Eᵀ padded to a square matrix.
-        let conds = self.jerk_conditions();
-        let m = conds.len();
-        if nv < m {
-            return None;
-        }
-        // The forms at u = 0, ½ and 1 of every segment, which the
-        // conditions, the first cuts and every round's exact maxima use.
+        // The forms at u = 0, ½ and 1 of every segment, which the first
+        // cuts and every round's exact maxima use.
         const NODES: [f64; 3] = [0.0, 0.5, 1.0];
         let nodes: Vec<[(DVector<f64>, f64); 3]> =
             (0..nseg).map(|k| NODES.map(|u| form(k, u))).collect();
@@ -104,26 +145,7 @@ impl Problem {
             Some(i) => nodes[k][i].clone(),
             None => form(k, u),
         };
-        let mut et = DMatrix::<f64>::zeros(nv, nv);
-        for (r, (a, b)) in conds.iter().enumerate() {
-            let (fa, _) = form_at(a.0, a.1);
-            let mut row = fa;
-            if let Some((k, u)) = b {
-                row -= &nodes[*k][NODES.iter().position(|&v| v == *u)?].0;
-            }
-            et.set_column(r, &row);
-        }
-        let scale = et.amax().max(f64::MIN_POSITIVE);
-        let qr = et.qr();
-        let r = qr.r();
-        for i in 0..m {
-            if r[(i, i)].abs() <= 1e-10 * scale {
-                return None;
-            }
-        }
-        let q = qr.q();
-        let d = nv - m;
-        let basis = q.columns(m, d).into_owned();
+        let d = basis.ncols();
         let xp = DVector::from_column_slice(xp);
         let mut rows: Vec<Row> = Vec::new();
         let cut_at = |k: usize, u: f64, rows: &mut Vec<Row>| {
@@ -184,7 +206,7 @@ impl Problem {
             };
             vertex = at;
             z = z_lp;
-            let x = &xp + &basis * &z;
+            let x = &xp + basis * &z;
             let mut worst: f64 = 0.0;
             let mut new_cuts = Vec::new();
             for k in 0..nseg {

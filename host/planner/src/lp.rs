@@ -1,9 +1,13 @@
 //! A small sparse linear program with optional second-order cones, solved by
 //! Clarabel (interior point).
 
+use std::sync::Mutex;
+
 use clarabel::algebra::CscMatrix;
+use clarabel::solver::traits::ProblemData;
 use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+    DefaultEquilibrationData, DefaultProblemData, DefaultSettings, DefaultSettingsBuilder,
+    DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 
 /// minimise costᵀx subject to equality rows (Σ a x = b) and inequality rows (Σ a x ≤ b).
@@ -107,6 +111,12 @@ impl Lp {
 
     /// Solves; returns the primal solution.
     pub fn solve(&self) -> Result<Vec<f64>, LpFailure> {
+        self.solve_keeping(true)
+    }
+
+    /// [`Lp::solve`]; `keep` lets it take a kept solver of its shape and
+    /// keep its own (the same answer either way).
+    fn solve_keeping(&self, keep: bool) -> Result<Vec<f64>, LpFailure> {
         let neq = self.eq.rhs.len();
         let nineq = self.ineq.rhs.len();
         let m = self.rows();
@@ -132,8 +142,25 @@ impl Lp {
             .iterative_refinement_enable(self.refine)
             .build()
             .map_err(|_| LpFailure::Status(SolverStatus::NumericalError))?;
-        let mut solver = DefaultSolver::new(&p, &self.cost, &a, &b, &cones, settings)
-            .map_err(|_| LpFailure::Status(SolverStatus::NumericalError))?;
+        let shape = Shape {
+            vars: self.vars,
+            cones: [neq, nineq, self.soc.rhs.len()],
+            colptr: a.colptr.clone(),
+            rowval: a.rowval.clone(),
+            tolerance: self.tolerance.to_bits(),
+            refine: self.refine,
+        };
+        let kept = keep
+            .then(|| take_solver(&shape))
+            .flatten()
+            .and_then(|mut solver| {
+                reload(&mut solver, &p, &self.cost, &a, &b, &cones, &settings).map(|()| solver)
+            });
+        let mut solver = match kept {
+            Some(solver) => solver,
+            None => DefaultSolver::new(&p, &self.cost, &a, &b, &cones, settings)
+                .map_err(|_| LpFailure::Status(SolverStatus::NumericalError))?,
+        };
         solver.solve();
         if std::env::var_os("TRIQUINT_LP_DEBUG").is_some() {
             eprintln!(
@@ -146,10 +173,92 @@ impl Lp {
             );
         }
         match solver.solution.status {
-            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver.solution.x.clone()),
+            SolverStatus::Solved | SolverStatus::AlmostSolved => {
+                let x = solver.solution.x.clone();
+                if keep {
+                    keep_solver(shape, solver);
+                }
+                Ok(x)
+            }
             other => Err(LpFailure::Status(other)),
         }
     }
+}
+
+/// What a solver's set-up depends on beyond the program's values: the
+/// constraint matrix's pattern, the cones and the settings. Programs of one
+/// shape have one KKT pattern, so one AMD ordering and symbolic
+/// factorisation (the search's step programs repeat a few shapes).
+#[derive(PartialEq, Eq)]
+struct Shape {
+    vars: usize,
+    /// Rows of the zero cone, the nonnegative cone and the 3-D cones.
+    cones: [usize; 3],
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    tolerance: u64,
+    refine: bool,
+}
+
+/// Solvers kept after a successful solve for the next program of the same shape,
+/// the most recently used last, with their KKT and factor sizes.
+static KEPT: Mutex<Vec<(Shape, DefaultSolver<f64>, usize)>> = Mutex::new(Vec::new());
+/// At most this many solvers are kept…
+const KEPT_SOLVERS: usize = 16;
+/// …holding at most this many KKT and factor nonzeros together: long
+/// paths' programs, whose set-up is a small share of their solve, are not
+/// kept.
+const KEPT_NONZEROS: usize = 400_000;
+
+fn take_solver(shape: &Shape) -> Option<DefaultSolver<f64>> {
+    let mut kept = KEPT.lock().ok()?;
+    let i = kept.iter().rposition(|(s, ..)| s == shape)?;
+    Some(kept.remove(i).1)
+}
+
+fn keep_solver(shape: Shape, solver: DefaultSolver<f64>) {
+    let size = solver.info.linsolver.nnzA + solver.info.linsolver.nnzL;
+    let Ok(mut kept) = KEPT.lock() else {
+        return;
+    };
+    if size > KEPT_NONZEROS {
+        return;
+    }
+    kept.push((shape, solver, size));
+    while kept.len() > KEPT_SOLVERS || kept.iter().map(|k| k.2).sum::<usize>() > KEPT_NONZEROS {
+        kept.remove(0);
+    }
+}
+
+/// Loads a program into a solver set up for one of the same shape (None if
+/// it refuses), so that it solves as a new solver would, bit for bit: the data equilibrated
+/// afresh (Clarabel's own update keeps the first program's scaling) and
+/// the scaled matrix's values written into its KKT matrix, whose ordering
+/// and symbolic factorisation depend only on the pattern. Everything else
+/// the solve starts from is set by its initial point.
+fn reload(
+    solver: &mut DefaultSolver<f64>,
+    p: &CscMatrix<f64>,
+    q: &[f64],
+    a: &CscMatrix<f64>,
+    b: &[f64],
+    cones: &[SupportedConeT<f64>],
+    settings: &DefaultSettings<f64>,
+) -> Option<()> {
+    let mut data = DefaultProblemData::new(p, q, a, b, cones, settings);
+    data.equilibrate(&solver.cones, settings);
+    // The values are already scaled: written through an identity scaling
+    // (a product with ones is exact), then the scaling put back for the
+    // solve's residuals and its unscaled answer.
+    let scaling = std::mem::replace(
+        &mut data.equilibration,
+        DefaultEquilibrationData::new(data.n, data.m),
+    );
+    let values = data.A.nzval.clone();
+    solver.data = data;
+    solver.update_A(&values).ok()?;
+    solver.data.equilibration = scaling;
+    Some(())
 }
 
 /// The constraint matrix in compressed columns, in linear time: the
@@ -212,6 +321,39 @@ mod tests {
         assert_eq!(ours.rowval, theirs.rowval);
         assert_eq!(ours.nzval, theirs.nzval);
         assert_eq!(ours.nzval, vec![2.0, 12.0, 4.0, 4.0, 8.0, 6.0]);
+    }
+
+    /// A program of one shape solved by a kept solver is solved bit for bit
+    /// as by a new one, across programs whose values (and scaling) differ.
+    #[test]
+    fn a_kept_solver_solves_as_a_new_one() {
+        // min t − x − 2y subject to x + y ≤ c, ‖(x, y)‖ ≤ t + d, y ≤ e;
+        // an unusual size (7 variables) keeps other tests' solvers apart.
+        let program = |c: f64, d: f64, e: f64| {
+            let mut lp = Lp::new(7);
+            lp.cost[0] = 1.0;
+            lp.cost[1] = -1.0;
+            lp.cost[2] = -2.0 * c;
+            for v in 3..7 {
+                lp.cost[v] = 1e-3 * v as f64;
+                lp.at_most(&[(v, -1.0)], 0.0);
+            }
+            lp.at_most(&[(1, 1.0), (2, e * 1e3)], c);
+            lp.at_most(&[(2, 1.0)], e);
+            lp.equal(&[(3, 1.0), (4, -d)], 0.1);
+            lp.second_order_cone([(&[(0, 1.0)], d), (&[(1, 1.0)], 0.0), (&[(2, 1.0)], 0.0)]);
+            lp.second_order_cone([(&[(5, 1.0)], 1.0), (&[(6, c)], 0.0), (&[(1, 0.5)], 0.0)]);
+            lp
+        };
+        let first = program(1.0, 0.5, 0.3);
+        first.solve().unwrap();
+        for (c, d, e) in [(2.0, 0.25, 0.7), (0.3, 4.0, 1e-3), (1.0, 0.5, 0.3)] {
+            let lp = program(c, d, e);
+            let kept = lp.solve().unwrap();
+            let new = lp.solve_keeping(false).unwrap();
+            let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&kept), bits(&new), "c = {c}");
+        }
     }
 
     #[test]
