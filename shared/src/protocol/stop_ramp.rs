@@ -533,25 +533,33 @@ pub fn stop_time_separate_peaks(v: f64, a: f64, j: f64, jerk_limit: f64, cap: f6
 mod tests {
     use super::*;
 
-    /// The largest F over the transitions a drive may run from a constant
-    /// σ at ramp `t`, sampled densely, each with the shortest ρ the drive
-    /// accepts (√Δσ below 1, else Δσ).
-    fn worst_jerk(v: f64, a: f64, j: f64, cap: f64, t: f64) -> f64 {
+    /// The largest F over transitions from a constant σ at ramp `t`, each
+    /// `[σ₀, Δσ, ρ]` (to σ₀ − Δσ over t·ρ), sampled on 2 001 points.
+    fn worst_of(v: f64, a: f64, j: f64, t: f64, runs: impl Iterator<Item = [f64; 3]>) -> f64 {
         let mut worst = 0.0f64;
-        for i in 1..=400 {
-            let ds = cap * i as f64 / 400.0;
-            // The drive's ρ: the smallest of its candidates, at most this.
-            let rho = if ds >= 1.0 { ds } else { libm::sqrt(ds) };
+        for [s0, ds, rho] in runs {
             let tt = t * rho;
             for k in 0..=2000 {
                 let u = k as f64 / 2000.0;
-                let sigma = cap - ds * s(u);
+                let sigma = s0 - ds * s(u);
                 let sd = ds * s1(u) / tt;
                 let sdd = ds * s2(u) / (tt * tt);
                 worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
             }
         }
         worst
+    }
+
+    /// The largest F over the transitions a drive may run from a constant
+    /// σ at ramp `t`, sampled densely, each with the shortest ρ the drive
+    /// accepts (√Δσ below 1, else Δσ).
+    fn worst_jerk(v: f64, a: f64, j: f64, cap: f64, t: f64) -> f64 {
+        let runs = (1..=400).map(|i| {
+            let ds = cap * i as f64 / 400.0;
+            // The drive's ρ: the smallest of its candidates, at most this.
+            [cap, ds, if ds >= 1.0 { ds } else { libm::sqrt(ds) }]
+        });
+        worst_of(v, a, j, t, runs)
     }
 
     #[test]
@@ -652,19 +660,11 @@ mod tests {
     /// The largest F over the stops (to σ = 0) a drive may run from a
     /// constant σ₀ ≤ 1 at ramp `t` (ρ = √σ₀), sampled densely.
     fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
-        let mut worst = 0.0f64;
-        for i in 1..=100 {
+        let runs = (1..=100).map(|i| {
             let s0 = i as f64 / 100.0;
-            let tt = t * libm::sqrt(s0);
-            for k in 0..=2000 {
-                let u = k as f64 / 2000.0;
-                let sigma = s0 * (1.0 - s(u));
-                let sd = s0 * s1(u) / tt;
-                let sdd = s0 * s2(u) / (tt * tt);
-                worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
-            }
-        }
-        worst
+            [s0, s0, libm::sqrt(s0)]
+        });
+        worst_of(v, a, j, t, runs)
     }
 
     /// The ramp for stops from σ ≤ 1 keeps each within the budget, is never
