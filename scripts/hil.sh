@@ -67,6 +67,9 @@ export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" 
     PATH="\$PATH:/usr/bin:/sbin"
 "$PY" -m pytest -p no:cacheprovider -v -rfE --durations=12 hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?
+# The guest kernel's log: clocksource changes and stalls explain a run
+# whose simulator reports ticks seconds late.
+dmesg > "$OUT/dmesg.log" 2>&1
 echo "\$status" > "$OUT/status"
 exit \$status
 VM
@@ -77,7 +80,7 @@ kernel=/boot/vmlinuz-$(ls /lib/modules | sort -V | tail -1)
 set +e
 # No '> file' redirection: QEMU reopens stdout/stderr; pipe instead.
 timeout "${HIL_TIMEOUT:-900}" "$VNG" --force-9p --run "$kernel" --user root --disable-kvm \
-    --memory 1G --cpus 2 --rwdir "$OUT" --exec "$OUT/in-vm.sh" 2>&1 | tee "$OUT/vm.log"
+    --memory 2G --cpus 2 --rwdir "$OUT" --exec "$OUT/in-vm.sh" 2>&1 | tee "$OUT/vm.log"
 status=${PIPESTATUS[0]}
 set -e
 if [ "$status" -eq 0 ] && [ "$(cat "$OUT/status" 2>/dev/null)" != 0 ]; then

@@ -15,6 +15,8 @@ import can
 import cantools
 import pytest
 
+import stall_rerun
+
 ROOT = os.environ.get("HIL_ROOT", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
 IFACE = os.environ.get("HIL_IFACE", "vcan0")
 # The drives' side of the fault-injecting proxy (host on IFACE, proxy between).
@@ -120,13 +122,21 @@ class Proxy(Sim):
         self.proc = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT)
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_protocol(item, nextitem):
+    # A failure while the guest stalled the simulator runs once more.
+    return stall_rerun.protocol(item, nextitem, OUT)
+
+
 @pytest.fixture
-def make_sim():
+def make_sim(request):
     sims = []
 
     def make(*a, cls=Sim, **k):
         s = cls(*a, **k)
         sims.append(s)
+        # Read by stall_rerun after the test.
+        getattr(request.node, "sim_logs", []).append(s.log_path)
         return s
 
     yield make
