@@ -221,7 +221,6 @@ impl Rig {
         self.command_with(c, arg, 0, node)
     }
 
-    /// [`Rig::command_to`] with `arg2`.
     /// A Stop carrying `dated_100us` while Running: the ticks (ms) from it
     /// to Idle.
     fn dated_stop_ms(&mut self, dated_100us: u16) -> i64 {
@@ -236,6 +235,7 @@ impl Rig {
         ms
     }
 
+    /// [`Rig::command_to`] with `arg2`.
     fn command_with(&mut self, c: CommandCode, arg: u32, arg2: u16, node: u8) -> Option<(u8, u32)> {
         let n = self.sent.len();
         self.token = self.token.wrapping_add(1);

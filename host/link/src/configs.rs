@@ -310,7 +310,7 @@ mod tests {
     /// dropped (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
     #[test]
     fn stop_ramp_for_the_path_ahead() {
-        use triquint_shared::protocol::segment_maxima::wire_stop_ramps_at_unit;
+        use triquint_shared::protocol::segment_maxima::wire_ramps_and_at_unit;
         let s = DriveSettings::default();
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
             let plan = committed_plan(name);
@@ -325,7 +325,7 @@ mod tests {
                 .unwrap()
                 .iter()
                 .map(|w| {
-                    let (r, _) = wire_stop_ramps_at_unit(w, jl, ceiling, cap).unwrap();
+                    let [_, (r, _)] = wire_ramps_and_at_unit(w, jl, ceiling, cap).unwrap();
                     let end = start + w.duration_us as f64 * 1e-6;
                     let row = (start, end, r as f64);
                     start = end;

@@ -187,24 +187,20 @@ pub fn piece_ramps_and_at_unit(
 /// jerk limit `jerk_limit`, ceiling `ceiling` and override cap `cap`;
 /// `None` if a drive would refuse it for its stop.
 pub fn wire_ramps(w: &WireSegment, jerk_limit: f32, ceiling: f32, cap: f32) -> Option<(f32, f32)> {
-    piece_ramps(
-        &piece_maxima(&w.normalised_f32(), inv_h(w.duration_us)),
-        jerk_limit,
-        ceiling,
-        cap,
-    )
+    wire_ramps_and_at_unit(w, jerk_limit, ceiling, cap).map(|[full, _]| full)
 }
 
-/// A wire segment's own ramps for a stop from σ ≤ 1 (controlled, quick;
-/// s), as a drive computes them for it ([`piece_ramps_and_at_unit`]).
-pub fn wire_stop_ramps_at_unit(
+/// [`wire_ramps`] and, from the same pass, the segment's own ramps for a
+/// stop from σ ≤ 1, as a drive computes them for it
+/// ([`piece_ramps_and_at_unit`]). `[full, at_unit]`.
+pub fn wire_ramps_and_at_unit(
     w: &WireSegment,
     jerk_limit: f32,
     ceiling: f32,
     cap: f32,
-) -> Option<(f32, f32)> {
+) -> Option<[(f32, f32); 2]> {
     let pieces = piece_maxima(&w.normalised_f32(), inv_h(w.duration_us));
-    piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap).map(|[_, at_unit]| at_unit)
+    piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap)
 }
 
 /// The controlled and quick stop ramps (s) the drives need for the whole

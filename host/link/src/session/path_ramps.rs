@@ -1,13 +1,13 @@
 //! The stop ramp a Stop, QuickStop or FeedHold carries for the path ahead
 //! of its instant (docs/protocol.md, "A ramp for the path ahead"): the
 //! largest of the drives' own ramps for a stop from σ ≤ 1 (the same f32
-//! rule on the same wire segments, `segment_ramps_and_at_unit`) over the
+//! rule on the same wire segments, `wire_ramps_and_at_unit`) over the
 //! segments a stop from there can pass through. The drives run it only at
 //! σ ≤ 1 and only if it covers those ramps of the segments they hold in
 //! that window, so a wrong estimate of where the plan is, or a σ above 1,
 //! costs the shorter stop, never a harder one.
 
-use triquint_shared::protocol::segment_maxima::{wire_ramps, wire_stop_ramps_at_unit};
+use triquint_shared::protocol::segment_maxima::wire_ramps_and_at_unit;
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
 /// Room on each side of the host's estimate of the plan time (µs): its
@@ -34,14 +34,10 @@ impl PathRamps {
         let rows = segments
             .iter()
             .map(|w| {
-                let us = |r: Option<(f32, f32)>| {
-                    r.map_or([f64::INFINITY; 2], |(s, q)| {
-                        [s as f64 * 1e6, q as f64 * 1e6]
-                    })
-                };
-                let (jl, ceiling, cap) = (c.max_jerk, c.ceiling_jerk, c.override_cap);
-                let ramps = us(wire_ramps(w, jl, ceiling, cap));
-                let at_unit = us(wire_stop_ramps_at_unit(w, jl, ceiling, cap));
+                let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
+                let [ramps, at_unit] =
+                    wire_ramps_and_at_unit(w, c.max_jerk, c.ceiling_jerk, c.override_cap)
+                        .map_or([[f64::INFINITY; 2]; 2], |r| r.map(us));
                 let end = start + w.duration_us as f64;
                 let row = (start, end, at_unit);
                 start = end;
