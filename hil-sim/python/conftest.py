@@ -124,7 +124,7 @@ class Proxy(Sim):
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_protocol(item, nextitem):
-    # A failure while the guest stalled the simulator runs once more.
+    # A failure while the simulator was behind real time runs once more.
     return stall_rerun.protocol(item, nextitem, OUT)
 
 

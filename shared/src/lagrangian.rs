@@ -3,8 +3,8 @@
 //! It shares no algebra with [`crate::dynamics`]: energies are written body by
 //! body (strut centre-of-mass velocity plus the rod's angular velocity
 //! ω = d × ḋ / l²), the Cartesian mass matrix M(r) is the same energy's
-//! quadratic form written term by term, and its derivatives come by central
-//! differences.
+//! quadratic form written term by term, and its velocity terms come from
+//! each body's acceleration (tested against central differences of M).
 //! Lagrange's equations in the platform coordinates r give Q = M r̈ + Ṁ ṙ −
 //! ½ ∂(ṙᵀMṙ)/∂r + ∇V, and virtual work maps Q to joint forces: F = J⁻ᵀ Q.
 //!
@@ -72,36 +72,27 @@ pub fn mass_matrix(m: &Model<f64>, pose: &Pose<f64>) -> Matrix3<f64> {
     mass
 }
 
-/// Step of the central differences (m): truncation ~h², round-off ~ε/h, both < 1e-9.
-const H: f64 = 2e-5;
-
-fn mass_matrix_at(m: &Model<f64>, r: Vector3<f64>) -> Result<Matrix3<f64>, KinematicsError> {
-    Ok(mass_matrix(m, &Pose::from_cartesian(m, r)?))
-}
-
 /// Velocity- and gravity-dependent generalised force n(r, ṙ) in Cartesian
 /// coordinates: Ṁṙ − ½ ∂(ṙᵀMṙ)/∂r + ∇V.
-fn bias_force(
-    m: &Model<f64>,
-    r: Vector3<f64>,
-    rd: Vector3<f64>,
-) -> Result<Vector3<f64>, KinematicsError> {
-    // Ṁ ṙ: M differentiated along ṙ.
-    let m_dot = (mass_matrix_at(m, r + rd * H)? - mass_matrix_at(m, r - rd * H)?) / (2.0 * H);
-    let mut n = m_dot * rd;
-    for k in 0..3 {
-        let mut e = Vector3::zeros();
-        e[k] = H;
-        let quad = |r: Vector3<f64>| -> Result<f64, KinematicsError> {
-            Ok(rd.dot(&(mass_matrix_at(m, r)? * rd)))
-        };
-        let v = |r: Vector3<f64>| -> Result<f64, KinematicsError> {
-            Ok(potential_energy(m, &Pose::from_cartesian(m, r)?))
-        };
-        n[k] +=
-            -0.5 * (quad(r + e)? - quad(r - e)?) / (2.0 * H) + (v(r + e)? - v(r - e)?) / (2.0 * H);
+///
+/// Every body's energy is ½ m_b |ṗ_b|² for a position p_b(r) with ṗ_b = A_b ṙ
+/// (the strut's spin too: |d × ḋ|² = l²|ḋ|² since d·ḋ = 0, so it is
+/// ½ (I⊥/l²)|ḋ|²). For such a body Lagrange's velocity terms reduce to
+/// m_b A_bᵀ (Ȧ_b ṙ), and every Ȧ_b ṙ is e_z times the slider's acceleration
+/// at r̈ = 0, a_i = |ḋ_i|²/d_iz (from differentiating d_i·ḋ_i = 0 twice).
+fn bias_force(m: &Model<f64>, pose: &Pose<f64>, rd: &Vector3<f64>) -> Vector3<f64> {
+    let ez = Vector3::z();
+    let spin = m.strut_mass / 12.0;
+    let axial = m.slider_mass + m.rotor_inertia * m.ratio * m.ratio;
+    let mut n = ez * (m.platform_mass + 1.5 * m.strut_mass) * m.gravity;
+    for d in &pose.struts {
+        let w = d / d.z;
+        let d_rate = rd - ez * w.dot(rd);
+        let a = d_rate.norm_squared() / d.z;
+        n += ((ez + w) * (0.25 * m.strut_mass) + (w - ez) * spin + w * axial) * a
+            + w * ((m.slider_mass + 0.5 * m.strut_mass) * m.gravity);
     }
-    Ok(n)
+    n
 }
 
 /// Motor torques (N·m) by the Lagrangian route.
@@ -114,7 +105,7 @@ pub fn inverse_dynamics(
     let pose = Pose::from_joints(m, *q)?;
     let rd = pose.cartesian_velocity(qd);
     let rdd = pose.cartesian_acceleration(&rd, qd, qdd);
-    let q_r = mass_matrix(m, &pose) * rdd + bias_force(m, pose.r, rd)?;
+    let q_r = mass_matrix(m, &pose) * rdd + bias_force(m, &pose, &rd);
     // Virtual work: F·δq = Q·δr with δr = G δq, so F = Gᵀ Q.
     Ok(pose.platform_jacobian().tr_mul(&q_r) / m.ratio)
 }
@@ -132,7 +123,7 @@ pub fn forward_dynamics(
     let rd = pose.cartesian_velocity(qd);
     let force = tau * m.ratio + external;
     let mass = mass_matrix(m, &pose);
-    let rhs = pose.jacobian().tr_mul(&force) - bias_force(m, pose.r, rd)?;
+    let rhs = pose.jacobian().tr_mul(&force) - bias_force(m, &pose, &rd);
     let rdd = mass
         .cholesky()
         .ok_or(KinematicsError::Singular)?
@@ -156,6 +147,52 @@ mod tests {
         let tau = inverse_dynamics(&m, &q, &qd, &qdd).unwrap();
         let back = forward_dynamics(&m, &q, &qd, &tau, &Vector3::zeros()).unwrap();
         assert!((back - qdd).norm() < 1e-6, "{back} vs {qdd}");
+    }
+
+    /// Ṁṙ − ½ ∂(ṙᵀMṙ)/∂r + ∇V by central differences of M and V.
+    fn bias_by_differences(m: &Model<f64>, r: Vector3<f64>, rd: Vector3<f64>) -> Vector3<f64> {
+        const H: f64 = 2e-5;
+        let pose = |r: Vector3<f64>| Pose::from_cartesian(m, r).unwrap();
+        let mass = |r: Vector3<f64>| mass_matrix(m, &pose(r));
+        let mut n = (mass(r + rd * H) - mass(r - rd * H)) / (2.0 * H) * rd;
+        for k in 0..3 {
+            let mut e = Vector3::zeros();
+            e[k] = H;
+            let quad = |r: Vector3<f64>| rd.dot(&(mass(r) * rd));
+            let v = |r: Vector3<f64>| potential_energy(m, &pose(r));
+            n[k] +=
+                -0.5 * (quad(r + e) - quad(r - e)) / (2.0 * H) + (v(r + e) - v(r - e)) / (2.0 * H);
+        }
+        n
+    }
+
+    #[test]
+    fn the_bias_force_is_lagranges_by_differences() {
+        let m = Robot::default().model::<f64>();
+        for r in [
+            Vector3::new(0.0, 0.0, 0.60),
+            Vector3::new(0.02, -0.03, 0.62),
+            Vector3::new(-0.09, 0.09, 0.68),
+        ] {
+            let pose = Pose::from_cartesian(&m, r).unwrap();
+            // Gravity alone, then the velocity terms alone.
+            let gravity = bias_force(&m, &pose, &Vector3::zeros());
+            let g_diff = bias_by_differences(&m, r, Vector3::zeros());
+            assert!((gravity - g_diff).norm() < 1e-8 * g_diff.norm(), "{r}");
+            for rd in [
+                Vector3::new(0.1, -0.2, 0.05),
+                Vector3::new(0.0, 0.0, 1.0),
+                Vector3::new(-0.3, 0.4, -0.2),
+            ] {
+                let closed = bias_force(&m, &pose, &rd) - gravity;
+                let diff = bias_by_differences(&m, r, rd) - g_diff;
+                let err = (closed - diff).norm();
+                assert!(
+                    err <= 1e-6 * diff.norm() + 1e-9,
+                    "{r} {rd}: {closed} vs {diff}"
+                );
+            }
+        }
     }
 
     #[test]
