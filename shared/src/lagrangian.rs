@@ -149,6 +149,10 @@ mod tests {
         assert!((back - qdd).norm() < 1e-6, "{back} vs {qdd}");
     }
 
+    /// Platform positions (m) and velocities (m/s) the tests sample.
+    const POSES: [[f64; 3]; 3] = [[0.0, 0.0, 0.60], [0.02, -0.03, 0.62], [-0.09, 0.09, 0.68]];
+    const RATES: [[f64; 3]; 3] = [[0.1, -0.2, 0.05], [0.0, 0.0, 1.0], [-0.3, 0.4, -0.2]];
+
     /// Ṁṙ − ½ ∂(ṙᵀMṙ)/∂r + ∇V by central differences of M and V.
     fn bias_by_differences(m: &Model<f64>, r: Vector3<f64>, rd: Vector3<f64>) -> Vector3<f64> {
         const H: f64 = 2e-5;
@@ -169,21 +173,13 @@ mod tests {
     #[test]
     fn the_bias_force_is_lagranges_by_differences() {
         let m = Robot::default().model::<f64>();
-        for r in [
-            Vector3::new(0.0, 0.0, 0.60),
-            Vector3::new(0.02, -0.03, 0.62),
-            Vector3::new(-0.09, 0.09, 0.68),
-        ] {
+        for r in POSES.map(Vector3::from) {
             let pose = Pose::from_cartesian(&m, r).unwrap();
             // Gravity alone, then the velocity terms alone.
             let gravity = bias_force(&m, &pose, &Vector3::zeros());
             let g_diff = bias_by_differences(&m, r, Vector3::zeros());
             assert!((gravity - g_diff).norm() < 1e-8 * g_diff.norm(), "{r}");
-            for rd in [
-                Vector3::new(0.1, -0.2, 0.05),
-                Vector3::new(0.0, 0.0, 1.0),
-                Vector3::new(-0.3, 0.4, -0.2),
-            ] {
+            for rd in RATES.map(Vector3::from) {
                 let closed = bias_force(&m, &pose, &rd) - gravity;
                 let diff = bias_by_differences(&m, r, rd) - g_diff;
                 let err = (closed - diff).norm();
@@ -198,19 +194,11 @@ mod tests {
     #[test]
     fn mass_matrix_is_the_kinetic_energys_quadratic_form() {
         let m = Robot::default().model::<f64>();
-        for r in [
-            Vector3::new(0.0, 0.0, 0.60),
-            Vector3::new(0.02, -0.03, 0.62),
-            Vector3::new(-0.09, 0.09, 0.68),
-        ] {
+        for r in POSES.map(Vector3::from) {
             let pose = Pose::from_cartesian(&m, r).unwrap();
             let mass = mass_matrix(&m, &pose);
             assert!((mass - mass.transpose()).norm() < 1e-12 * mass.norm());
-            for rd in [
-                Vector3::new(0.1, -0.2, 0.05),
-                Vector3::new(0.0, 0.0, 1.0),
-                Vector3::new(-0.3, 0.4, -0.2),
-            ] {
+            for rd in RATES.map(Vector3::from) {
                 let t = kinetic_energy(&m, &pose, &pose.joint_velocity(&rd));
                 let quad = 0.5 * rd.dot(&(mass * rd));
                 assert!((quad - t).abs() <= 1e-12 * t, "{r} {rd}: {quad} vs {t}");
