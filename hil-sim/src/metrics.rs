@@ -25,7 +25,12 @@ pub fn plan_position(plan: &Plan, t: f64) -> [f64; 3] {
 /// ([`eval::at`]: the start position before them, the end position after);
 /// zeros for no segments, NaN for a NaN `t`.
 pub fn segments_position(segments: &[Segment], t: f64) -> [f64; 3] {
-    match eval::at(segments, t) {
+    segments_position_within(segments, eval::duration(segments), t)
+}
+
+/// [`segments_position`] with the segments' duration already known.
+fn segments_position_within(segments: &[Segment], duration: f64, t: f64) -> [f64; 3] {
+    match eval::at_within(segments, duration, t) {
         Some(s) => s.q,
         None if t.is_nan() && !segments.is_empty() => [f64::NAN; 3],
         None => [0.0; 3],
@@ -46,6 +51,8 @@ pub fn tracking_segments(
     samples: &[Sample],
 ) -> Tracking {
     let end_ns = start_ns + (total_time_s * 1e9) as u64;
+    // Summed once: a run's samples times its segments would be quadratic.
+    let duration = eval::duration(segments);
     let mut sum = [0.0; 3];
     let mut out = Tracking::default();
     for s in samples
@@ -53,7 +60,7 @@ pub fn tracking_segments(
         .filter(|s| s.t_ns >= start_ns && s.t_ns <= end_ns)
     {
         let t = (s.t_ns - start_ns) as f64 * 1e-9;
-        let r = segments_position(segments, t.min(total_time_s));
+        let r = segments_position_within(segments, duration, t.min(total_time_s));
         for j in 0..3 {
             let e = s.q[j] - r[j];
             sum[j] += e * e;

@@ -7,7 +7,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyType};
 use triquint_shared::kinematics::KinematicsError;
-use triquint_shared::plan::{JointState, Plan, SampleError};
+use triquint_shared::plan::{JointState, Plan, SampleError, eval};
 use triquint_shared::{dynamics, kinematics};
 
 use crate::arrays::{array, floats, rows_array};
@@ -308,12 +308,14 @@ impl PyPlan {
                 )));
             }
         };
+        // The plan's duration summed once, not at every time asked.
+        let duration = eval::duration(&self.plan.segments);
         let states = guard(py, || {
             times
                 .data
                 .iter()
                 .map(|&t| {
-                    self.plan.at(t).ok_or_else(|| {
+                    eval::at_within(&self.plan.segments, duration, t).ok_or_else(|| {
                         PyValueError::new_err(if t.is_nan() {
                             "t is NaN".to_string()
                         } else {

@@ -144,8 +144,14 @@ pub fn duration(segments: &[Segment]) -> f64 {
 /// assert!(eval::segment_at(&segs, f64::NAN).is_none());
 /// ```
 pub fn segment_at(segments: &[Segment], t: f64) -> Option<(usize, &Segment)> {
+    segment_at_within(segments, duration(segments), t)
+}
+
+/// [`segment_at`] with the segments' [`duration`] already known: a caller
+/// that evaluates many times pays its sum once, not at every call.
+pub fn segment_at_within(segments: &[Segment], duration: f64, t: f64) -> Option<(usize, &Segment)> {
     // `!(a <= b)` also rejects NaN, in `t` or in the duration.
-    if !(0.0 <= t && t <= duration(segments)) {
+    if !(0.0 <= t && t <= duration) {
         return None;
     }
     let i = segments.partition_point(|s| s.t0_s <= t).saturating_sub(1);
@@ -169,6 +175,12 @@ pub fn segment_at(segments: &[Segment], t: f64) -> Option<(usize, &Segment)> {
 /// assert!(eval::at(&[], 0.0).is_none());
 /// ```
 pub fn at(segments: &[Segment], t: f64) -> Option<JointState> {
+    at_within(segments, duration(segments), t)
+}
+
+/// [`at`] with the segments' [`duration`] already known (as
+/// [`segment_at_within`]).
+pub fn at_within(segments: &[Segment], duration: f64, t: f64) -> Option<JointState> {
     if t.is_nan() {
         return None;
     }
@@ -176,7 +188,7 @@ pub fn at(segments: &[Segment], t: f64) -> Option<JointState> {
     if t < 0.0 {
         return Some(JointState::at_rest(first.quintic().eval(0.0).q.into()));
     }
-    match segment_at(segments, t) {
+    match segment_at_within(segments, duration, t) {
         Some((_, s)) => Some(s.quintic().eval(t - s.t0_s).into()),
         None => Some(JointState::at_rest(last.quintic().end().q.into())),
     }
@@ -254,7 +266,7 @@ impl Iterator for Samples<'_> {
             self.end
         };
         self.next += 1;
-        at(self.segments, t).map(|s| (t, s))
+        at_within(self.segments, self.end, t).map(|s| (t, s))
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
