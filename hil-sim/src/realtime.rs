@@ -231,6 +231,9 @@ fn unwrap_host_us(arg: u32, est_ns: i64) -> i64 {
     (est_us + arg.wrapping_sub(est_us as u32) as i32 as i64) * 1000
 }
 
+/// The least lateness logged (µs).
+const LOGGED_LATE_US: f64 = 100_000.0;
+
 /// Ticks later than this are not caught up but skipped (and counted).
 const MAX_CATCH_UP_NS: u64 = 5_000_000_000;
 
@@ -294,6 +297,7 @@ pub fn run(
     let mut all_busy_ns = 0u64;
     let mut rx = Vec::new();
     let mut closed: VecDeque<Closed> = VecDeque::new();
+    let mut logged_late_us = LOGGED_LATE_US;
     let result = 'run: loop {
         if stop.load(Ordering::Relaxed) {
             break 'run Ok(());
@@ -307,7 +311,20 @@ pub fn run(
         // the plant stay a consistent discrete-time system); each one that
         // starts a whole period late is a missed deadline.
         let late = now - next;
-        report.max_late_us = report.max_late_us.max(late as f64 * 1e-3);
+        let late_us = late as f64 * 1e-3;
+        // Lateness past 0.1 s is logged when it happens, each time it
+        // doubles, to be set beside the other processes' logs (the suite
+        // reruns a failed test whose simulator was that late); a line a
+        // tick would itself make the loop later.
+        if late_us > logged_late_us {
+            eprintln!(
+                "triquint-sim: tick {:.3} s after start ran {:.0} ms late",
+                (next - start_ns) as f64 * 1e-9,
+                late_us * 1e-3
+            );
+            logged_late_us = 2.0 * late_us;
+        }
+        report.max_late_us = report.max_late_us.max(late_us);
         if late >= tick_ns {
             report.missed_deadlines += 1;
         }
