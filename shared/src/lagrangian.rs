@@ -82,8 +82,11 @@ pub fn mass_matrix(m: &Model<f64>, pose: &Pose<f64>) -> Matrix3<f64> {
 /// at r̈ = 0, a_i = |ḋ_i|²/d_iz (from differentiating d_i·ḋ_i = 0 twice).
 fn bias_force(m: &Model<f64>, pose: &Pose<f64>, rd: &Vector3<f64>) -> Vector3<f64> {
     let ez = Vector3::z();
+    // I⊥/l² of the rod, I⊥ = m_s l²/12 as in `kinetic_energy`.
     let spin = m.strut_mass / 12.0;
     let axial = m.slider_mass + m.rotor_inertia * m.ratio * m.ratio;
+    // ∇V: the platform and the strut centres' halves of z, and each slider
+    // and strut centre's half of q_i, with ∂q_i/∂r = w_i.
     let mut n = ez * (m.platform_mass + 1.5 * m.strut_mass) * m.gravity;
     for d in &pose.struts {
         let w = d / d.z;
