@@ -67,8 +67,8 @@ export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" 
     PATH="\$PATH:/usr/bin:/sbin"
 "$PY" -m pytest -p no:cacheprovider -v -rfE --durations=12 hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?
-# The guest kernel's log: clocksource changes and stalls explain a run
-# whose simulator reports ticks seconds late.
+# The guest kernel's log (clocksource changes, stalls), kept beside the
+# simulator's own, which logs when its ticks ran late (docs/vcan.md).
 dmesg > "$OUT/dmesg.log" 2>&1
 echo "\$status" > "$OUT/status"
 exit \$status

@@ -139,13 +139,15 @@ mod tests {
 
     /// A stop from σ = 1 at plan time `t0` (s) that lasts `t` (s) with the
     /// shape `rate(u)` = (S′(u), S″(u)), σ = 1 − S(u): the largest joint
-    /// |jerk| along it, q‴σ³ + 3q″σσ̇ + q′σ̈ with the signs as they are,
-    /// sampled on 1 000 steps.
+    /// |jerk| along it, q‴σ³ + 3q″σσ̇ + q′σ̈ with the signs as they are, as
+    /// a share of the budget `budget(s)` at plan time s, sampled on 1 000
+    /// steps.
     fn stop_peak_jerk(
         p: &triquint_shared::plan::Plan,
         t0: f64,
         t: f64,
         rate: impl Fn(f64) -> (f64, f64),
+        budget: &dyn Fn(f64) -> f64,
     ) -> f64 {
         let steps = 1000;
         let dt = t / steps as f64;
@@ -154,12 +156,14 @@ mod tests {
             let u = k as f64 / steps as f64;
             let (s1, s2) = rate(u);
             let (sd, sdd) = (-s1 / t, -s2 / (t * t));
-            let Some(js) = p.at(s.min(p.duration())) else {
+            let s_now = s.min(p.duration());
+            let Some(js) = p.at(s_now) else {
                 break;
             };
+            let b = budget(s_now);
             for i in 0..3 {
                 let j = js.jerk[i] * sigma.powi(3) + 3.0 * js.a[i] * sigma * sd + js.v[i] * sdd;
-                peak = peak.max(j.abs());
+                peak = peak.max(j.abs() / b);
             }
             // Midpoint rule for σ and the plan time it advances.
             let (s1m, _) = rate((u + 0.5 / steps as f64).min(1.0));
@@ -170,21 +174,21 @@ mod tests {
         peak
     }
 
-    /// The shortest stop of a shape within jerk `b` from `t0` (bisection on
-    /// its length; `None` if none up to 4 s).
+    /// The shortest stop of a shape within the jerk budget `budget(s)`
+    /// from `t0` (bisection on its length; `None` if none up to 4 s).
     fn shortest_of_shape(
         p: &triquint_shared::plan::Plan,
         t0: f64,
-        b: f64,
+        budget: &dyn Fn(f64) -> f64,
         rate: &dyn Fn(f64) -> (f64, f64),
     ) -> Option<f64> {
         let (mut lo, mut hi) = (0.01, 4.0);
-        if stop_peak_jerk(p, t0, hi, rate) > b {
+        if stop_peak_jerk(p, t0, hi, rate, budget) > 1.0 {
             return None;
         }
         for _ in 0..30 {
             let mid = 0.5 * (lo + hi);
-            if stop_peak_jerk(p, t0, mid, rate) > b {
+            if stop_peak_jerk(p, t0, mid, rate, budget) > 1.0 {
                 lo = mid;
             } else {
                 hi = mid;
@@ -195,6 +199,9 @@ mod tests {
 
     /// Where the stop's length goes, at 40 instants of each committed plan
     /// (σ = 1, the plan's largest budget b): the ramp for the path ahead;
+    /// the smoothstep held to each segment's budget along the path, from
+    /// anywhere in the estimate margin (what drives checking the path
+    /// could run, never longer than the ramp);
     /// the smoothstep sized for that instant with the jerk's true signs
     /// (the best any sizing of this shape can do); σ̈ bang-bang (−c then
     /// +c′, switching at the best of nine fractions), sized the same way;
@@ -215,16 +222,28 @@ mod tests {
             let c = &configs.nodes[0];
             let w = p.wire_segments().unwrap();
             let r = PathRamps::new(&w, c);
-            let b = w
+            // Each segment's end (s) and controlled stop budget.
+            let mut end = 0.0;
+            let spans: Vec<(f64, f64)> = w
                 .iter()
                 .map(|s| {
                     let [_, _, j] = maxima(&s.normalised_f32(), inv_h(s.duration_us));
-                    budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0]
+                    end += s.duration_us as f64 * 1e-6;
+                    let b = budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0];
+                    (end, b as f64)
                 })
-                .fold(0.0f32, f32::max) as f64;
+                .collect();
+            let b = spans.iter().map(|x| x.1).fold(0.0, f64::max);
+            let budget_at = |s: f64| {
+                spans
+                    .iter()
+                    .find(|x| s <= x.0)
+                    .or(spans.last())
+                    .map_or(b, |x| x.1)
+            };
             let total = p.duration();
             let n = 40;
-            let mut sums = [0.0f64; 4];
+            let mut sums = [0.0f64; 6];
             let mut counted = 0;
             for i in 1..n {
                 let t0 = total * i as f64 / n as f64;
@@ -239,7 +258,40 @@ mod tests {
                     0 => r.full_us[0],
                     u => u as f64 * UNIT_US as f64,
                 } * 1e-6;
-                let best_smooth = shortest_of_shape(&p, t0, b, &smooth).unwrap();
+                let best_smooth = shortest_of_shape(&p, t0, &|_| b, &smooth).unwrap();
+                // The same smoothstep held to each segment's own budget, from
+                // anywhere within the host's estimate margin of t0: what a
+                // drive that checked the path it holds could run.
+                let checked = [-1.0, -0.5, 0.0, 0.5, 1.0]
+                    .map(|k| {
+                        let from = (t0 + k * ESTIMATE_MARGIN_US * 1e-6).clamp(0.0, total);
+                        shortest_of_shape(&p, from, &budget_at, &smooth).unwrap()
+                    })
+                    .into_iter()
+                    .fold(0.0, f64::max);
+                // A stop of that length passes through no plan time beyond
+                // t0 + checked (σ ≤ 1), nor does a shorter one: the largest
+                // budget there bounds every such stop's jerk.
+                let b_way = spans
+                    .iter()
+                    .zip(std::iter::once(0.0).chain(spans.iter().map(|x| x.0)))
+                    .filter(|&(&(e, _), a)| e > t0 && a < t0 + checked)
+                    .map(|(x, _)| x.1)
+                    .fold(0.0, f64::max);
+                let bound_way = (0..3)
+                    .map(|k| one_joint_stop_s(js.v[k], js.a[k], b_way))
+                    .fold(0.0, f64::max);
+                // The drives' ramp keeps every stop from the window within
+                // the segments' budgets, so the shortest that does is no
+                // longer; nor is the lower bound longer than that shortest.
+                assert!(
+                    checked <= dated * 1.001,
+                    "{name} at {t0}: {checked} > {dated}"
+                );
+                assert!(
+                    bound <= bound_way && bound_way <= checked * 1.001,
+                    "{name} at {t0}"
+                );
                 let best_bang = (1..10)
                     .filter_map(|k| {
                         let l = k as f64 / 10.0;
@@ -250,18 +302,21 @@ mod tests {
                                 (2.0 * (1.0 - u) / (1.0 - l), -2.0 / (1.0 - l))
                             }
                         };
-                        shortest_of_shape(&p, t0, b, &bang)
+                        shortest_of_shape(&p, t0, &|_| b, &bang)
                     })
                     .fold(f64::INFINITY, f64::min);
-                for (sum, x) in sums.iter_mut().zip([dated, best_smooth, best_bang, bound]) {
+                for (sum, x) in
+                    sums.iter_mut()
+                        .zip([dated, checked, best_smooth, best_bang, bound, bound_way])
+                {
                     *sum += x;
                 }
                 counted += 1;
             }
             let m = sums.map(|x| x / counted as f64);
             eprintln!(
-                "{name} (b {b:.3} m/s³, {counted} instants), mean stop: path-ahead ramp {:.3} s, smoothstep sized for the instant {:.3} s, bang-bang sized for the instant {:.3} s, lower bound {:.3} s",
-                m[0], m[1], m[2], m[3]
+                "{name} (b {b:.3} m/s³, {counted} instants), mean stop: path-ahead ramp {:.3} s, smoothstep checked along the path {:.3} s, smoothstep sized for the instant {:.3} s, bang-bang sized for the instant {:.3} s, lower bound {:.3} s (within the budgets on its way {:.3} s)",
+                m[0], m[1], m[2], m[3], m[4], m[5]
             );
         }
     }
