@@ -35,7 +35,7 @@ step "fault soak (release)"
 # 200 schedules here (8 per fault kind, about a minute; `scripts/soak.sh`
 # alone runs 1 000, docs/verification.md).
 SOAK_SCHEDULES=${SOAK_SCHEDULES:-200} ./scripts/soak.sh
-FUZZ_SECONDS=${FUZZ_SECONDS:-20} ./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
+FUZZ_SECONDS=${FUZZ_SECONDS:-12} ./scripts/fuzz.sh   # short libFuzzer run of fuzz/ on stable (canary first)
 
 step "Python package: abi3 wheel in a fresh venv (pip install ./host/python), pytest"
 # The README's install command; the wheel reuses target/ (absolute: pip runs
