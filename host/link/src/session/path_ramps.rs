@@ -222,24 +222,25 @@ mod tests {
             let c = &configs.nodes[0];
             let w = p.wire_segments().unwrap();
             let r = PathRamps::new(&w, c);
-            // Each segment's end (s) and controlled stop budget.
-            let mut end = 0.0;
-            let spans: Vec<(f64, f64)> = w
+            // Each segment's plan-time span (s, the ramps' own) and its
+            // controlled stop budget.
+            let spans: Vec<(f64, f64, f64)> = r
+                .segments
                 .iter()
-                .map(|s| {
+                .zip(&w)
+                .map(|(&(a, e, _), s)| {
                     let [_, _, j] = maxima(&s.normalised_f32(), inv_h(s.duration_us));
-                    end += s.duration_us as f64 * 1e-6;
                     let b = budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0];
-                    (end, b as f64)
+                    (a * 1e-6, e * 1e-6, b as f64)
                 })
                 .collect();
-            let b = spans.iter().map(|x| x.1).fold(0.0, f64::max);
+            let b = spans.iter().map(|x| x.2).fold(0.0, f64::max);
             let budget_at = |s: f64| {
                 spans
                     .iter()
-                    .find(|x| s <= x.0)
+                    .find(|x| s <= x.1)
                     .or(spans.last())
-                    .map_or(b, |x| x.1)
+                    .map_or(b, |x| x.2)
             };
             let total = p.duration();
             let n = 40;
@@ -274,9 +275,8 @@ mod tests {
                 // budget there bounds every such stop's jerk.
                 let b_way = spans
                     .iter()
-                    .zip(std::iter::once(0.0).chain(spans.iter().map(|x| x.0)))
-                    .filter(|&(&(e, _), a)| e > t0 && a < t0 + checked)
-                    .map(|(x, _)| x.1)
+                    .filter(|&&(a, e, _)| e > t0 && a < t0 + checked)
+                    .map(|x| x.2)
                     .fold(0.0, f64::max);
                 let bound_way = (0..3)
                     .map(|k| one_joint_stop_s(js.v[k], js.a[k], b_way))
