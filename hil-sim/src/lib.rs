@@ -7,6 +7,7 @@
 //! host's station on the in-process bus: [`host_port`]).
 #![allow(clippy::needless_range_loop)]
 
+mod band_lu;
 pub mod bus;
 pub mod confinement;
 pub mod faults;

@@ -6,6 +6,7 @@
 //! [`helix`]) are built with [`Ends::Still`] and pass `triquint check`, so
 //! `triquint upload` takes them as files.
 
+use crate::band_lu::Banded;
 use nalgebra::Vector3;
 use triquint_firmware::QUEUE_CAPACITY;
 use triquint_shared::kinematics::{KinematicsError, Pose};
@@ -74,8 +75,9 @@ fn quintic_spline_derivatives(q: &[f64], h: &[f64], ends: Ends) -> (Vec<f64>, Ve
         return (v, a);
     }
     let m = 2 * (n - 2);
-    let mut mat = nalgebra::DMatrix::<f64>::zeros(m, m);
-    let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+    // A row at knot i touches the knots i − 1, i and i + 1: a band of 3.
+    let mut mat = Banded::zeros(m, 3, 3);
+    let mut rhs = vec![0.0; m];
     let idx = |i: usize, k: usize| 2 * (i - 1) + k;
     // A segment's end jerk and snap depend on its knots' positions only
     // through their difference (b[0] = −b[3]): with `Ends::Still` taken as
@@ -91,8 +93,8 @@ fn quintic_spline_derivatives(q: &[f64], h: &[f64], ends: Ends) -> (Vec<f64>, Ve
         }
         for (knot, base) in [(seg, 0usize), (seg + 1, 3)] {
             if knot > 0 && knot < n - 1 {
-                mat[(row, idx(knot, 0))] += sign * b[base + 1][quantity];
-                mat[(row, idx(knot, 1))] += sign * b[base + 2][quantity];
+                mat.add(row, idx(knot, 0), sign * b[base + 1][quantity]);
+                mat.add(row, idx(knot, 1), sign * b[base + 2][quantity]);
             }
         }
     };
@@ -119,17 +121,21 @@ fn quintic_spline_derivatives(q: &[f64], h: &[f64], ends: Ends) -> (Vec<f64>, Ve
         // long one's), then the solution refined against its residual, for
         // the check's 10⁻⁹ on jerk continuity.
         for r in 0..m {
-            let scale = mat.row(r).amax();
+            let scale = mat.row_amax(r);
             if scale > 0.0 {
-                mat.row_mut(r).unscale_mut(scale);
+                mat.unscale_row(r, scale);
                 rhs[r] /= scale;
             }
         }
         let lu = mat.clone().lu();
         lu.solve(&rhs).map(|mut x| {
             for _ in 0..2 {
-                if let Some(dx) = lu.solve(&(&rhs - &mat * &x)) {
-                    x += dx;
+                let ax = mat.mul(&x);
+                let residual: Vec<f64> = rhs.iter().zip(&ax).map(|(b, y)| b - y).collect();
+                if let Some(dx) = lu.solve(&residual) {
+                    for (x, d) in x.iter_mut().zip(dx) {
+                        *x += d;
+                    }
                 }
             }
             x
