@@ -34,7 +34,9 @@ objdump="$bin/llvm-objdump"
 size="$bin/llvm-size"
 
 step "golden vectors are current (host f32 results; f64 plan within 1 µm)"
-cargo test --locked -p triquint-firmware --test golden -- --nocapture 2>&1 | grep -E "golden|test result"
+# --workspace: the features of the workspace-wide test build, so its
+# compiled dependencies are reused (-p alone would build another set).
+cargo test --locked --workspace --test golden -- --nocapture 2>&1 | grep -E "golden|test result"
 
 cd "$root/firmware/boards/qemu-mps2-an386"
 # Board crates are their own workspaces: build each into its own target/,
