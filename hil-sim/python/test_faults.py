@@ -11,9 +11,8 @@ import warnings
 import subprocess
 import time
 
-import cantools
 
-from conftest import IFACE, OUT, ROOT, TRIQUINT, Proxy, plan_path, plan_start_mm, run
+from conftest import IFACE, OUT, TRIQUINT, Proxy, plan_path, plan_start_mm, run
 
 CASE = 1
 # Tracking bound through the proxy: a quarter of the drives' 1 mm following
@@ -58,22 +57,34 @@ def check_executed(report, sent, whole):
             assert [e[0] for e in ex] == list(range(n)), f"node {node}: {ex}"
 
 
-def wait_at_rest(bus, timeout=20.0):
+def heartbeat(db, m):
+    """(node, state name, fault code) of a heartbeat frame, else None."""
+    if not 0x701 <= m.arbitration_id <= 0x703:
+        return None
+    d = db.decode_message(m.arbitration_id, bytes(m.data), decode_choices=False)
+    return m.arbitration_id - 0x700, STATES[d["state"]], d["fault"]
+
+
+def at_rest(states):
+    """Every node's latest heartbeat says Fault or Idle."""
+    return len(states) == 3 and all(s in ("Fault", "Idle") for s in states)
+
+
+def wait_at_rest(bus, db, timeout=20.0):
     """Reads heartbeats until every node's latest is Fault or Idle (or
     `timeout` s pass: the caller's assertions then say what was left)."""
-    db = cantools.database.load_file(os.path.join(ROOT, "docs", "triquint.dbc"))
     state = {}
     t0 = time.monotonic()
     while time.monotonic() - t0 < timeout:
         m = bus.recv(0.05)
-        if m is not None and 0x701 <= m.arbitration_id <= 0x703:
-            d = db.decode_message(m.arbitration_id, bytes(m.data), decode_choices=False)
-            state[m.arbitration_id - 0x700] = STATES[d["state"]]
-            if len(state) == 3 and all(s in ("Fault", "Idle") for s in state.values()):
+        hb = heartbeat(db, m) if m is not None else None
+        if hb is not None:
+            state[hb[0]] = hb[1]
+            if at_rest(state.values()):
                 return
 
 
-def completed_unchanged(make_sim, bus, name, faults):
+def completed_unchanged(make_sim, bus, db, name, faults):
     """The upload completes, every drive executed every segment as sent.
 
     One exception, checked as such: when the proxy's own latency in the
@@ -87,7 +98,7 @@ def completed_unchanged(make_sim, bus, name, faults):
     if code != 0:
         # The host exits once it sees the fault, while the drives are still
         # ramping down: the report's stop figures need them at rest.
-        wait_at_rest(bus)
+        wait_at_rest(bus, db)
     report = sim.stop()
     counts = proxy.stop()
     with open(os.path.join(OUT, f"faults-{name}.json"), "w") as f:
@@ -114,29 +125,29 @@ def completed_unchanged(make_sim, bus, name, faults):
     return summary, counts["faults"]
 
 
-def test_frame_loss_is_recovered_by_retransmission(make_sim, bus):
+def test_frame_loss_is_recovered_by_retransmission(make_sim, bus, db):
     # 1 % of segment parts and segment acknowledgements lost, both ways.
     r = completed_unchanged(
-        make_sim, bus, "loss", ["--seed", "11", "--loss", "0.01", "--ids", "0x100-0x18F"])
+        make_sim, bus, db, "loss", ["--seed", "11", "--loss", "0.01", "--ids", "0x100-0x18F"])
     if r is None:
         return
     summary, f = r
     assert f["lost"] > 0 and summary["retransmits"] > 0, (f, summary)
 
 
-def test_corrupted_segment_parts_fail_the_crc_and_are_retransmitted(make_sim, bus):
+def test_corrupted_segment_parts_fail_the_crc_and_are_retransmitted(make_sim, bus, db):
     # One flipped bit in 2 % of segment parts, full and compact: the CRC-32
     # rejects them (Case I's 9 segments are 39 classic frames; seed 12
     # corrupts 3 of them on the first pass: proxy.rs, the_vm_crc_scenario).
-    r = completed_unchanged(make_sim, bus, "corrupt", ["--seed", "12", "--corrupt", "0.02"])
+    r = completed_unchanged(make_sim, bus, db, "corrupt", ["--seed", "12", "--corrupt", "0.02"])
     if r is None:
         return
     summary, f = r
     assert f["corrupted"] > 0 and summary["retransmits"] > 0, (f, summary)
 
 
-def test_duplicated_frames_change_nothing(make_sim, bus):
-    r = completed_unchanged(make_sim, bus, "dup", ["--seed", "13", "--dup", "0.1"])
+def test_duplicated_frames_change_nothing(make_sim, bus, db):
+    r = completed_unchanged(make_sim, bus, db, "dup", ["--seed", "13", "--dup", "0.1"])
     if r is None:
         return
     summary, f = r
@@ -157,16 +168,15 @@ def test_host_killed_mid_upload_ends_in_the_along_path_stop(make_sim, bus, bus_b
             continue
         if 0x011 <= m.arbitration_id <= 0x013:
             emergencies.append((m.arbitration_id - 0x010, str(db.decode_message(m.arbitration_id, bytes(m.data))["code"])))
-        elif 0x701 <= m.arbitration_id <= 0x703:
-            d = db.decode_message(m.arbitration_id, bytes(m.data), decode_choices=False)
-            hb[m.arbitration_id - 0x700] = (STATES[d["state"]], d["fault"])
+        elif (beat := heartbeat(db, m)) is not None:
+            hb[beat[0]] = beat[1:]
             # Kill the host 0.5 s into the motion (SIGKILL: no goodbye).
             if killed_at is None and any(s == "Running" for s, _ in hb.values()):
                 time.sleep(0.5)
                 host.kill()
                 host.wait()
                 killed_at = time.monotonic()
-            if killed_at is not None and len(hb) == 3 and all(s in ("Fault", "Idle") for s, _ in hb.values()):
+            if killed_at is not None and at_rest([s for s, _ in hb.values()]):
                 break
     assert killed_at is not None, f"never saw the motion start: {hb}"
     report = sim.stop()
