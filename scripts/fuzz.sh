@@ -19,6 +19,7 @@
 #    into the corpus.
 #
 # Output: ${CARGO_TARGET_DIR:-target}/fuzz/ (its own build: the flags differ).
+# FUZZ_BUILD_ONLY=1: the build alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -46,6 +47,8 @@ RUSTFLAGS="-Cpasses=sancov-module -Cllvm-args=-sanitizer-coverage-level=4 \
     CARGO_TARGET_DIR="$DIR" nice cargo build --manifest-path fuzz/Cargo.toml --release --locked \
     --target "$host" --bins
 BIN="$DIR/$host/release"
+# Build only (test.sh builds beside the tests, then runs them here).
+[ -n "${FUZZ_BUILD_ONLY:-}" ] && exit 0
 
 rm -rf "$OUT"
 mkdir -p "$OUT/crashes"

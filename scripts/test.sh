@@ -29,7 +29,20 @@ step "cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 
 step "cargo test"
+# The fuzz targets' build (its own target directory and flags, niced) runs
+# beside the tests, which leave part of the second core idle; the fuzz step
+# below then only runs them.
+fuzz_build_log="${CARGO_TARGET_DIR:-target}/fuzz-build.log"
+FUZZ_BUILD_ONLY=1 ./scripts/fuzz.sh > "$fuzz_build_log" 2>&1 &
+fuzz_build=$!
+trap 'kill "$fuzz_build" 2>/dev/null || true' EXIT
 cargo test --workspace --locked
+if ! wait "$fuzz_build"; then
+    cat "$fuzz_build_log"
+    echo "the fuzz targets' build failed" >&2
+    exit 1
+fi
+trap - EXIT
 
 step "fault soak (release)"
 # 200 schedules here (8 per fault kind, about a minute; `scripts/soak.sh`
