@@ -11,7 +11,6 @@ import warnings
 import subprocess
 import time
 
-
 from conftest import IFACE, OUT, TRIQUINT, Proxy, plan_path, plan_start_mm, run
 
 CASE = 1
