@@ -16,7 +16,7 @@ mod telemetry;
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
-use triquint_shared::protocol::contract::UNCONFIGURED_SYNC_TIMEOUT_US;
+use triquint_shared::protocol::contract::{PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US};
 use triquint_shared::protocol::{
     Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, Reject, State,
 };
@@ -319,6 +319,50 @@ impl<const Q: usize> Drive<Q> {
         dated
     }
 
+    /// The ramp (ns) this node vouches for, for a stop for its own fault
+    /// from host time `t`, and in 100 µs units (rounded up) for its
+    /// Emergency: the largest own ramp for a stop from σ ≤ 1 of the queued
+    /// segments overlapping [s, s + `PEER_RAMP_MARGIN_US` + T/2] for plan
+    /// time s, the window every peer that takes its Emergency within the
+    /// margin checks. The full ramp `full_ns` (and 0) from a transition or
+    /// σ above 1, when the queue does not hold that window (nor the plan's
+    /// end), or when not shorter (docs/protocol.md, "A ramp for a fault
+    /// stop").
+    // Cold, out of line: only the tick that takes a fault runs it.
+    #[cold]
+    #[inline(never)]
+    fn path_ramp(&self, t: i64, full_ns: i64, quick: bool) -> (i64, u16) {
+        const MARGIN_NS: i64 = PEER_RAMP_MARGIN_US * 1000;
+        if self.scaling.in_transition() || self.scaling.target_q16() > UNIT_Q16 {
+            return (full_ns, 0);
+        }
+        let s = self.scaling.constant_plan_time_ns(t);
+        let mut units: i64 = 0;
+        let mut reach = s + MARGIN_NS;
+        // The queue is in plan order; the window grows with the ramp.
+        for q in self.queue.iter() {
+            if q.start_ns >= reach {
+                break;
+            }
+            if q.end_ns() <= s {
+                continue;
+            }
+            let own = if quick {
+                q.unit_ramps_us.1
+            } else {
+                q.unit_ramps_us.0
+            };
+            units = units.max((own as i64 + 99) / 100);
+            reach = s + MARGIN_NS + units * 50_000;
+        }
+        let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
+        let ramp = units * 100_000;
+        if !held || units == 0 || ramp >= full_ns || units > u16::MAX as i64 {
+            return (full_ns, 0);
+        }
+        (ramp, units as u16)
+    }
+
     /// The largest of the queued segments' own stop ramps, controlled and
     /// quick (ns).
     pub fn queue_ramps_ns(&self) -> (i64, i64) {
@@ -465,10 +509,11 @@ impl<const Q: usize> Drive<Q> {
                 code,
                 node,
                 rx_us,
+                ramp_100us,
                 ref ready,
             } => {
                 if node == 0 || self.is_peer(node) {
-                    self.on_emergency(code, rx_us, ready.as_ref())
+                    self.on_emergency(code, rx_us, ready.as_ref(), ramp_100us)
                 }
             }
             Item::PeerHeartbeat {
@@ -524,7 +569,7 @@ impl<const Q: usize> Drive<Q> {
         self.state = State::Fault;
         self.fault = code;
         self.start_ns = None;
-        self.emergency(code);
+        self.emergency(code, 0);
         self.react_at_rest(code);
     }
 
@@ -568,37 +613,44 @@ impl<const Q: usize> Drive<Q> {
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
-    fn emergency(&mut self, code: FaultCode) {
+    fn emergency(&mut self, code: FaultCode, ramp_100us: u16) {
         let plan_us = (self.plan_ns.max(0) / 1000) as u32;
         let e = Emergency {
             code: code as u8,
             state: self.state as u8,
-            segment: self.current_seq,
+            ramp_100us,
             plan_time_us: plan_us,
         };
         let f = e.to_frame(self.node_id);
         self.send_priority(f);
     }
 
-    /// Begins a stop along the path (Running only); otherwise handles the
-    /// reason directly.
+    /// Begins a stop along the path (Running only) for a reason of this
+    /// node's own: a fault's stop runs the ramp the node vouches for
+    /// ([`Drive::path_ramp`]), which its Emergency carries.
     fn begin_stop(&mut self, reason: StopReason, quick: bool, local_us: u64) {
         let t = self.sync.host_ns(local_us).unwrap_or(0);
-        self.begin_stop_at(reason, quick, t, None);
+        let Some(a) = self.active else {
+            return;
+        };
+        if self.state == State::Running {
+            let (stop, quick_ns) = self.ramps_ns(&a);
+            let full = if quick { quick_ns } else { stop };
+            let (ramp, carried) = match reason {
+                StopReason::Fault(_) => self.path_ramp(t, full, quick),
+                _ => (full, 0),
+            };
+            self.begin_stop_ramp(reason, t, None, ramp, carried);
+        }
     }
 
-    /// [`Drive::begin_stop`] from host time `t` (ns), with the slow-down the
-    /// receive side sized if it did.
+    /// Begins a stop along the path from host time `t` (ns), with the
+    /// slow-down the receive side sized if it did, and the ramp a Stop,
+    /// QuickStop, FeedHold or a peer's Emergency carries for its instant
+    /// (`dated_100us`, 0 for none): see [`Drive::dated_ramp_ns`].
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
-    fn begin_stop_at(&mut self, reason: StopReason, quick: bool, t: i64, ready: Option<&Retarget>) {
-        self.begin_stop_dated(reason, quick, t, ready, 0);
-    }
-
-    /// [`Drive::begin_stop_at`] with the ramp a Stop, QuickStop or FeedHold
-    /// carries for its instant (`dated_100us`, 0 for none): see
-    /// [`Drive::dated_ramp_ns`].
     fn begin_stop_dated(
         &mut self,
         reason: StopReason,
@@ -612,17 +664,34 @@ impl<const Q: usize> Drive<Q> {
         };
         if self.state == State::Running {
             let (stop, quick_ns) = self.ramps_ns(&a);
-            let ramp = if quick { quick_ns } else { stop };
-            let ramp = self.dated_ramp_ns(t, dated_100us, ramp, quick);
-            self.scaling.retarget_ready(t, 0, ramp, ready);
-            self.stop_reason = Some(reason);
-            if reason != StopReason::Hold {
-                self.state = State::Stopping;
-            }
-            if let StopReason::Fault(code) = reason {
-                self.fault = code;
-                self.emergency(code);
-            }
+            let full = if quick { quick_ns } else { stop };
+            let ramp = self.dated_ramp_ns(t, dated_100us, full, quick);
+            let carried = if ramp < full { dated_100us } else { 0 };
+            self.begin_stop_ramp(reason, t, ready, ramp, carried);
+        }
+    }
+
+    /// Slows to rest from host time `t` over `ramp` (ns), Running only; a
+    /// fault's Emergency carries `carried_100us`, the ramp it runs when
+    /// shorter than the full one, for the peers to run too.
+    // Inline: each caller is cold and out of line already.
+    #[inline(always)]
+    fn begin_stop_ramp(
+        &mut self,
+        reason: StopReason,
+        t: i64,
+        ready: Option<&Retarget>,
+        ramp: i64,
+        carried_100us: u16,
+    ) {
+        self.scaling.retarget_ready(t, 0, ramp, ready);
+        self.stop_reason = Some(reason);
+        if reason != StopReason::Hold {
+            self.state = State::Stopping;
+        }
+        if let StopReason::Fault(code) = reason {
+            self.fault = code;
+            self.emergency(code, carried_100us);
         }
     }
 

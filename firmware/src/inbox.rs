@@ -236,6 +236,8 @@ pub enum Item {
         /// The sender (0: the host).
         node: u8,
         rx_us: u64,
+        /// The ramp its sender runs (100 µs units, 0 = the full ramp).
+        ramp_100us: u16,
         /// The stop it causes when Running in a transition, sized ahead.
         ready: Option<Retarget>,
     },

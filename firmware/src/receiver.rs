@@ -118,7 +118,7 @@ impl Receiver {
                     .on_sync(s.seq, s.prev_tx_us, rx_us, snapshot.may_rebase);
                 Some(Item::Sync(self.sync))
             }
-            Msg::Emergency(_) if node != self.node_id => Some(Item::Emergency {
+            Msg::Emergency(e) if node != self.node_id => Some(Item::Emergency {
                 code: if node == 0 {
                     FaultCode::HostEmergency
                 } else {
@@ -126,6 +126,7 @@ impl Receiver {
                 },
                 node,
                 rx_us,
+                ramp_100us: e.ramp_100us,
                 // The stop it causes when Running (dated on receipt).
                 ready: self.ramps(&snapshot).and_then(|(stop, _)| {
                     let t = self.sync.host_ns(rx_us).unwrap_or(0);

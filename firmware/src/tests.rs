@@ -338,6 +338,17 @@ impl Rig {
             .collect()
     }
 
+    /// The ramps its Emergency frames carried (100 µs units).
+    fn emergency_ramps_100us(&self) -> Vec<u16> {
+        self.sent
+            .iter()
+            .filter_map(|f| match decode(f) {
+                Ok((Msg::Emergency(e), 2)) => Some(e.ramp_100us),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Configured, synced (with a settled hold position at the plan start), loaded.
     fn loaded(segs: &[WireSegment]) -> Self {
         Self::loaded_with(Self::new(), segs)
@@ -539,7 +550,9 @@ fn underrun_stops_along_the_path_with_bounded_jerk() {
     );
     let limit = Limits::default().jerk;
     let ts = triquint_shared::protocol::stop_ramp::stop_time(v, a, j, limit, 1.0);
-    let mut r = Rig::loaded_with(Rig::with_stop_time(ts), &segs[..3]);
+    let mut r = Rig::with_stop_time(ts);
+    r.cfg.max_jerk = limit as f32;
+    let mut r = Rig::loaded_with(r, &segs[..3]);
     r.start();
     let mut stop_at = None;
     for _ in 0..6000 {
@@ -551,7 +564,17 @@ fn underrun_stops_along_the_path_with_bounded_jerk() {
             break;
         }
     }
-    assert!(stop_at.is_some(), "underrun detected");
+    let stop_at = stop_at.expect("underrun detected");
+    // Its own fault: the ramp it vouches for, carried to the peers, shorter
+    // than the one the configuration was sized with.
+    let carried = r.emergency_ramps_100us();
+    std::eprintln!("stopped in {} µs, carried {carried:?}", r.t - stop_at);
+    assert_eq!(carried.len(), 1);
+    assert!(
+        carried[0] > 0 && (carried[0] as f64) * 1e-4 < ts,
+        "{carried:?}"
+    );
+    assert!(((r.t - stop_at) as f64) * 1e-6 < ts);
     assert_eq!(r.node.state(), State::Fault);
     assert_eq!(r.node.fault(), FaultCode::Underrun);
     assert_eq!(r.emergencies(), std::vec![FaultCode::Underrun as u8]);
@@ -574,6 +597,67 @@ fn underrun_stops_along_the_path_with_bounded_jerk() {
         "stop jerk {} > {limit}",
         r.max_stop_jerk
     );
+}
+
+/// A fault's stop runs the ramp its node vouches for, and a peer that
+/// takes its Emergency runs the same one (the stop ends on the same tick)
+/// and says so in its own; a ramp shorter than a segment the peer holds
+/// needs gets the full ramp, and its Emergency carries none.
+#[test]
+fn a_peer_runs_the_ramp_a_fault_stop_carries_when_it_covers_what_it_holds() {
+    let h = 0.8;
+    let segs = segments(8, h);
+    let rig = || {
+        let mut r = Rig::with_stop_time(0.5);
+        r.cfg.max_jerk = 5.0;
+        r
+    };
+    // The node that faults (Underrun: it holds 3 segments).
+    let mut a = Rig::loaded_with(rig(), &segs[..3]);
+    a.start();
+    let mut ticks = 0;
+    while a.node.state() != State::Stopping {
+        a.tick();
+        ticks += 1;
+        assert!(ticks < 6000, "underrun detected");
+    }
+    let carried = a.emergency_ramps_100us();
+    assert_eq!(carried.len(), 1);
+    assert!(carried[0] > 0 && carried[0] < 5000, "{carried:?}");
+    let stop_ticks = |r: &mut Rig| {
+        let mut n = 0u32;
+        while r.node.state() == State::Stopping {
+            r.tick();
+            n += 1;
+        }
+        assert_eq!(r.node.state(), State::Fault);
+        n
+    };
+    let a_stop = stop_ticks(&mut a);
+    // Peers holding one segment more, told at the instant of the fault.
+    for (ramp, runs) in [(carried[0], carried[0]), (carried[0] - 1, 0)] {
+        let mut b = Rig::loaded_with(rig(), &segs[..4]);
+        b.start();
+        b.run(ticks - 1);
+        assert_eq!(b.node.state(), State::Running);
+        b.rx(Emergency {
+            code: FaultCode::Underrun as u8,
+            state: State::Stopping as u8,
+            ramp_100us: ramp,
+            plan_time_us: 0,
+        }
+        .to_frame(3));
+        b.tick();
+        assert_eq!(b.node.state(), State::Stopping);
+        assert_eq!(b.emergency_ramps_100us(), std::vec![runs]);
+        let b_stop = stop_ticks(&mut b);
+        std::eprintln!("carried {ramp}: stop {b_stop} ticks, the fault's node {a_stop}");
+        if runs > 0 {
+            assert!(b_stop.abs_diff(a_stop) <= 1, "{b_stop} against {a_stop}");
+        } else {
+            assert!(b_stop > a_stop + 100, "{b_stop} against {a_stop}");
+        }
+    }
 }
 
 /// A host that configures a stop ramp far too short for the plan (50 ms)
@@ -760,7 +844,7 @@ fn commanded_stop_feed_hold_resume_and_emergencies() {
     r.rx(Emergency {
         code: FaultCode::FollowingError as u8,
         state: State::Stopping as u8,
-        segment: 0,
+        ramp_100us: 0,
         plan_time_us: 0,
     }
     .to_frame(3));
@@ -902,6 +986,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
         code: FaultCode::HostEmergency,
         node: 0,
         rx_us: r.t,
+        ramp_100us: 0,
         ready: None,
     };
     assert!(emergency.is_urgent());
@@ -1044,7 +1129,7 @@ fn mid_transition_changes_are_sized_by_the_receive_side() {
     let peer = Emergency {
         code: FaultCode::FollowingError as u8,
         state: State::Stopping as u8,
-        segment: 0,
+        ramp_100us: 0,
         plan_time_us: 0,
     };
     let item = r.receive(peer.to_frame(3)).unwrap();

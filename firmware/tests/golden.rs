@@ -35,7 +35,8 @@ use triquint_shared::plan::Plan;
 use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
 use triquint_shared::protocol::{
-    Command, CommandCode, Frame, State, TimeSync, WireSegment, config_write_frame,
+    Command, CommandCode, FaultCode, Frame, Msg, State, TimeSync, WireSegment, config_write_frame,
+    decode,
 };
 use triquint_shared::quintic::JointMotion;
 use triquint_shared::{Limits, Model, Robot};
@@ -243,12 +244,17 @@ struct Recorder {
     chain: Chain,
     /// Segments sent compact.
     compact: usize,
+    /// The ramps its Emergency frames carried (100 µs units).
+    emergency_ramps: Vec<u16>,
 }
 
 impl Recorder {
     fn drain(&mut self) -> (u8, u32) {
         let mut sent = Vec::new();
         while let Some(f) = self.node.pop_tx() {
+            if let Ok((Msg::Emergency(e), _)) = decode(&f) {
+                self.emergency_ramps.push(e.ramp_100us);
+            }
             sent.push(f);
         }
         (sent.len() as u8, tx_hash(&sent))
@@ -378,6 +384,7 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         states: Vec::new(),
         chain: Chain::default(),
         compact: 0,
+        emergency_ramps: Vec::new(),
     };
     r.out.u8(b'N');
     r.out.u8(NODE);
@@ -439,8 +446,24 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     r.command2(CommandCode::Override, 0, 1000);
     run(&mut r, &mut next, 50_000);
     assert!(r.node.scaling().in_transition(), "not mid-transition");
-    r.command(CommandCode::Stop, 0);
-    r.run_us(1_000_000);
+    r.command(CommandCode::FeedHold, 0);
+    run(&mut r, &mut next, 50_000);
+    assert!(r.node.scaling().in_transition(), "not mid-transition");
+    r.command(CommandCode::Resume, 0);
+    run(&mut r, &mut next, 300_000);
+    assert!(!r.node.scaling().in_transition(), "still in a transition");
+    // The host goes silent at σ = 1: the node faults with Underrun, its
+    // tick scans the queue for the ramp it vouches for (Emergency
+    // `ramp_100us`), and it comes to rest in Fault.
+    assert!(next < segs.len(), "the plan's end was sent");
+    r.run_us(1_500_000);
+    assert_eq!(r.node.state(), State::Fault, "no underrun");
+    assert_eq!(r.node.fault(), FaultCode::Underrun);
+    assert!(
+        matches!(r.emergency_ramps[..], [x] if x > 0),
+        "the ramp it vouched for: {:?}",
+        r.emergency_ramps
+    );
     r.out.u8(b'Z');
     // Every segment after the first went compact, and the node took them all.
     assert_eq!(r.compact + 1, next, "segments sent compact");

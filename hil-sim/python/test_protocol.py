@@ -124,7 +124,7 @@ def test_each_message_is_answered(make_sim, bus, db):
         d = wait_for(bus, db, f"SegmentAck_{n}")
         assert d["result"] == 6 and d["capacity"] == QUEUE_CAPACITY
     # Emergency from the host: every node faults (HostEmergency, 5) and says so.
-    send(bus, db, "Emergency_Host", code=5, state=0, segment=0, plan_time_us=0)
+    send(bus, db, "Emergency_Host", code=5, state=0, ramp_100us=0, plan_time_us=0)
     for n in (1, 2, 3):
         d = wait_for(bus, db, f"Emergency_{n}")
         assert d["code"] == 5 and STATES[d["state"]] == "Fault"

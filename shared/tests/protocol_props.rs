@@ -71,8 +71,8 @@ proptest! {
         e in any::<u8>(), f in any::<u8>(), x in finite(), y in finite(), h in 0u8..=15,
     ) {
         let msgs = [
-            (Emergency { code: a, state: b, segment: c, plan_time_us: d }.to_frame(h),
-             Msg::Emergency(Emergency { code: a, state: b, segment: c, plan_time_us: d }), h),
+            (Emergency { code: a, state: b, ramp_100us: c, plan_time_us: d }.to_frame(h),
+             Msg::Emergency(Emergency { code: a, state: b, ramp_100us: c, plan_time_us: d }), h),
             (TimeSync { seq: a, prev_tx_us: d }.to_frame(0), Msg::TimeSync(TimeSync { seq: a, prev_tx_us: d }), 0),
             (Command { command: a, token: b, arg: d, arg2: c }.to_frame(h), Msg::Command(Command { command: a, token: b, arg: d, arg2: c }), h),
             (SegmentAck { seq: c, result: a, depth: b, next_seq: c ^ 0x5A5A, capacity: e, reason_count: f }.to_frame(n),

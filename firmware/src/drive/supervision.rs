@@ -18,11 +18,12 @@ impl<const Q: usize> Drive<Q> {
         code: FaultCode,
         local_us: u64,
         ready: Option<&Retarget>,
+        ramp_100us: u16,
     ) {
         match self.state {
             State::Running => {
                 let t = self.sync.host_ns(local_us).unwrap_or(0);
-                self.begin_stop_at(StopReason::Fault(code), false, t, ready)
+                self.begin_stop_dated(StopReason::Fault(code), false, t, ready, ramp_100us)
             }
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));
@@ -50,9 +51,9 @@ impl<const Q: usize> Drive<Q> {
         }
         let peer = h.state().ok();
         if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
-            self.on_emergency(FaultCode::PeerEmergency, rx_us, None);
+            self.on_emergency(FaultCode::PeerEmergency, rx_us, None, 0);
         } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
-            self.on_emergency(FaultCode::PeerLost, rx_us, None);
+            self.on_emergency(FaultCode::PeerLost, rx_us, None, 0);
         }
     }
 
@@ -150,7 +151,7 @@ impl<const Q: usize> Drive<Q> {
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
-                self.emergency(code);
+                self.emergency(code, 0);
             }
             State::Idle | State::Loaded | State::Armed => self.fault_now(code),
             _ => {}
@@ -200,7 +201,7 @@ impl<const Q: usize> Drive<Q> {
         {
             self.torque_off = true;
             self.check = None;
-            self.emergency(FaultCode::FollowingError);
+            self.emergency(FaultCode::FollowingError, 0);
         }
     }
 

@@ -127,7 +127,7 @@ mod tests {
         let frame = Emergency {
             code: code as u8,
             state: state as u8,
-            segment: 0,
+            ramp_100us: 0,
             plan_time_us: 0,
         }
         .to_frame(node);

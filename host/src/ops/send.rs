@@ -29,7 +29,7 @@ pub fn send_emergency(port: &mut SocketCanPort) -> OpResult<bool> {
     let f = Emergency {
         code: FaultCode::HostEmergency as u8,
         state: State::Fault as u8,
-        segment: 0,
+        ramp_100us: 0,
         plan_time_us: 0,
     }
     .to_frame(0);

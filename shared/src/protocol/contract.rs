@@ -37,6 +37,11 @@ pub const MIN_HEARTBEAT_US: u64 = 1_000;
 /// Armed this long after the start, or Idle this long before the end of
 /// the plan (µs): covers the start skew (one tick) and the end skew.
 pub const PEER_SKEW_MARGIN_US: u64 = 20_000;
+/// A node that stops for a fault vouches for its ramp (Emergency
+/// `ramp_100us`) over the plan time its stop covers and this much more
+/// (µs): a peer that takes the Emergency within this of the fault checks
+/// a window inside the sender's, so an honest ramp is never refused.
+pub const PEER_RAMP_MARGIN_US: i64 = 10_000;
 /// How long the maintenance window `UnlockCeilings` opens stays open at
 /// most (µs): long enough for a configuration's writes and the commit's
 /// resends, short enough that a forgotten unlock does not stay open.

@@ -414,14 +414,14 @@ pub fn golden_frames() -> Vec<(String, Frame, Expect)> {
     let e = Emergency {
         code: FaultCode::Underrun as u8,
         state: State::Stopping as u8,
-        segment: 17,
+        ramp_100us: 3_471,
         plan_time_us: 2_345_678,
     };
     add("Emergency_2", e.to_frame(2), Msg::Emergency(e));
     let e = Emergency {
         code: FaultCode::HostEmergency as u8,
         state: State::Fault as u8,
-        segment: 0,
+        ramp_100us: 0,
         plan_time_us: 0,
     };
     add("Emergency_Host", e.to_frame(0), Msg::Emergency(e));

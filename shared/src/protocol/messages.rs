@@ -160,7 +160,7 @@ code_enum! {
 
 /// Protocol version carried in every heartbeat: a host refuses nodes of
 /// another version. What each version changed: the top of `docs/protocol.md`.
-pub const PROTOCOL_VERSION: u8 = 7;
+pub const PROTOCOL_VERSION: u8 = 8;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {
@@ -194,8 +194,10 @@ messages! {
         code: u8 @ 0 ["", 1.0, FaultCode],
         /// State after the fault.
         state: u8 @ 1 ["", 1.0, State],
-        /// Sequence number of the segment executing.
-        segment: u16 @ 2 ["", 1.0],
+        /// The ramp of the node's stop along the path (100 µs units), for
+        /// peers to run the same one: the largest own ramp for a stop from
+        /// σ ≤ 1 of the segments it passes through; 0 = the full ramp.
+        ramp_100us: u16 @ 2 ["s", 0.0001],
         /// Plan time at the fault.
         plan_time_us: u32 @ 4 ["us", 1.0],
     }
@@ -297,7 +299,7 @@ impl Emergency {
         Self {
             code: FaultCode::HostEmergency as u8,
             state: State::Fault as u8,
-            segment: 0,
+            ramp_100us: 0,
             plan_time_us: 0,
         }
         .to_frame(0)
