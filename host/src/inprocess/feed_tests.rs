@@ -15,6 +15,8 @@ use triquint_shared::quintic::JointMotion;
 use triquint_sim::host_port::SimPort;
 use triquint_sim::{Sim, SimConfig, testplan};
 
+use super::stop_harness::Path;
+
 /// One millisecond of a run.
 #[derive(Clone, Copy, Debug)]
 struct Trace {
@@ -188,29 +190,17 @@ fn first_all(trace: &[Trace], from: f64, phases: &[Phase]) -> Option<f64> {
 /// Largest distance (m) of the plant from the planned joint path (a
 /// polyline of 0.5 ms samples) over `t_s` in [from, to).
 fn off_path(plan: &Plan, trace: &[Trace], from: f64, to: f64) -> f64 {
-    let pts: Vec<Vector3<f64>> = plan
-        .sample(0.0005)
-        .unwrap()
-        .map(|(_, s)| Vector3::from(s.q))
-        .collect();
-    let dist = |q: &Vector3<f64>| {
-        pts.windows(2)
-            .map(|w| {
-                let d = w[1] - w[0];
-                let u = if d.norm_squared() > 0.0 {
-                    ((q - w[0]).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                (w[0] + d * u - q).norm()
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
+    let path = Path(
+        plan.sample(0.0005)
+            .unwrap()
+            .map(|(_, s)| Vector3::from(s.q))
+            .collect(),
+    );
     trace
         .iter()
         .filter(|t| t.t_s >= from && t.t_s < to)
         .step_by(5)
-        .map(|t| dist(&t.q))
+        .map(|t| path.distance(&t.q))
         .fold(0.0, f64::max)
 }
 

@@ -6,9 +6,13 @@
 
 pub mod fault_run;
 #[cfg(test)]
+mod fault_stop_tests;
+#[cfg(test)]
 mod feed_tests;
 mod measure;
 pub mod simulate;
+#[cfg(test)]
+mod stop_harness;
 #[cfg(test)]
 mod stop_tests;
 #[cfg(test)]

@@ -7,26 +7,14 @@
 //! reference within the stop budget (docs/protocol.md, "Stop ramp"). The
 //! figures are printed (`--nocapture`) for docs/protocol.md.
 
-use nalgebra::Vector3;
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use triquint_link::{DriveConfigs, Feed, Outcome, Session, SessionOptions};
+use triquint_link::{DriveConfigs, Feed};
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::State;
 use triquint_shared::protocol::config::{DriveSettings, SMOOTHSTEP_MAX_D1};
-use triquint_sim::host_port::SimPort;
-use triquint_sim::{Sim, SimConfig, testplan};
+use triquint_sim::testplan;
 
-/// Largest distance of the plant from the planned joint path from the
-/// Stop on (m): the servo's cross-path error, not only the rest position.
-const OFF_PATH_M: f64 = 50e-6;
-/// Largest distance of the rest position from the path (m).
-const REST_OFF_PATH_M: f64 = 10e-6;
-/// At rest: joint speed over the last 100 ms below this (m/s).
-const REST_SPEED: f64 = 1e-4;
-/// How long after every drive is Idle the run goes on (ns).
-const SETTLE_NS: u64 = 300_000_000;
+use super::stop_harness::{Ending, Path, Run, SETTLE_NS, branch_runs, seeded_instants};
 
 /// One stopped run.
 #[derive(Clone, Copy, Debug)]
@@ -35,12 +23,8 @@ struct StopRun {
     at_s: f64,
     /// From the Stop to every drive Idle (s).
     stop_s: f64,
-    /// Worst distance of the plant from the path, from the Stop on (m).
-    off_path_m: f64,
-    /// Distance of the rest position from the path (m).
-    rest_off_path_m: f64,
-    /// Joint speed over the last 100 ms (m/s).
-    rest_speed: f64,
+    /// Where it ended, against the path, from the Stop on.
+    ending: Ending,
     /// Largest |jerk| of any drive's reference while Stopping (m/s³).
     jerk: f64,
     /// Largest |acceleration| of the reference from the Stop on (m/s²).
@@ -74,69 +58,7 @@ fn bounds(plan: &Plan, configs: &DriveConfigs) -> Bounds {
     }
 }
 
-/// A run of a plan on the in-process drives. The simulation is
-/// deterministic, so a clone taken at an instant goes on exactly as a run
-/// started afresh would from there: one run to the last instant, branched
-/// at each, replaces a run from the start per instant.
-#[derive(Clone)]
-struct Run {
-    sim: Sim,
-    session: Session,
-    limit_ns: u64,
-    /// When the Stop was sent (true time, ns).
-    sent_ns: Option<u64>,
-    /// Largest |acceleration| of the reference from the Stop on.
-    accel: f32,
-    /// The largest of any drive's own stop ramp for its queue (ns).
-    own_ramp_ns: i64,
-}
-
 impl Run {
-    fn new(plan: &Plan, configs: &DriveConfigs) -> Self {
-        let q0 = plan.segments[0].quintic().eval(0.0).q;
-        Run {
-            sim: Sim::new(&plan.robot, q0, SimConfig::default()),
-            session: Session::new(plan, configs.nodes, SessionOptions::default()).unwrap(),
-            limit_ns: ((plan.total_time_s + 30.0) * 1e9) as u64,
-            sent_ns: None,
-            accel: 0.0,
-            own_ramp_ns: 0,
-        }
-    }
-
-    fn track_ramps(&mut self) {
-        for n in &self.sim.nodes {
-            self.own_ramp_ns = self.own_ramp_ns.max(n.node.drive.queue_ramps_ns().0);
-        }
-    }
-
-    /// Whether plan time `at_s` has come (the plan started).
-    fn reached(&self, at_s: f64) -> bool {
-        let start_ns = self.session.start_us() * 1000;
-        start_ns > 0 && self.sim.now_ns() as f64 >= start_ns as f64 + at_s * 1e9
-    }
-
-    /// The session polled, then 100 µs of simulation; the outcome once the
-    /// session ended.
-    fn advance(&mut self) -> Option<Outcome> {
-        if self.sent_ns.is_some() {
-            self.accel = self
-                .accel
-                .max(self.sim.nodes[0].node.stats.reference.qdd.amax());
-        }
-        let mut port = SimPort {
-            sim: &mut self.sim,
-            tx_queue: 32,
-        };
-        if let Some(o) = self.session.poll(&mut port).unwrap() {
-            return Some(o);
-        }
-        let t = self.sim.now_ns() + 100_000;
-        assert!(t < self.limit_ns, "the run did not end");
-        self.sim.run_until(t).unwrap();
-        None
-    }
-
     /// Sends Stop now and runs to the end: the stopped run's figures.
     fn stop(mut self, plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
         self.session.feed(Feed::Stop);
@@ -180,27 +102,10 @@ impl Run {
             && (outcome.stopped || outcome.completed);
         let stop_s = configs.stop_time_s;
         let path = Path::new(plan, at_s - 0.1, at_s + stop_s + 0.1);
-        let after: Vec<_> = sim.samples.iter().filter(|s| s.t_ns >= sent).collect();
-        let off_path_m = after
-            .iter()
-            .step_by(5)
-            .map(|s| path.distance(&Vector3::from(s.q)))
-            .fold(0.0, f64::max);
-        let last = after.last().expect("samples after the stop");
-        let rest_off_path_m = path.distance(&Vector3::from(last.q));
-        let before = after
-            .iter()
-            .rev()
-            .find(|s| s.t_ns + 100_000_000 <= last.t_ns)
-            .expect("100 ms of samples");
-        let rest_speed = (Vector3::from(last.q) - Vector3::from(before.q)).amax()
-            / ((last.t_ns - before.t_ns) as f64 * 1e-9);
         StopRun {
             at_s,
             stop_s: idle_at.saturating_sub(sent) as f64 * 1e-9,
-            off_path_m,
-            rest_off_path_m,
-            rest_speed,
+            ending: Ending::of(&sim, &path, sent),
             jerk: sim
                 .nodes
                 .iter()
@@ -210,70 +115,6 @@ impl Run {
             own_ramp_ns,
             clean,
         }
-    }
-}
-
-/// Runs `plan` once and stops a branch of the run at each plan time of
-/// `instants`: the figures of each stopped run, in the order given.
-fn stop_runs(plan: &Plan, configs: &DriveConfigs, instants: &[f64]) -> Vec<StopRun> {
-    let mut order: Vec<usize> = (0..instants.len()).collect();
-    order.sort_by(|&a, &b| instants[a].total_cmp(&instants[b]));
-    let mut runs: Vec<Option<StopRun>> = vec![None; instants.len()];
-    let mut pending = order.into_iter().peekable();
-    let mut main = Run::new(plan, configs);
-    loop {
-        main.track_ramps();
-        while let Some(&k) = pending.peek() {
-            if !main.reached(instants[k]) {
-                break;
-            }
-            runs[k] = Some(main.clone().stop(plan, configs, instants[k]));
-            pending.next();
-        }
-        if pending.peek().is_none() {
-            break;
-        }
-        if main.advance().is_some() {
-            panic!(
-                "the session ended before the Stop at {} s",
-                instants[pending.next().unwrap()]
-            );
-        }
-    }
-    runs.into_iter()
-        .map(|r| r.expect("every instant stopped"))
-        .collect()
-}
-
-/// The planned joint path over plan times [from, to], as a polyline of
-/// 0.5 ms samples.
-struct Path(Vec<Vector3<f64>>);
-
-impl Path {
-    fn new(plan: &Plan, from: f64, to: f64) -> Self {
-        let (from, to) = (from.max(0.0), to.min(plan.total_time_s));
-        let n = ((to - from) / 0.0005).ceil().max(1.0) as usize;
-        Path(
-            (0..=n)
-                .filter_map(|i| plan.at(from + (to - from) * i as f64 / n as f64))
-                .map(|s| Vector3::from(s.q))
-                .collect(),
-        )
-    }
-
-    fn distance(&self, q: &Vector3<f64>) -> f64 {
-        self.0
-            .windows(2)
-            .map(|w| {
-                let d = w[1] - w[0];
-                let u = if d.norm_squared() > 0.0 {
-                    ((q - w[0]).dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                (w[0] + d * u - q).norm()
-            })
-            .fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -296,18 +137,15 @@ fn stops_end_on_the_path_with(
     // The drives' own ramp for what they hold never exceeds the host's
     // (as the drive rounds it: whole µs).
     let host_ns = (configs.nodes[0].stop_time * 1e6) as i64 * 1000;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let instants: Vec<f64> = (0..n)
-        .map(|_| rng.random_range(0.0..plan.total_time_s))
-        .collect();
-    let runs = stop_runs(plan, &configs, &instants);
+    let instants = seeded_instants(seed, n, 0.0..plan.total_time_s);
+    let runs = branch_runs(plan, &configs, &instants, |run, at_s| {
+        run.stop(plan, &configs, at_s)
+    });
     let unsafe_endings: Vec<&StopRun> = runs
         .iter()
         .filter(|r| {
             !r.clean
-                || r.off_path_m > OFF_PATH_M
-                || r.rest_off_path_m > REST_OFF_PATH_M
-                || r.rest_speed > REST_SPEED
+                || r.ending.is_unsafe()
                 || r.jerk > b.jerk * 1.001
                 || r.accel > b.accel * 1.001
                 || r.stop_s > configs.stop_time_s + 0.01
@@ -318,7 +156,7 @@ fn stops_end_on_the_path_with(
     let worst = |f: fn(&StopRun) -> f64| runs.iter().map(f).fold(0.0, f64::max);
     let worst_at = runs
         .iter()
-        .max_by(|a, b| a.off_path_m.total_cmp(&b.off_path_m))
+        .max_by(|a, b| a.ending.off_path_m.total_cmp(&b.ending.off_path_m))
         .map_or(0.0, |r| r.at_s);
     // Stops the host dated with a ramp for the path ahead are shorter.
     let mean_stop = runs.iter().map(|r| r.stop_s).sum::<f64>() / runs.len().max(1) as f64;
@@ -327,15 +165,15 @@ fn stops_end_on_the_path_with(
          mean stop {mean_stop:.3} s (×{:.3} of T_s), worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
          rest speed {:.1e} m/s, drives' own ramp up to {:.3} s; {} unsafe",
         configs.stop_time_s,
-        worst(|r| r.off_path_m) * 1e6,
-        worst(|r| r.rest_off_path_m) * 1e6,
+        worst(|r| r.ending.off_path_m) * 1e6,
+        worst(|r| r.ending.rest_off_path_m) * 1e6,
         mean_stop / configs.stop_time_s,
         worst(|r| r.stop_s),
         worst(|r| r.jerk),
         b.jerk,
         worst(|r| r.accel),
         b.accel,
-        worst(|r| r.rest_speed),
+        worst(|r| r.ending.rest_speed),
         worst(|r| r.own_ramp_ns as f64 * 1e-9),
         unsafe_endings.len()
     );
