@@ -508,12 +508,12 @@ impl<const Q: usize> Drive<Q> {
             Item::Emergency {
                 code,
                 node,
-                rx_us,
+                t_ns,
                 ramp_100us,
                 ref ready,
             } => {
                 if node == 0 || self.is_peer(node) {
-                    self.on_emergency(code, rx_us, ready.as_ref(), ramp_100us)
+                    self.on_emergency(code, t_ns, ready.as_ref(), ramp_100us)
                 }
             }
             Item::PeerHeartbeat {
@@ -614,7 +614,14 @@ impl<const Q: usize> Drive<Q> {
     #[cold]
     #[inline(never)]
     fn emergency(&mut self, code: FaultCode, ramp_100us: u16) {
-        let plan_us = (self.plan_ns.max(0) / 1000) as u32;
+        self.emergency_at(code, ramp_100us, self.plan_ns);
+    }
+
+    /// [`Drive::emergency`] at plan time `plan_ns` (rounded to the µs).
+    #[cold]
+    #[inline(never)]
+    fn emergency_at(&mut self, code: FaultCode, ramp_100us: u16, plan_ns: i64) {
+        let plan_us = ((plan_ns.max(0) + 500) / 1000) as u32;
         let e = Emergency {
             code: code as u8,
             state: self.state as u8,
@@ -625,11 +632,13 @@ impl<const Q: usize> Drive<Q> {
         self.send_priority(f);
     }
 
-    /// Begins a stop along the path (Running only) for a reason of this
-    /// node's own: a fault's stop runs the ramp the node vouches for
-    /// ([`Drive::path_ramp`]), which its Emergency carries.
-    fn begin_stop(&mut self, reason: StopReason, quick: bool, local_us: u64) {
-        let t = self.sync.host_ns(local_us).unwrap_or(0);
+    /// Begins a stop along the path from host time `t` (ns; Running only)
+    /// for a reason of this node's own: a fault's stop runs the ramp the
+    /// node vouches for ([`Drive::path_ramp`]), which its Emergency carries.
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
+    fn begin_stop(&mut self, reason: StopReason, quick: bool, t: i64) {
         let Some(a) = self.active else {
             return;
         };
@@ -684,6 +693,11 @@ impl<const Q: usize> Drive<Q> {
         ramp: i64,
         carried_100us: u16,
     ) {
+        // Where a fault's stop begins on the path, for the peers to date theirs.
+        let s = match reason {
+            StopReason::Fault(_) => self.scaling.at(t).s_ns,
+            _ => 0,
+        };
         self.scaling.retarget_ready(t, 0, ramp, ready);
         self.stop_reason = Some(reason);
         if reason != StopReason::Hold {
@@ -691,7 +705,7 @@ impl<const Q: usize> Drive<Q> {
         }
         if let StopReason::Fault(code) = reason {
             self.fault = code;
-            self.emergency(code, carried_100us);
+            self.emergency_at(code, carried_100us, s);
         }
     }
 
@@ -729,7 +743,7 @@ impl<const Q: usize> Drive<Q> {
         let q = self.measure(&a, enc);
         let host = self.sync.host_ns(now_us);
         if let Some(code) = self.time_fault(&a, host.is_some(), now_us) {
-            self.on_time_fault(code, now_us);
+            self.on_time_fault(code, now_us, a.sync_timeout_us);
         }
         let host_ns = host.unwrap_or(0);
         self.trigger_start(host_ns);
@@ -749,7 +763,8 @@ impl<const Q: usize> Drive<Q> {
                 Some(t) => ff = t,
                 None => {
                     if matches!(self.state, State::Running) {
-                        self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, now_us);
+                        let t = self.sync.host_ns(now_us).unwrap_or(0);
+                        self.begin_stop(StopReason::Fault(FaultCode::Kinematics), true, t);
                     }
                 }
             }

@@ -235,7 +235,9 @@ pub enum Item {
         code: FaultCode,
         /// The sender (0: the host).
         node: u8,
-        rx_us: u64,
+        /// Host time (ns) the stop it causes begins at: the sender's
+        /// instant where the receive side could date it, else the receipt.
+        t_ns: i64,
         /// The ramp its sender runs (100 µs units, 0 = the full ramp).
         ramp_100us: u16,
         /// The stop it causes when Running in a transition, sized ahead.

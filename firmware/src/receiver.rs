@@ -5,12 +5,13 @@
 //! [`Item`] (the hand-off types are in the `inbox` module).
 
 use triquint_shared::protocol::{
-    Command, CommandCode, DriveConfig, FaultCode, Msg, PARAM_COUNT, Reject, SegmentEvent,
-    SegmentRx, WireSegment, config::config_crc, decode,
+    Command, CommandCode, DriveConfig, Emergency, FaultCode, Msg, PARAM_COUNT, Reject,
+    SegmentEvent, SegmentRx, WireSegment, config::config_crc, decode,
 };
 
 use triquint_shared::protocol::contract::{
-    LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, RELATIVE_LIMIT_MARGIN,
+    LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, PEER_RAMP_MARGIN_US,
+    RELATIVE_LIMIT_MARGIN,
 };
 
 use crate::ceiling_lock::first_widening;
@@ -118,21 +119,23 @@ impl Receiver {
                     .on_sync(s.seq, s.prev_tx_us, rx_us, snapshot.may_rebase);
                 Some(Item::Sync(self.sync))
             }
-            Msg::Emergency(e) if node != self.node_id => Some(Item::Emergency {
-                code: if node == 0 {
-                    FaultCode::HostEmergency
-                } else {
-                    FaultCode::PeerEmergency
-                },
-                node,
-                rx_us,
-                ramp_100us: e.ramp_100us,
-                // The stop it causes when Running (dated on receipt).
-                ready: self.ramps(&snapshot).and_then(|(stop, _)| {
-                    let t = self.sync.host_ns(rx_us).unwrap_or(0);
-                    Retarget::prepare(&snapshot.scaling, t, 0, stop)
-                }),
-            }),
+            Msg::Emergency(e) if node != self.node_id => {
+                let t = self.emergency_ns(&e, node, rx_us, &snapshot);
+                Some(Item::Emergency {
+                    code: if node == 0 {
+                        FaultCode::HostEmergency
+                    } else {
+                        FaultCode::PeerEmergency
+                    },
+                    node,
+                    t_ns: t,
+                    ramp_100us: e.ramp_100us,
+                    // The stop it causes when Running.
+                    ready: self
+                        .ramps(&snapshot)
+                        .and_then(|(stop, _)| Retarget::prepare(&snapshot.scaling, t, 0, stop)),
+                })
+            }
             Msg::Heartbeat(heartbeat) if node != self.node_id => Some(Item::PeerHeartbeat {
                 node,
                 heartbeat,
@@ -194,6 +197,24 @@ impl Receiver {
             }
             _ => CommandData::None,
         }
+    }
+
+    /// When the stop a peer's Emergency causes begins (host ns): at the
+    /// host time this node's constant σ reaches the sender's plan time at
+    /// its fault, if that is within `PEER_RAMP_MARGIN_US` of the receipt,
+    /// so every node's σ(t) is the same to the microsecond of plan time;
+    /// else (the host's, a transition, a time too far off) the receipt.
+    fn emergency_ns(&self, e: &Emergency, node: u8, rx_us: u64, snapshot: &TickSnapshot) -> i64 {
+        const MARGIN_NS: i64 = PEER_RAMP_MARGIN_US * 1000;
+        let rx = self.sync.host_ns(rx_us).unwrap_or(0);
+        if node == 0 {
+            return rx;
+        }
+        snapshot
+            .scaling
+            .constant_host_time_ns(e.plan_time_us as i64 * 1000)
+            .filter(|t| (t - rx).abs() <= MARGIN_NS)
+            .unwrap_or(rx)
     }
 
     /// Stop and quick-stop ramps (ns) the tick runs transitions with.

@@ -188,6 +188,24 @@ impl TimeScaling {
         self.constant_at(t_ns - self.t0_ns).s_ns
     }
 
+    /// The host time (ns) at which a constant σ above 0 reaches plan time
+    /// `s_ns`; None in a transition, at rest, or before its start.
+    pub fn constant_host_time_ns(&self, s_ns: i64) -> Option<i64> {
+        let ds = s_ns - self.s0_ns;
+        if self.in_transition() || ds < 0 {
+            return None;
+        }
+        match self.target_q16 {
+            0 => None,
+            UNIT_Q16 => Some(self.t0_ns + ds),
+            // checked: no panic path on the receive side.
+            k => ds
+                .saturating_mul(UNIT_Q16 as i64)
+                .checked_div(k as i64)
+                .map(|d| self.t0_ns + d),
+        }
+    }
+
     fn constant_at(&self, dt: i64) -> Scaled {
         let dt = dt.max(0);
         let (s_ns, sigma) = match self.target_q16 {
@@ -460,6 +478,35 @@ mod tests {
 
     const MS: i64 = 1_000_000;
     const TICK: i64 = 100_000;
+
+    /// The host time a constant σ reaches a plan time is the inverse of
+    /// the plan time it gives, to a nanosecond of plan time; none at rest,
+    /// before the start, or in a transition.
+    #[test]
+    fn constant_host_time_inverts_constant_plan_time() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for q16 in [UNIT_Q16, UNIT_Q16 / 2, 3 * UNIT_Q16 / 2, 977] {
+            let sc = TimeScaling::constant(5 * MS, 2 * MS, q16);
+            for _ in 0..200 {
+                let t = 5 * MS + rng.random_range(0..10_000 * MS);
+                let s = sc.constant_plan_time_ns(t);
+                let back = sc.constant_host_time_ns(s).unwrap();
+                assert!(
+                    (sc.constant_plan_time_ns(back) - s).abs() <= 1,
+                    "{q16}: {t} -> {s} -> {back}"
+                );
+            }
+            assert_eq!(sc.constant_host_time_ns(MS), None);
+        }
+        assert_eq!(
+            TimeScaling::constant(0, 0, 0).constant_host_time_ns(MS),
+            None
+        );
+        let mut sc = TimeScaling::constant(0, 0, UNIT_Q16);
+        sc.retarget(10 * MS, 0, 200 * MS);
+        sc.at(20 * MS);
+        assert_eq!(sc.constant_host_time_ns(30 * MS), None);
+    }
 
     #[test]
     fn decel_from_nominal_is_the_smoothstep_and_rests_after_half_the_ramp() {

@@ -154,6 +154,24 @@ impl SyncEstimator {
         }
     }
 
+    /// The host time (ns) at which the sync was lost, if it was by
+    /// `local_us`: the last sync's (or good sample's) host time plus the
+    /// timeout in host time, the same instant to the microsecond on every
+    /// node that received the same syncs, whichever tick notices it and
+    /// whatever rate each estimated.
+    pub fn lost_at_ns(&self, local_us: u64, timeout_us: u64) -> Option<i64> {
+        let (g, r) = (self.good_us?, self.rx_us?);
+        let (from, after) = if r + timeout_us <= g + 4 * timeout_us {
+            (r, timeout_us + 1)
+        } else {
+            (g, 4 * timeout_us + 1)
+        };
+        if self.samples < 2 || from + after > local_us {
+            return None;
+        }
+        Some(self.host_ns(from)? + after as i64 * 1000)
+    }
+
     /// Has had a sync once but lost it.
     pub fn lost(&self, local_us: u64, timeout_us: u64) -> bool {
         self.samples >= 2 && !self.is_synced(local_us, timeout_us)

@@ -624,6 +624,14 @@ fn a_peer_runs_the_ramp_a_fault_stop_carries_when_it_covers_what_it_holds() {
     let carried = a.emergency_ramps_100us();
     assert_eq!(carried.len(), 1);
     assert!(carried[0] > 0 && carried[0] < 5000, "{carried:?}");
+    let sent = a
+        .sent
+        .iter()
+        .find_map(|f| match decode(f) {
+            Ok((Msg::Emergency(e), 2)) => Some(e),
+            _ => None,
+        })
+        .unwrap();
     let stop_ticks = |r: &mut Rig| {
         let mut n = 0u32;
         while r.node.state() == State::Stopping {
@@ -634,26 +642,32 @@ fn a_peer_runs_the_ramp_a_fault_stop_carries_when_it_covers_what_it_holds() {
         n
     };
     let a_stop = stop_ticks(&mut a);
+    let a_rest = a.node.stats.reference.q;
     // Peers holding one segment more, told at the instant of the fault.
     for (ramp, runs) in [(carried[0], carried[0]), (carried[0] - 1, 0)] {
         let mut b = Rig::loaded_with(rig(), &segs[..4]);
         b.start();
         b.run(ticks - 1);
         assert_eq!(b.node.state(), State::Running);
+        // A tick late, as a frame on the bus is: dated to the sender's instant.
+        b.tick();
         b.rx(Emergency {
-            code: FaultCode::Underrun as u8,
-            state: State::Stopping as u8,
             ramp_100us: ramp,
-            plan_time_us: 0,
+            ..sent
         }
         .to_frame(3));
         b.tick();
         assert_eq!(b.node.state(), State::Stopping);
         assert_eq!(b.emergency_ramps_100us(), std::vec![runs]);
         let b_stop = stop_ticks(&mut b);
-        std::eprintln!("carried {ramp}: stop {b_stop} ticks, the fault's node {a_stop}");
+        let apart = (b.node.stats.reference.q - a_rest).amax();
+        std::eprintln!(
+            "carried {ramp}: stop {b_stop} ticks, the fault's node {a_stop}; rest {apart:e} m apart"
+        );
         if runs > 0 {
             assert!(b_stop.abs_diff(a_stop) <= 1, "{b_stop} against {a_stop}");
+            // The same σ(t) from the same plan time: the same rest pose.
+            assert!(apart < 2e-7, "rest poses {apart:e} m apart");
         } else {
             assert!(b_stop > a_stop + 100, "{b_stop} against {a_stop}");
         }
@@ -985,7 +999,7 @@ fn a_stop_behind_a_flood_of_segments_is_queued_and_runs() {
     let emergency = Item::Emergency {
         code: FaultCode::HostEmergency,
         node: 0,
-        rx_us: r.t,
+        t_ns: 0,
         ramp_100us: 0,
         ready: None,
     };

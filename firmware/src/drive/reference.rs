@@ -153,11 +153,7 @@ impl<const Q: usize> Drive<Q> {
                 && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
                 && ahead < need
             {
-                self.begin_stop(
-                    StopReason::Fault(FaultCode::Underrun),
-                    false,
-                    self.last_local_us,
-                );
+                self.begin_stop(StopReason::Fault(FaultCode::Underrun), false, host_ns);
             }
         }
         Some(m)

@@ -16,13 +16,12 @@ impl<const Q: usize> Drive<Q> {
     pub(super) fn on_emergency(
         &mut self,
         code: FaultCode,
-        local_us: u64,
+        t: i64,
         ready: Option<&Retarget>,
         ramp_100us: u16,
     ) {
         match self.state {
             State::Running => {
-                let t = self.sync.host_ns(local_us).unwrap_or(0);
                 self.begin_stop_dated(StopReason::Fault(code), false, t, ready, ramp_100us)
             }
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
@@ -51,9 +50,11 @@ impl<const Q: usize> Drive<Q> {
         }
         let peer = h.state().ok();
         if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
-            self.on_emergency(FaultCode::PeerEmergency, rx_us, None, 0);
+            let t = self.sync.host_ns(rx_us).unwrap_or(0);
+            self.on_emergency(FaultCode::PeerEmergency, t, None, 0);
         } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
-            self.on_emergency(FaultCode::PeerLost, rx_us, None, 0);
+            let t = self.sync.host_ns(rx_us).unwrap_or(0);
+            self.on_emergency(FaultCode::PeerLost, t, None, 0);
         }
     }
 
@@ -102,11 +103,26 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
-    pub(super) fn on_time_fault(&mut self, code: FaultCode, now_us: u64) {
+    // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn on_time_fault(&mut self, code: FaultCode, now_us: u64, timeout_us: u64) {
         match self.state {
             State::Armed => self.fault_now(code),
-            // Without a time base, keep stepping on the local clock.
-            _ => self.begin_stop(StopReason::Fault(code), false, now_us),
+            // Without a time base, keep stepping on the local clock; from
+            // the instant the sync was lost, as every node dates it.
+            _ => {
+                let now = self.sync.host_ns(now_us).unwrap_or(0);
+                let t = match code {
+                    FaultCode::LostSync => self.sync.lost_at_ns(now_us, timeout_us),
+                    _ => None,
+                };
+                self.begin_stop(
+                    StopReason::Fault(code),
+                    false,
+                    t.map_or(now, |t| t.min(now)),
+                )
+            }
         }
     }
 
@@ -147,7 +163,10 @@ impl<const Q: usize> Drive<Q> {
             return;
         }
         match self.state {
-            State::Running => self.begin_stop(StopReason::Fault(code), false, now_us),
+            State::Running => {
+                let t = self.sync.host_ns(now_us).unwrap_or(0);
+                self.begin_stop(StopReason::Fault(code), false, t)
+            }
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
