@@ -328,24 +328,26 @@ impl Rig {
             .collect()
     }
 
-    fn emergencies(&self) -> Vec<u8> {
+    /// The Emergency frames it sent.
+    fn emergency_frames(&self) -> Vec<Emergency> {
         self.sent
             .iter()
             .filter_map(|f| match decode(f) {
-                Ok((Msg::Emergency(e), 2)) => Some(e.code),
+                Ok((Msg::Emergency(e), 2)) => Some(e),
                 _ => None,
             })
             .collect()
     }
 
+    fn emergencies(&self) -> Vec<u8> {
+        self.emergency_frames().iter().map(|e| e.code).collect()
+    }
+
     /// The ramps its Emergency frames carried (100 µs units).
     fn emergency_ramps_100us(&self) -> Vec<u16> {
-        self.sent
+        self.emergency_frames()
             .iter()
-            .filter_map(|f| match decode(f) {
-                Ok((Msg::Emergency(e), 2)) => Some(e.ramp_100us),
-                _ => None,
-            })
+            .map(|e| e.ramp_100us)
             .collect()
     }
 
@@ -624,14 +626,7 @@ fn a_peer_runs_the_ramp_a_fault_stop_carries_when_it_covers_what_it_holds() {
     let carried = a.emergency_ramps_100us();
     assert_eq!(carried.len(), 1);
     assert!(carried[0] > 0 && carried[0] < 5000, "{carried:?}");
-    let sent = a
-        .sent
-        .iter()
-        .find_map(|f| match decode(f) {
-            Ok((Msg::Emergency(e), 2)) => Some(e),
-            _ => None,
-        })
-        .unwrap();
+    let sent = a.emergency_frames()[0];
     let stop_ticks = |r: &mut Rig| {
         let mut n = 0u32;
         while r.node.state() == State::Stopping {

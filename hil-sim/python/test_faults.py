@@ -166,7 +166,9 @@ def test_host_killed_mid_upload_ends_in_the_along_path_stop(make_sim, bus, bus_b
         if m is None:
             continue
         if 0x011 <= m.arbitration_id <= 0x013:
-            emergencies.append((m.arbitration_id - 0x010, str(db.decode_message(m.arbitration_id, bytes(m.data))["code"])))
+            e = db.decode_message(m.arbitration_id, bytes(m.data))
+            # ramp_100us scaled by the DBC to seconds.
+            emergencies.append((m.arbitration_id - 0x010, str(e["code"]), float(e["ramp_100us"])))
         elif (beat := heartbeat(db, m)) is not None:
             hb[beat[0]] = beat[1:]
             # Kill the host 0.5 s into the motion (SIGKILL: no goodbye).
@@ -189,7 +191,12 @@ def test_host_killed_mid_upload_ends_in_the_along_path_stop(make_sim, bus, bus_b
     # Documented: LostSync or Underrun on the node that detects it first,
     # PeerEmergency on the others (or their own LostSync/Underrun).
     assert set(codes.values()) <= {"LostSync", "Underrun", "PeerEmergency"}, codes
-    assert any(c in ("LostSync", "Underrun") for _, c in emergencies), emergencies
+    assert any(c in ("LostSync", "Underrun") for _, c, _ in emergencies), emergencies
+    # The node that noticed stops with the ramp of the path its stop passes
+    # through (docs/protocol.md, "A ramp for a fault stop"), shorter than
+    # the full one, and its Emergency carries it to the peers.
+    own = [r for _, c, r in emergencies if c in ("LostSync", "Underrun")]
+    assert any(0 < r < run_["stop_ramp_s"] for r in own), (own, run_["stop_ramp_s"])
     assert not run_["completed"]
     assert {f["name"] for f in run_["faults"]} == set(codes.values()), run_["faults"]
     check_executed(run_, counts["segments_from_a"], whole=False)
