@@ -7,8 +7,13 @@ use triquint_shared::{Limits, Robot};
 use triquint_sim::testplan;
 
 fn check(path: &str) -> (i32, String) {
+    check_with(&[path])
+}
+
+fn check_with(args: &[&str]) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_triquint"))
-        .args(["check", path])
+        .arg("check")
+        .args(args)
         .output()
         .unwrap();
     (
@@ -57,5 +62,40 @@ fn check_reports_streamability() {
     let (code, out) = check(&path.to_string_lossy());
     assert_eq!(code, 1, "{out}");
     assert!(streaming_row(&out).ends_with("VIOLATED"), "{out}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The last column of a check row: what the run needs (s).
+fn need_s(row: &str) -> f64 {
+    let cols: Vec<&str> = row.split_whitespace().collect();
+    cols[cols.len() - 2].parse().unwrap()
+}
+
+/// A machine whose override stops at 100 % (`drive.max_override = 1`)
+/// needs less plan queued ahead: its stop ramp is sized for a stop from
+/// σ = 1, not from the spiral's cap of 2.955 (docs/machine.md).
+#[test]
+fn a_machine_without_overrides_above_100_percent_needs_less_look_ahead() {
+    let spiral = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../testdata/protocol/plans/spiral-spline.json"
+    );
+    let paper = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/machines/paper.toml"
+    ))
+    .unwrap();
+    let line = paper
+        .lines()
+        .find(|l| l.starts_with("max_override"))
+        .expect("paper.toml names max_override");
+    let dir = std::env::temp_dir().join(format!("triquint-check-override-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let machine = dir.join("no-override.toml");
+    std::fs::write(&machine, paper.replace(line, "max_override = 1.0")).unwrap();
+    let (_, free) = check(spiral);
+    let (_, capped) = check_with(&[spiral, "--machine", &machine.to_string_lossy()]);
+    let (free, capped) = (need_s(streaming_row(&free)), need_s(streaming_row(&capped)));
+    assert!(capped < 0.8 * free, "{capped} s against {free} s");
     let _ = std::fs::remove_dir_all(&dir);
 }

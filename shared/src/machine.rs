@@ -97,6 +97,10 @@ pub struct Tuning {
     pub soft_limit_margin: f64,
     /// Control tick rate (Hz).
     pub control_rate: f64,
+    /// Largest feed override σ the drives allow (1 = 100 %), below what
+    /// the plan's limits allow: every stop ramp is sized for a stop from
+    /// it, so a lower one shortens them and the look-ahead they need.
+    pub max_override: f64,
 }
 
 impl Default for Tuning {
@@ -109,6 +113,7 @@ impl Default for Tuning {
             following_error_max: 1.0e-3,
             soft_limit_margin: 1.0e-3,
             control_rate: 1000.0,
+            max_override: crate::plan::override_cap::CAP_MAX,
         }
     }
 }
@@ -268,6 +273,7 @@ impl Machine {
             brake: self.axes.each_ref().map(|a| a.brake),
             homing: self.homing_settings(),
             ceilings: self.effective_ceilings(),
+            max_override: self.drive.max_override,
         }
     }
 
@@ -420,6 +426,14 @@ impl Machine {
             0.0,
             0.1,
             "must be in 0..0.1 m",
+        )?;
+        within(
+            "drive.max_override",
+            None,
+            d.max_override,
+            1.0,
+            crate::plan::override_cap::CAP_MAX,
+            "must be in 1..32 (σ, 1 = 100 %)",
         )?;
         let c = &self.ceilings;
         within(

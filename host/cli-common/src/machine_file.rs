@@ -94,6 +94,7 @@ struct DriveTable {
     following_error_max: Option<f64>,
     soft_limit_margin: Option<f64>,
     control_rate: Option<f64>,
+    max_override: Option<f64>,
     /// Defaults for every axis.
     torque_constant: Option<f64>,
     current_limit: Option<f64>,
@@ -168,6 +169,7 @@ pub fn parse_machine(text: &str) -> Result<Machine, MachineFileError> {
     set(&mut t.following_error_max, d.following_error_max);
     set(&mut t.soft_limit_margin, d.soft_limit_margin);
     set(&mut t.control_rate, d.control_rate);
+    set(&mut t.max_override, d.max_override);
     for a in &mut m.axes {
         set(&mut a.torque_constant, d.torque_constant);
         set(&mut a.brake, d.brake);
@@ -358,6 +360,18 @@ mod tests {
             "line 3: `vibration.platform_damping` = 1.5: must be in 0..0.99"
         );
         assert!(err("[vibration]\nmode_hz = 3\n").contains("unknown field"));
+    }
+
+    #[test]
+    fn the_override_limit_is_read_held_to_its_range_and_configured() {
+        let m = parse_machine("[drive]\nmax_override = 1.0\n").unwrap();
+        assert_eq!(m.drive.max_override, 1.0);
+        assert_eq!(m.drive_settings().max_override, 1.0);
+        assert_eq!(Machine::default().drive_settings().max_override, 32.0);
+        assert_eq!(
+            err("[drive]\nmax_override = 0.5\n"),
+            "line 2: `drive.max_override` = 0.5: must be in 1..32 (σ, 1 = 100 %)"
+        );
     }
 
     #[test]

@@ -42,7 +42,7 @@ impl DriveConfigs {
     pub fn for_plan(plan: &Plan, settings: &DriveSettings) -> Result<Self, PlanConfigError> {
         let [v, a, j] = largest(plan)?;
         // The override cap, and the stop ramps sized for a stop from it.
-        let s = override_scaling(plan, Maxima { v, a, j });
+        let s = override_scaling(plan, Maxima { v, a, j }, settings.max_override);
         let (robot, limits) = (&plan.robot, &plan.limits);
         // The drives' own rule over every segment: never shorter than the
         // ramp a drive sizes for the segments it holds.
@@ -255,6 +255,55 @@ mod tests {
         // Sized from the segments: the recorded summary would have given
         // the 50 ms floor, a stop far above the jerk limit.
         assert!(got.stop_time_s > 0.05, "{}", got.stop_time_s);
+    }
+
+    /// A machine whose override stops at 100 % (`drive.max_override = 1`):
+    /// the cap is 1, every ramp is sized for a stop from σ = 1, and the
+    /// look-ahead the drives' Underrun rule and `check` ask for shrinks
+    /// with it (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
+    #[test]
+    fn a_lower_max_override_shortens_the_ramps_and_the_look_ahead() {
+        use triquint_shared::protocol::streaming::{QUEUE_CAPACITY, StreamRule};
+        let free = DriveSettings::default();
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let plan = committed_plan(name);
+            let a = DriveConfigs::for_plan(&plan, &free).unwrap();
+            let mut rows = vec![];
+            for max in [a.override_cap, 1.5, 1.2, 1.0] {
+                let s = DriveSettings {
+                    max_override: max,
+                    ..free.clone()
+                };
+                let c = DriveConfigs::for_plan(&plan, &s).unwrap();
+                let look = StreamRule::for_plan(&plan, &s, QUEUE_CAPACITY).unwrap();
+                assert!(c.override_cap <= max.max(1.0) + 1e-12, "{name}");
+                assert!(
+                    c.nodes
+                        .iter()
+                        .all(|n| n.override_cap == c.override_cap as f32)
+                );
+                assert!(c.stop_time_s <= a.stop_time_s * (1.0 + 1e-9), "{name}");
+                rows.push((c.override_cap, c.stop_time_s, look.lookahead_us));
+            }
+            let text: Vec<String> = rows
+                .iter()
+                .map(|(cap, ts, l)| {
+                    format!(
+                        "cap {cap:.3}: T_s {ts:.3} s, look-ahead {:.3} s",
+                        *l as f64 * 1e-6
+                    )
+                })
+                .collect();
+            eprintln!("{name}: {}", text.join("; "));
+            // From the plan's own cap (above 1 on all three) to 1: shorter,
+            // by much where the cap, not the plan at σ = 1, sized the ramp.
+            let (first, last) = (rows[0], rows[rows.len() - 1]);
+            assert!(first.0 > 1.0 && last.0 == 1.0, "{name}: {rows:?}");
+            assert!(last.1 < first.1 && last.2 < first.2, "{name}: {rows:?}");
+            if name != "case2-spline" {
+                assert!(last.1 < 0.8 * first.1, "{name}: {rows:?}");
+            }
+        }
     }
 
     /// The stop ramps of the committed test plans and of a move at the

@@ -67,7 +67,7 @@ pub fn run(args: &CheckArgs) -> CliResult {
             ok: r.ok,
         });
     }
-    if let Some(s) = streamability(&plan) {
+    if let Some(s) = streamability(&plan, &args.machine.load()?.drive_settings()) {
         table.push(Row {
             what: format!("streaming: segments {}–{} (s)", s.first, s.last),
             value: s.run_us as f64 * 1e-6,
@@ -111,11 +111,12 @@ pub fn run(args: &CheckArgs) -> CliResult {
 }
 
 /// The shortest run of segments the drives' queues hold ahead, against what
-/// they need at σ = 1 with the default drive settings and queue
-/// (docs/protocol.md, Streamability); `None` when the plan fits the queue
-/// whole or has no motion.
-fn streamability(plan: &Plan) -> Option<Shortfall> {
-    let rule = StreamRule::for_plan(plan, &DriveSettings::default(), QUEUE_CAPACITY)?;
+/// they need at σ = 1 with the machine's drive settings (its override
+/// limit sizes the stop ramp) and the drives' queue (docs/protocol.md,
+/// Streamability); `None` when the plan fits the queue whole or has no
+/// motion.
+fn streamability(plan: &Plan, settings: &DriveSettings) -> Option<Shortfall> {
+    let rule = StreamRule::for_plan(plan, settings, QUEUE_CAPACITY)?;
     let d: Vec<u32> = plan
         .wire_segments()
         .ok()?

@@ -57,8 +57,14 @@ pub fn ramps(m: Maxima, limits: &Limits, k: f64) -> (f64, f64) {
     )
 }
 
-/// The override cap for `plan` (maxima `m`) and the stop ramps sized for it.
-pub fn override_scaling(plan: &Plan, m: Maxima) -> Scaling {
+/// The override cap for `plan` (maxima `m`), never above `max` (the
+/// machine's `drive.max_override`), and the stop ramps sized for it.
+pub fn override_scaling(plan: &Plan, m: Maxima, max: f64) -> Scaling {
+    let max = if max.is_finite() {
+        max.clamp(1.0, CAP_MAX)
+    } else {
+        CAP_MAX
+    };
     let l = &plan.limits;
     let tol = 1.0 + 1e-9;
     let kinematic_ok = |k: f64| {
@@ -66,12 +72,12 @@ pub fn override_scaling(plan: &Plan, m: Maxima) -> Scaling {
             && k * k * m.a <= l.acceleration * tol
             && k * k * k * m.j <= l.jerk * tol
     };
-    let k = bisect(1.0, CAP_MAX, kinematic_ok);
+    let k = bisect(1.0, max, kinematic_ok);
     let k = match TorqueGrid::new(plan, m) {
         Some(g) if !g.ok(k) => bisect(1.0, k, |x| g.ok(x)),
         _ => k,
     };
-    let cap = (libm::floor(k * 1000.0 + 1e-6) / 1000.0).clamp(1.0, CAP_MAX);
+    let cap = (libm::floor(k * 1000.0 + 1e-6) / 1000.0).clamp(1.0, max);
     let (ts, tq) = ramps(m, l, cap);
     Scaling {
         cap,
@@ -179,7 +185,7 @@ mod tests {
     fn a_plan_with_headroom_gets_a_cap_above_one_at_a_limit() {
         let plan = case2();
         let m = maxima(&plan);
-        let s = override_scaling(&plan, m);
+        let s = override_scaling(&plan, m, CAP_MAX);
         let (k, l) = (s.cap, &plan.limits);
         assert!(k > 1.0 && k <= CAP_MAX, "cap {k}");
         assert!(k * m.v <= l.velocity && k * k * m.a <= l.acceleration);
@@ -219,18 +225,18 @@ mod tests {
             a: plan.limits.acceleration,
             j: plan.limits.jerk,
         };
-        assert_eq!(override_scaling(&plan, m).cap, 1.0);
+        assert_eq!(override_scaling(&plan, m, CAP_MAX).cap, 1.0);
     }
 
     #[test]
     fn torque_lowers_the_cap() {
         let mut plan = case2();
         let m = maxima(&plan);
-        let free = override_scaling(&plan, m).cap;
+        let free = override_scaling(&plan, m, CAP_MAX).cap;
         // A torque limit just above the plan's own peak: little room.
         let peak = plan.max_abs.torque.iter().fold(0.0f64, |a, b| a.max(*b));
         plan.limits.torque = peak * 1.02;
-        let k = override_scaling(&plan, m).cap;
+        let k = override_scaling(&plan, m, CAP_MAX).cap;
         assert!(k < free && k >= 1.0, "{k} vs {free}");
     }
 }

@@ -288,6 +288,9 @@ pub struct DriveSettings {
     /// The machine's ceilings (torque already lowered to the weakest
     /// axis's Kt × current limit): the drives hold them whatever a plan says.
     pub ceilings: Ceilings,
+    /// Largest feed override σ (the machine file's `drive.max_override`):
+    /// the override cap is the plan's, never above it.
+    pub max_override: f64,
 }
 
 /// How the drives home (the robot file's `[homing]` table).

@@ -94,7 +94,7 @@ impl StreamRule {
         if !finite || v + a + j == 0.0 {
             return None;
         }
-        let s = override_scaling(plan, Maxima { v, a, j });
+        let s = override_scaling(plan, Maxima { v, a, j }, settings.max_override);
         let ts = super::segment_maxima::for_plan(plan, settings, &s).stop_time_s;
         Some(Self::new(
             capacity,
