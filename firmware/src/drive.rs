@@ -344,7 +344,8 @@ impl<const Q: usize> Drive<Q> {
             if q.start_ns >= reach {
                 break;
             }
-            if q.end_ns() <= s {
+            // A µs before s too: a peer dates its stop to s rounded to the µs.
+            if q.end_ns() <= s - 1_000 {
                 continue;
             }
             let own = if quick {
@@ -645,8 +646,10 @@ impl<const Q: usize> Drive<Q> {
         if self.state == State::Running {
             let (stop, quick_ns) = self.ramps_ns(&a);
             let full = if quick { quick_ns } else { stop };
+            // A quick stop (Kinematics) runs its full quick ramp: the peers
+            // take its Emergency as a controlled stop.
             let (ramp, carried) = match reason {
-                StopReason::Fault(_) => self.path_ramp(t, full, quick),
+                StopReason::Fault(_) if !quick => self.path_ramp(t, full, false),
                 _ => (full, 0),
             };
             self.begin_stop_ramp(reason, t, None, ramp, carried);

@@ -10,7 +10,7 @@ use triquint_shared::protocol::{
 };
 
 use triquint_shared::protocol::contract::{
-    LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US, PEER_RAMP_MARGIN_US,
+    EMERGENCY_DATE_MAX_US, LIMIT_CHECK_INTERVALS, MAX_DURATION_US, MIN_DURATION_US,
     RELATIVE_LIMIT_MARGIN,
 };
 
@@ -129,7 +129,8 @@ impl Receiver {
                     },
                     node,
                     t_ns: t,
-                    ramp_100us: e.ramp_100us,
+                    // The host's emergency stop runs the full ramp.
+                    ramp_100us: if node == 0 { 0 } else { e.ramp_100us },
                     // The stop it causes when Running.
                     ready: self
                         .ramps(&snapshot)
@@ -205,15 +206,19 @@ impl Receiver {
     /// so every node's σ(t) is the same to the microsecond of plan time;
     /// else (the host's, a transition, a time too far off) the receipt.
     fn emergency_ns(&self, e: &Emergency, node: u8, rx_us: u64, snapshot: &TickSnapshot) -> i64 {
-        const MARGIN_NS: i64 = PEER_RAMP_MARGIN_US * 1000;
+        const MAX_NS: i64 = EMERGENCY_DATE_MAX_US * 1000;
         let rx = self.sync.host_ns(rx_us).unwrap_or(0);
         if node == 0 {
             return rx;
         }
+        // The frame's µs wrap every 71.6 min: unwrapped against our own
+        // plan time now.
+        let own_us = snapshot.scaling.constant_plan_time_ns(rx).div_euclid(1000);
+        let behind = (own_us as u32).wrapping_sub(e.plan_time_us) as i32 as i64;
         snapshot
             .scaling
-            .constant_host_time_ns(e.plan_time_us as i64 * 1000)
-            .filter(|t| (t - rx).abs() <= MARGIN_NS)
+            .constant_host_time_ns((own_us - behind) * 1000)
+            .filter(|t| (t - rx).abs() <= MAX_NS)
             .unwrap_or(rx)
     }
 

@@ -161,12 +161,16 @@ impl SyncEstimator {
     /// whatever rate each estimated.
     pub fn lost_at_ns(&self, local_us: u64, timeout_us: u64) -> Option<i64> {
         let (g, r) = (self.good_us?, self.rx_us?);
-        let (from, after) = if r + timeout_us <= g + 4 * timeout_us {
-            (r, timeout_us + 1)
+        let (after_r, after_g) = (
+            timeout_us.saturating_add(1),
+            timeout_us.saturating_mul(4).saturating_add(1),
+        );
+        let (from, after) = if r.saturating_add(after_r) <= g.saturating_add(after_g) {
+            (r, after_r)
         } else {
-            (g, 4 * timeout_us + 1)
+            (g, after_g)
         };
-        if self.samples < 2 || from + after > local_us {
+        if self.samples < 2 || from.saturating_add(after) > local_us {
             return None;
         }
         Some(self.host_ns(from)? + after as i64 * 1000)

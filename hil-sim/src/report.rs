@@ -69,6 +69,10 @@ pub struct RunReport {
     pub max_stop_jerk: [f64; 3],
     /// The stop ramp T_s the drives were configured with (s).
     pub stop_ramp_s: f64,
+    /// The feed-override cap they were configured with (σ): with the
+    /// plan's jerk it sets a stop's jerk budget, max(J, j·cap³ + J/2)
+    /// (docs/protocol.md, "Stop ramp").
+    pub override_cap: f64,
     /// Only in a seeded fault run: what the fault tests and the soak check
     /// (absent from the JSON otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -109,7 +113,8 @@ pub struct FaultRunFigures {
     pub executed_whole_plan: bool,
     /// First fault on any node (true ns).
     pub first_fault_ns: Option<u64>,
-    /// The stop's jerk budget (m/s³): max(limit, plan's jerk + limit/2).
+    /// The stop's jerk budget B_s (m/s³): max(limit, plan's jerk · cap³ +
+    /// limit/2), within the jerk ceiling.
     pub stop_jerk_bound: f64,
     /// Largest delay from an Emergency frame reaching a running node to its
     /// first stopping control tick, in ticks.
@@ -168,6 +173,7 @@ impl Default for RunReport {
             stopped_within_buffer: false,
             max_stop_jerk: [0.0; 3],
             stop_ramp_s: 0.0,
+            override_cap: 1.0,
             fault_run: None,
             vibration: None,
         }

@@ -113,7 +113,7 @@ impl Default for Tuning {
             following_error_max: 1.0e-3,
             soft_limit_margin: 1.0e-3,
             control_rate: 1000.0,
-            max_override: crate::plan::override_cap::CAP_MAX,
+            max_override: crate::protocol::config::OVERRIDE_CAP_MAX,
         }
     }
 }
@@ -432,7 +432,7 @@ impl Machine {
             None,
             d.max_override,
             1.0,
-            crate::plan::override_cap::CAP_MAX,
+            crate::protocol::config::OVERRIDE_CAP_MAX,
             "must be in 1..32 (σ, 1 = 100 %)",
         )?;
         let c = &self.ceilings;

@@ -153,7 +153,13 @@ impl<const Q: usize> Drive<Q> {
                 && matches!(self.scaling.phase, Phase::Nominal | Phase::Accel)
                 && ahead < need
             {
-                self.begin_stop(StopReason::Fault(FaultCode::Underrun), false, host_ns);
+                // From where the queue fell short (the same instant on every
+                // node that holds the same segments), not this tick.
+                let t = self
+                    .scaling
+                    .constant_host_time_ns(self.queued_end_ns - need)
+                    .map_or(host_ns, |t| t.min(host_ns));
+                self.begin_stop(StopReason::Fault(FaultCode::Underrun), false, t);
             }
         }
         Some(m)

@@ -472,9 +472,18 @@ fn fault_figures(
         .map(|m| m.jerk.iter().fold(0.0f64, |a, b| a.max(*b)))
         .unwrap_or(f64::INFINITY);
     let lim = plan.limits.jerk;
-    // The stop's jerk budget (docs/protocol.md, Stopping): the limit, or the
-    // plan's own jerk plus half the limit when the plan already uses more.
-    let stop_jerk_bound = lim.max(plan_jerk + 0.5 * lim) * 1.001;
+    // The stop's jerk budget B_s (docs/protocol.md, "Stop ramp"): the
+    // limit, or the plan's own jerk at the override cap plus half the
+    // limit, within the ceiling. A stop from σ ≤ 1 sized for its path (a
+    // fault's, a dated Stop's) may use all of it.
+    let cap = run.override_cap;
+    let ceiling = sim
+        .nodes
+        .iter()
+        .filter_map(|n| n.node.config())
+        .map(|c| c.ceiling_jerk as f64)
+        .fold(f64::INFINITY, f64::min);
+    let stop_jerk_bound = lim.max(plan_jerk * cap.powi(3) + 0.5 * lim).min(ceiling) * 1.001;
     // The fault reactions (docs/protocol.md): with brakes every Fault at
     // rest is torque off; a miswired axis faults naming what is wrong.
     let reaction_wrong = sc.brakes

@@ -29,7 +29,7 @@ use triquint_shared::protocol::{FaultCode, State};
 use triquint_sim::testplan;
 
 use super::stop_harness::{
-    Ending, Path, Run, SETTLE_NS, branch_runs, committed_plan, seeded_instants,
+    Ending, Path, Run, SETTLE_NS, bounds, branch_runs, committed_plan, seeded_instants,
 };
 
 /// How long the silent host leaves the drives to end in Fault (ns).
@@ -93,6 +93,8 @@ struct FaultStop {
     skew_s: f64,
     /// The largest of any drive's own stop ramp for its queue (ns).
     own_ramp_ns: i64,
+    /// Largest |joint jerk| of any drive's reference while Stopping (m/s³).
+    jerk: f64,
     /// Where it ended, against the path, from the silence on.
     ending: Ending,
     /// Every node in Fault at the end.
@@ -179,6 +181,11 @@ fn fall_silent(mut run: Run, plan: &Plan, at_s: f64) -> FaultStop {
             _ => 0.0,
         },
         own_ramp_ns,
+        jerk: sim
+            .nodes
+            .iter()
+            .map(|n| n.max_stop_jerk as f64)
+            .fold(0.0, f64::max),
         ending: Ending::of(&sim, &path, silent),
         clean,
     }
@@ -214,6 +221,8 @@ fn fault_stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
         fall_silent(run, plan, at_s)
     });
     let bound = |r: &FaultStop| full_s.max(r.own_ramp_ns as f64 * 1e-9) + STOP_SLACK_S;
+    // The stop's jerk within the drives' budget B_s.
+    let b = bounds(plan, &configs);
     let unsafe_endings: Vec<&FaultStop> = runs
         .iter()
         .filter(|r| {
@@ -224,6 +233,7 @@ fn fault_stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
                 )
                 || r.ending.is_unsafe()
                 || r.stop_s > bound(r)
+                || r.jerk > b.jerk * 1.001
         })
         .collect();
     let worst = |f: fn(&FaultStop) -> f64| runs.iter().map(f).fold(0.0, f64::max);
@@ -248,14 +258,17 @@ fn fault_stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
         .map_or(0.0, |r| r.at_s);
     let rest_um = worst(|r| r.ending.rest_off_path_m) * 1e6;
     let rest_speed = worst(|r| r.ending.rest_speed);
+    let jerk = worst(|r| r.jerk);
     eprintln!(
         "{name}: {n} fault stops ({} unsafe), T_s {full_s:.3} s: mean stop {mean:.3} s (×{:.3} of T_s), \
          min {min:.3} s, max {max:.3} s (bound {worst_bound:.3} s), detected by {detected} \
          (nodes' faults {nodes}), ramps run {ramp_min:.3}–{ramp_max:.3} s, drives' own ramp up to \
          {own_ramp:.3} s, stop instants apart up to {skew_us:.0} µs; worst off path {off_um:.2} µm \
-         (silent at {worst_at:.3} s; at rest {rest_um:.2} µm), rest speed {rest_speed:.1e} m/s",
+         (silent at {worst_at:.3} s; at rest {rest_um:.2} µm), rest speed {rest_speed:.1e} m/s, \
+         worst stop jerk {jerk:.3} of {:.3} m/s³",
         unsafe_endings.len(),
         mean / full_s,
+        b.jerk,
     );
     assert!(unsafe_endings.is_empty(), "{name}: {unsafe_endings:#?}");
     // The ramp for the path the stop passes through, not the largest held:

@@ -11,8 +11,32 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_link::{DriveConfigs, Outcome, Session, SessionOptions};
 use triquint_shared::plan::Plan;
+use triquint_shared::plan::figures::kinematics;
+use triquint_shared::protocol::config::SMOOTHSTEP_MAX_D1;
 use triquint_sim::host_port::SimPort;
 use triquint_sim::{Sim, SimConfig};
+
+/// The bounds a stop keeps to (docs/protocol.md, "Stop ramp"): jerk within
+/// the drives' own stop budget, min(C, max(J, j·cap³ + J/2)) for their
+/// jerk limit J, ceiling C and override cap, acceleration within
+/// max(A, a + 1.875·v/T_s), for the plan's exact maxima v, a, j.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Bounds {
+    pub(super) jerk: f64,
+    pub(super) accel: f64,
+}
+
+pub(super) fn bounds(plan: &Plan, configs: &DriveConfigs) -> Bounds {
+    let [v, a, j] = kinematics(&plan.segments).largest();
+    let l = &plan.limits;
+    let c = &configs.nodes[0];
+    let (jl, cap) = (c.max_jerk as f64, configs.override_cap);
+    let stop_time_s = configs.stop_time_s;
+    Bounds {
+        jerk: (c.ceiling_jerk as f64).min(jl.max(j * cap.powi(3) + 0.5 * jl)),
+        accel: l.acceleration.max(a + SMOOTHSTEP_MAX_D1 * v / stop_time_s),
+    }
+}
 
 /// Largest distance of the plant from the planned joint path from the
 /// stop on (m): the servo's cross-path error, not only the rest position.

@@ -11,10 +11,10 @@ use triquint_link::{DriveConfigs, Feed};
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::State;
-use triquint_shared::protocol::config::{DriveSettings, SMOOTHSTEP_MAX_D1};
+use triquint_shared::protocol::config::DriveSettings;
 use triquint_sim::testplan;
 
-use super::stop_harness::{Ending, Path, Run, SETTLE_NS, branch_runs, seeded_instants};
+use super::stop_harness::{Ending, Path, Run, SETTLE_NS, bounds, branch_runs, seeded_instants};
 
 /// One stopped run.
 #[derive(Clone, Copy, Debug)]
@@ -34,28 +34,6 @@ struct StopRun {
     /// Every drive Idle, no fault on any node or reported to the host, and
     /// the session ended stopped (or completed: the plan ended first).
     clean: bool,
-}
-
-/// The bounds a stop keeps to (docs/protocol.md, "Stop ramp"): jerk within
-/// the drives' own stop budget, min(C, max(J, j·cap³ + J/2)) for their
-/// jerk limit J, ceiling C and override cap, acceleration within
-/// max(A, a + 1.875·v/T_s), for the plan's exact maxima v, a, j.
-#[derive(Clone, Copy, Debug)]
-struct Bounds {
-    jerk: f64,
-    accel: f64,
-}
-
-fn bounds(plan: &Plan, configs: &DriveConfigs) -> Bounds {
-    let [v, a, j] = kinematics(&plan.segments).largest();
-    let l = &plan.limits;
-    let c = &configs.nodes[0];
-    let (jl, cap) = (c.max_jerk as f64, configs.override_cap);
-    let stop_time_s = configs.stop_time_s;
-    Bounds {
-        jerk: (c.ceiling_jerk as f64).min(jl.max(j * cap.powi(3) + 0.5 * jl)),
-        accel: l.acceleration.max(a + SMOOTHSTEP_MAX_D1 * v / stop_time_s),
-    }
 }
 
 impl Run {

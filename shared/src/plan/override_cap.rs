@@ -25,7 +25,7 @@ use crate::protocol::config::SMOOTHSTEP_MAX_D1;
 use crate::protocol::stop_ramp::stop_time;
 
 /// The largest cap the drives accept (configuration range 1–32).
-pub const CAP_MAX: f64 = 32.0;
+pub const CAP_MAX: f64 = crate::protocol::config::OVERRIDE_CAP_MAX;
 
 /// Torque is checked on this grid of plan time (s).
 const TORQUE_STEP_S: f64 = 0.002;

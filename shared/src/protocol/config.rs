@@ -253,6 +253,8 @@ pub struct ConfigError {
 
 /// Smoothstep S(u) = 10u³ − 15u⁴ + 6u⁵ bounds used by the stop time-scaling.
 pub const SMOOTHSTEP_MAX_D1: f64 = 1.875;
+/// The largest feed-override cap a drive accepts (σ; `override_cap` range 1–32).
+pub const OVERRIDE_CAP_MAX: f64 = 32.0;
 /// max |S''(u)| = 10/√3.
 pub const SMOOTHSTEP_MAX_D2: f64 = 5.773_502_691_896_258;
 
@@ -469,7 +471,7 @@ impl DriveConfig {
                 });
             }
         }
-        if !(1.0..=32.0).contains(&self.override_cap) {
+        if !(1.0..=OVERRIDE_CAP_MAX as f32).contains(&self.override_cap) {
             return Err(ConfigError {
                 name: "override_cap",
                 value: self.override_cap,

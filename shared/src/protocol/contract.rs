@@ -42,6 +42,11 @@ pub const PEER_SKEW_MARGIN_US: u64 = 20_000;
 /// (µs): a peer that takes the Emergency within this of the fault checks
 /// a window inside the sender's, so an honest ramp is never refused.
 pub const PEER_RAMP_MARGIN_US: i64 = 10_000;
+/// A peer dates the stop an Emergency causes to its sender's instant when
+/// that is within this of the receipt (µs): a frame's way on a busy bus
+/// and a tick. Further back, the ramp would begin part-way with a step in
+/// acceleration; the receipt is used instead.
+pub const EMERGENCY_DATE_MAX_US: i64 = 2_000;
 /// How long the maintenance window `UnlockCeilings` opens stays open at
 /// most (µs): long enough for a configuration's writes and the commit's
 /// resends, short enough that a forgotten unlock does not stay open.
