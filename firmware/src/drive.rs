@@ -319,19 +319,19 @@ impl<const Q: usize> Drive<Q> {
         dated
     }
 
-    /// The ramp (ns) this node vouches for, for a stop for its own fault
-    /// from host time `t`, and in 100 µs units (rounded up) for its
-    /// Emergency: the largest own ramp for a stop from σ ≤ 1 of the queued
-    /// segments overlapping [s, s + `PEER_RAMP_MARGIN_US` + T/2] for plan
-    /// time s, the window every peer that takes its Emergency within the
-    /// margin checks. The full ramp `full_ns` (and 0) from a transition or
+    /// The ramp (ns) this node vouches for, for a controlled stop for its
+    /// own fault from host time `t`, and in 100 µs units (rounded up) for
+    /// its Emergency: the largest own ramp for a stop from σ ≤ 1 of the
+    /// queued segments overlapping [s − 1 µs, s + `PEER_RAMP_MARGIN_US` +
+    /// T/2] for plan time s, the window every peer that takes its
+    /// Emergency within the margin checks. The full ramp `full_ns` (and 0) from a transition or
     /// σ above 1, when the queue does not hold that window (nor the plan's
     /// end), or when not shorter (docs/protocol.md, "A ramp for a fault
     /// stop").
     // Cold, out of line: only the tick that takes a fault runs it.
     #[cold]
     #[inline(never)]
-    fn path_ramp(&self, t: i64, full_ns: i64, quick: bool) -> (i64, u16) {
+    fn path_ramp(&self, t: i64, full_ns: i64) -> (i64, u16) {
         const MARGIN_NS: i64 = PEER_RAMP_MARGIN_US * 1000;
         if self.scaling.in_transition() || self.scaling.target_q16() > UNIT_Q16 {
             return (full_ns, 0);
@@ -348,12 +348,7 @@ impl<const Q: usize> Drive<Q> {
             if q.end_ns() <= s - 1_000 {
                 continue;
             }
-            let own = if quick {
-                q.unit_ramps_us.1
-            } else {
-                q.unit_ramps_us.0
-            };
-            units = units.max((own as i64 + 99) / 100);
+            units = units.max((q.unit_ramps_us.0 as i64 + 99) / 100);
             reach = s + MARGIN_NS + units * 50_000;
         }
         let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
@@ -570,7 +565,7 @@ impl<const Q: usize> Drive<Q> {
         self.state = State::Fault;
         self.fault = code;
         self.start_ns = None;
-        self.emergency(code, 0);
+        self.emergency(code);
         self.react_at_rest(code);
     }
 
@@ -611,14 +606,19 @@ impl<const Q: usize> Drive<Q> {
             .unwrap_or_else(|| Expected::of(&self.model).load)
     }
 
+    /// The Emergency frame of a fault whose stop carries no ramp of its
+    /// own (not moving, homing, a fault during another stop), at the last
+    /// reference's plan time.
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
-    fn emergency(&mut self, code: FaultCode, ramp_100us: u16) {
-        self.emergency_at(code, ramp_100us, self.plan_ns);
+    fn emergency(&mut self, code: FaultCode) {
+        self.emergency_at(code, 0, self.plan_ns);
     }
 
-    /// [`Drive::emergency`] at plan time `plan_ns` (rounded to the µs).
+    /// [`Drive::emergency`] for a stop along the path that begins at plan
+    /// time `plan_ns` (rounded to the µs) and runs the ramp `ramp_100us`
+    /// (0: the full one).
     #[cold]
     #[inline(never)]
     fn emergency_at(&mut self, code: FaultCode, ramp_100us: u16, plan_ns: i64) {
@@ -649,7 +649,7 @@ impl<const Q: usize> Drive<Q> {
             // A quick stop (Kinematics) runs its full quick ramp: the peers
             // take its Emergency as a controlled stop.
             let (ramp, carried) = match reason {
-                StopReason::Fault(_) if !quick => self.path_ramp(t, full, false),
+                StopReason::Fault(_) if !quick => self.path_ramp(t, full),
                 _ => (full, 0),
             };
             self.begin_stop_ramp(reason, t, None, ramp, carried);

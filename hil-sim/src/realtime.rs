@@ -541,11 +541,7 @@ fn finish(watch: &Watch, nodes: &[SimNode], now: u64, completed: bool) -> RunRep
             .filter_map(|n| n.node.config())
             .map(|c| c.stop_time as f64)
             .fold(0.0, f64::max),
-        override_cap: nodes
-            .iter()
-            .filter_map(|n| n.node.config())
-            .map(|c| c.override_cap as f64)
-            .fold(1.0, f64::max),
+        override_cap: RunReport::override_cap_of(nodes.iter().filter_map(|n| n.node.config())),
         max_stop_jerk: [0, 1, 2].map(|a| {
             nodes
                 .iter()

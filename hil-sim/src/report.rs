@@ -7,7 +7,7 @@
 //! and `scripts/hil_figures.py` read.
 
 use serde::{Serialize, Serializer};
-use triquint_shared::protocol::{FaultCode, Reject};
+use triquint_shared::protocol::{DriveConfig, FaultCode, Reject};
 
 use crate::faults::FaultStats;
 use crate::metrics::Tracking;
@@ -188,6 +188,15 @@ impl RunReport {
             max_error_m: self.max_error_m,
             samples: self.tracking_samples,
         }
+    }
+
+    /// The override cap the drives were configured with (the largest of
+    /// `configs`; 1 without any): [`RunReport::override_cap`].
+    pub fn override_cap_of(configs: impl IntoIterator<Item = DriveConfig>) -> f64 {
+        configs
+            .into_iter()
+            .map(|c| c.override_cap as f64)
+            .fold(1.0, f64::max)
     }
 
     /// Sets the tracking figures.

@@ -46,7 +46,7 @@ impl<const Q: usize> Drive<Q> {
         self.state = State::Stopping;
         self.stop_reason = Some(StopReason::Fault(code));
         self.fault = code;
-        self.emergency(code, 0);
+        self.emergency(code);
     }
 
     /// One homing period: the reference of this tick (in this tick's frame).

@@ -49,13 +49,15 @@ impl<const Q: usize> Drive<Q> {
             return;
         }
         let peer = h.state().ok();
-        if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
-            let t = self.sync.host_ns(rx_us).unwrap_or(0);
-            self.on_emergency(FaultCode::PeerEmergency, t, None, 0);
+        let code = if !matches!(h.fault(), Ok(FaultCode::None | FaultCode::QuickStop)) {
+            FaultCode::PeerEmergency
         } else if h.config_crc == 0 || self.peer_left_behind(peer, rx_us) {
-            let t = self.sync.host_ns(rx_us).unwrap_or(0);
-            self.on_emergency(FaultCode::PeerLost, t, None, 0);
-        }
+            FaultCode::PeerLost
+        } else {
+            return;
+        };
+        let t = self.sync.host_ns(rx_us).unwrap_or(0);
+        self.on_emergency(code, t, None, 0);
     }
 
     /// A peer still Loaded or Armed (it missed the Start) well after we
@@ -170,7 +172,7 @@ impl<const Q: usize> Drive<Q> {
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));
                 self.fault = code;
-                self.emergency(code, 0);
+                self.emergency(code);
             }
             State::Idle | State::Loaded | State::Armed => self.fault_now(code),
             _ => {}
@@ -220,7 +222,7 @@ impl<const Q: usize> Drive<Q> {
         {
             self.torque_off = true;
             self.check = None;
-            self.emergency(FaultCode::FollowingError, 0);
+            self.emergency(FaultCode::FollowingError);
         }
     }
 

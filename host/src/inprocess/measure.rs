@@ -54,12 +54,7 @@ pub(crate) fn run_report(
         stopped_within_buffer,
         max_stop_jerk: [0, 1, 2].map(|i| sim.nodes[i].max_stop_jerk as f64),
         stop_ramp_s,
-        override_cap: sim
-            .nodes
-            .iter()
-            .filter_map(|n| n.node.config())
-            .map(|c| c.override_cap as f64)
-            .fold(1.0, f64::max),
+        override_cap: RunReport::override_cap_of(sim.nodes.iter().filter_map(|n| n.node.config())),
         ..RunReport::default()
     };
     run.set_tracking(&metrics::tracking(plan, start_ns, &sim.samples));
