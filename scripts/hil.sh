@@ -68,7 +68,8 @@ done
 export TRIQUINT="$BIN/triquint" TRIQUINT_SIM="$BIN/triquint-sim" HIL_OUT="$OUT" \
     HIL_PLANS="$OUT/plans" HIL_ROOT="$ROOT" HIL_IFACE=vcan0 HIL_IFACE_B=vcan1 PYTHONDONTWRITEBYTECODE=1 \
     PATH="\$PATH:/usr/bin:/sbin"
-"$PY" -m pytest -p no:cacheprovider -v -rfE --durations=12 hil-sim/python ${HIL_PYTEST_ARGS:-}
+"$PY" -m pytest -p no:cacheprovider -v -rfE --durations=12 \
+    --junitxml="$OUT/junit.xml" hil-sim/python ${HIL_PYTEST_ARGS:-}
 status=\$?
 # The guest kernel's log (clocksource changes, stalls), kept beside the
 # simulator's own, which logs when its ticks ran late (docs/vcan.md).
@@ -104,5 +105,9 @@ for f in "$OUT"/plans/stream-*.json; do
     done
 done
 "$PY" scripts/hil_figures.py "$OUT" || true
+if [ "$status" -ne 0 ]; then
+    step "failures (the suite's report of each, and its simulators' logs)"
+    "$PY" scripts/hil_failures.py "$OUT" || true
+fi
 step "HIL suite exit status $status"
 exit "$status"

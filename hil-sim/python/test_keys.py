@@ -55,19 +55,26 @@ class Terminal:
     def text(self):
         return self.out.decode(errors="replace")
 
+    def why(self):
+        """For a failure: the exit status and the last line the upload
+        wrote first (a failure's summary shows one line), then its tail."""
+        lines = [l.strip() for l in self.text().replace("\r", "\n").splitlines() if l.strip()]
+        last = lines[-1] if lines else "(nothing written)"
+        return f"exit {self.code}, last line: {last[-300:]}\n{self.text()[-2000:]}"
+
     def wait(self, timeout):
         end = time.monotonic() + timeout
         while self.drain(0.2):
-            assert time.monotonic() < end, self.text()[-2000:]
+            assert time.monotonic() < end, self.why()
         return self.code
 
     def until(self, cond, timeout, what):
         end = time.monotonic() + timeout
         while time.monotonic() < end:
-            assert self.drain(0.1), f"the upload exited before {what}: {self.text()[-2000:]}"
+            assert self.drain(0.1), f"the upload exited before {what}: {self.why()}"
             if cond(status()["nodes"]):
                 return
-        raise AssertionError(f"never {what}: {self.text()[-2000:]}")
+        raise AssertionError(f"never {what}: {self.why()}")
 
 
 def test_keys_on_a_terminal_hold_resume_override_and_stop(make_sim, bus):
@@ -75,20 +82,20 @@ def test_keys_on_a_terminal_hold_resume_override_and_stop(make_sim, bus):
     sim.wait_heartbeats(bus)
     t = Terminal()
     t.until(lambda ns: all(n["state"] == "Running" for n in ns), 60, "running")
-    assert "space hold/resume" in t.text(), t.text()[-2000:]
+    assert "space hold/resume" in t.text(), t.why()
     t.drain(1.0)
     t.key(b" ")
     t.until(lambda ns: all(n["held"] for n in ns), 10, "held by the space key")
     # Held longer than the rest of the 5 s plan: not a timeout.
     t.drain(8.0)
-    assert t.code is None, t.text()[-2000:]
-    assert "HELD" in t.text(), t.text()[-2000:]
+    assert t.code is None, t.why()
+    assert "HELD" in t.text(), t.why()
     t.key(b"-")
     t.until(lambda ns: all(n["override"] for n in ns), 10, "overridden by the - key")
     t.key(b" ")
     t.until(lambda ns: not any(n["held"] for n in ns), 10, "resumed by the space key")
-    assert t.wait(120) == 0, t.text()[-2000:]
-    assert "override 90 %" in t.text(), t.text()[-2000:]
+    assert t.wait(120) == 0, t.why()
+    assert "override 90 %" in t.text(), t.why()
     s = status()
     assert all(n["state"] == "Idle" and n["fault"]["code"] == 0 for n in s["nodes"]), s
     # Case II is closed: the next upload starts where this one ended; 's' stops it.
@@ -96,8 +103,8 @@ def test_keys_on_a_terminal_hold_resume_override_and_stop(make_sim, bus):
     t.until(lambda ns: all(n["state"] == "Running" for n in ns), 60, "running")
     t.drain(0.5)
     t.key(b"s")
-    assert t.wait(60) == STOPPED, t.text()[-2000:]
-    assert "stopped on request" in t.text(), t.text()[-2000:]
+    assert t.wait(60) == STOPPED, t.why()
+    assert "stopped on request" in t.text(), t.why()
     s = status()
     assert all(n["state"] == "Idle" and n["fault"]["code"] == 0 for n in s["nodes"]), s
     sim.stop()
