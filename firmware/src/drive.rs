@@ -49,6 +49,9 @@ pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 64;
 
+/// No segment dropped since the last flush: it ends before any plan time.
+const NONE_DROPPED: (i64, i64, (u32, u32)) = (i64::MIN, i64::MIN, (0, 0));
+
 /// Why the node is slowing down.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StopReason {
@@ -100,6 +103,13 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     /// The largest of the queued segments' own stop ramps, controlled and
     /// quick (µs): the drive's floor under the configured ones.
     queue_ramps_us: (u32, u32),
+    /// The last segment the queue dropped (the one before its front):
+    /// start and end (plan ns) and its own ramps for stops from σ ≤ 1
+    /// (µs). A dated stop applies up to `APPLY_LATE_MAX_US` late, by when
+    /// a node may have dropped the segment it begins in (and its peers,
+    /// whose ticks fall elsewhere, not): every node counts it all the
+    /// same, and one that begins earlier still gets the full ramp.
+    dropped: (i64, i64, (u32, u32)),
     /// End motion (q, q', q'', q''') of the last accepted segment.
     prev_end: Option<JointMotion<f32>>,
     /// Body CRC of the last accepted segment (valid with `prev_end`).
@@ -199,6 +209,7 @@ impl<const Q: usize> Drive<Q> {
             next_seq: 0,
             queued_end_ns: 0,
             queue_ramps_us: (0, 0),
+            dropped: NONE_DROPPED,
             prev_end: None,
             prev_crc: 0,
             sync: SyncEstimator::default(),
@@ -300,6 +311,11 @@ impl<const Q: usize> Drive<Q> {
             return full_ns;
         }
         let s = self.scaling.constant_plan_time_ns(t);
+        // The segment before the front, if the stop begins in it.
+        let (from, to, (c, q)) = self.dropped;
+        if to > s && (from > s || if quick { q } else { c } > dated_us) {
+            return full_ns;
+        }
         // At σ ≤ 1 the stop covers at most T/2 of plan time.
         let end = s + (dated >> 1);
         // The queue is in plan order: from the front up to the window's end.
@@ -337,8 +353,20 @@ impl<const Q: usize> Drive<Q> {
             return (full_ns, 0);
         }
         let s = self.scaling.constant_plan_time_ns(t);
-        let mut units: i64 = 0;
-        let mut reach = s + MARGIN_NS;
+        // The segment before the front, if the stop begins in it.
+        let (from, to, (before, _)) = self.dropped;
+        let before = if to > s - 1_000 {
+            if from > s - 1_000 {
+                return (full_ns, 0);
+            }
+            before
+        } else {
+            0
+        };
+        // In 100 µs units, rounded up; u32 arithmetic: a 64-bit division
+        // is a library call on the drives, and this runs in the tick.
+        let mut units = before.div_ceil(100);
+        let mut reach = s + MARGIN_NS + units as i64 * 50_000;
         // The queue is in plan order; the window grows with the ramp.
         for q in self.queue.iter() {
             if q.start_ns >= reach {
@@ -348,10 +376,14 @@ impl<const Q: usize> Drive<Q> {
             if q.end_ns() <= s - 1_000 {
                 continue;
             }
-            units = units.max((q.unit_ramps_us.0 as i64 + 99) / 100);
-            reach = s + MARGIN_NS + units * 50_000;
+            let own = q.unit_ramps_us.0.div_ceil(100);
+            if own > units {
+                units = own;
+                reach = s + MARGIN_NS + units as i64 * 50_000;
+            }
         }
         let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
+        let units = units as i64;
         let ramp = units * 100_000;
         if !held || units == 0 || ramp >= full_ns || units > u16::MAX as i64 {
             return (full_ns, 0);
@@ -548,6 +580,7 @@ impl<const Q: usize> Drive<Q> {
         self.next_seq = 0;
         self.queued_end_ns = 0;
         self.queue_ramps_us = (0, 0);
+        self.dropped = NONE_DROPPED;
         self.prev_end = None;
         self.start_ns = None;
         self.stop_reason = None;
@@ -659,7 +692,11 @@ impl<const Q: usize> Drive<Q> {
     /// Begins a stop along the path from host time `t` (ns), with the
     /// slow-down the receive side sized if it did, and the ramp a Stop,
     /// QuickStop, FeedHold or a peer's Emergency carries for its instant
-    /// (`dated_100us`, 0 for none): see [`Drive::dated_ramp_ns`].
+    /// (`dated_100us`, 0 for none): see [`Drive::dated_ramp_ns`]. `None`:
+    /// a controlled stop dated by the host that carries no ramp (another
+    /// process's): the ramp this node vouches for at that instant
+    /// ([`Drive::path_ramp`]), the same on every node that holds the
+    /// segments it passes through.
     // Cold, out of line: the tick's own code must fit the ESC1's CCM SRAM.
     #[cold]
     #[inline(never)]
@@ -669,7 +706,7 @@ impl<const Q: usize> Drive<Q> {
         quick: bool,
         t: i64,
         ready: Option<&Retarget>,
-        dated_100us: u16,
+        dated_100us: Option<u16>,
     ) {
         let Some(a) = self.active else {
             return;
@@ -677,8 +714,14 @@ impl<const Q: usize> Drive<Q> {
         if self.state == State::Running {
             let (stop, quick_ns) = self.ramps_ns(&a);
             let full = if quick { quick_ns } else { stop };
-            let ramp = self.dated_ramp_ns(t, dated_100us, full, quick);
-            let carried = if ramp < full { dated_100us } else { 0 };
+            let (ramp, carried) = match dated_100us {
+                None if !quick => self.path_ramp(t, full),
+                d => {
+                    let d = d.unwrap_or(0);
+                    let ramp = self.dated_ramp_ns(t, d, full, quick);
+                    (ramp, if ramp < full { d } else { 0 })
+                }
+            };
             self.begin_stop_ramp(reason, t, ready, ramp, carried);
         }
     }

@@ -209,6 +209,10 @@ pub enum CommandData {
     /// FeedHold, Resume, Override, Stop or QuickStop in the middle of a
     /// transition: the new transition, sized by the receive side.
     Scaling(Retarget),
+    /// FeedHold, Resume, Override, Stop or QuickStop otherwise: the host
+    /// time (ns) it applies at (`SyncEstimator::apply_ns` at its receipt),
+    /// its 64-bit arithmetic done here rather than in the tick.
+    At(i64),
 }
 
 impl CommandData {
@@ -216,6 +220,16 @@ impl CommandData {
     pub fn retarget(&self) -> Option<&Retarget> {
         match self {
             CommandData::Scaling(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// The host time (ns) a feed command applies at, as the receive side
+    /// dated it; `None` if it did not.
+    pub fn applies_at(&self) -> Option<i64> {
+        match self {
+            CommandData::Scaling(r) => Some(r.t_ns),
+            CommandData::At(t) => Some(*t),
             _ => None,
         }
     }

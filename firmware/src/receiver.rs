@@ -178,11 +178,15 @@ impl Receiver {
                 | CommandCode::Override
                 | CommandCode::Stop
                 | CommandCode::QuickStop,
-            ) if snapshot.scaling.in_transition() => {
+            ) => {
+                let t = self.sync.apply_ns(c.arg, rx_us);
+                if !snapshot.scaling.in_transition() {
+                    return CommandData::At(t);
+                }
                 // The change of σ the drive makes of it if it acts on it
                 // (see `Drive::on_command`): sized here, not in the tick.
                 let Some((stop, quick)) = self.ramps(snapshot) else {
-                    return CommandData::None;
+                    return CommandData::At(t);
                 };
                 let (k, full) = match code {
                     Ok(CommandCode::Resume) => (snapshot.override_q16, stop),
@@ -190,10 +194,9 @@ impl Receiver {
                     Ok(CommandCode::QuickStop) => (0, quick),
                     _ => (0, stop),
                 };
-                let t = self.sync.apply_ns(c.arg, rx_us);
                 match Retarget::prepare(&snapshot.scaling, t, k, full) {
                     Some(r) => CommandData::Scaling(r),
-                    None => CommandData::None,
+                    None => CommandData::At(t),
                 }
             }
             _ => CommandData::None,

@@ -224,14 +224,26 @@ impl Rig {
     /// A Stop carrying `dated_100us` while Running: the ticks (ms) from it
     /// to Idle.
     fn dated_stop_ms(&mut self, dated_100us: u16) -> i64 {
-        let t = self.command_with(CommandCode::Stop, 0, dated_100us, 0);
+        self.stop_ms(CommandCode::Stop, 0, dated_100us)
+    }
+
+    /// Ticks from a command `c` (Stop or FeedHold) for host time `arg` (0:
+    /// on receipt) carrying `dated_100us` until the node is at rest.
+    fn stop_ms(&mut self, c: CommandCode, arg: u32, dated_100us: u16) -> i64 {
+        let t = self.command_with(c, arg, dated_100us, 0);
         assert_eq!(t.map(|a| a.0), Some(0));
         let mut ms = 0;
-        while self.node.state() == State::Stopping && ms < 10_000 {
+        let moving = |r: &Self| match c {
+            CommandCode::FeedHold => r.node.scaling_phase() != Phase::Rest,
+            _ => r.node.state() == State::Stopping,
+        };
+        while moving(self) && ms < 10_000 {
             self.tick();
             ms += 1;
         }
-        assert_eq!(self.node.state(), State::Idle);
+        if c != CommandCode::FeedHold {
+            assert_eq!(self.node.state(), State::Idle);
+        }
         ms
     }
 
@@ -753,6 +765,94 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
             "dated {dated}: {ms} ms against {full_ms}"
         );
     }
+}
+
+/// A Stop or FeedHold dated by the host but carrying no ramp (another
+/// process's: `triquint stop`, `hold`, the web page) runs the ramp the
+/// node vouches for at that instant, as a fault's stop does; on receipt
+/// (not dated) it runs the full ramp.
+#[test]
+fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
+    let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
+    let rig = || {
+        let mut r = Rig::with_stop_time(0.05);
+        (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
+        r
+    };
+    let gentle = Rig::loaded_with(rig(), &segs[..2])
+        .node
+        .drive
+        .queue_ramps_ns()
+        .0;
+    for c in [CommandCode::Stop, CommandCode::FeedHold] {
+        let stop = |dated: bool| {
+            let mut r = Rig::loaded_with(rig(), &segs);
+            let full = r.node.drive.queue_ramps_ns().0;
+            r.start();
+            r.run(150);
+            assert_eq!(r.node.state(), State::Running);
+            // Dated a millisecond back, as `triquint stop` dates it.
+            let arg = if dated { (r.t - 1_000) as u32 } else { 0 };
+            let ms = r.stop_ms(c, arg, 0);
+            (ms, full / 1_000_000, r.max_stop_jerk)
+        };
+        let (ms, full_ms, jerk) = stop(true);
+        let gentle_ms = (gentle + 99_999) / 100_000 / 10;
+        std::eprintln!(
+            "{c:?} dated, no ramp: {ms} ms (the gentle segments' ramp {gentle_ms} ms, full {full_ms} ms), peak jerk {jerk:.3} m/s³"
+        );
+        assert!(
+            gentle_ms * 10 < full_ms * 6,
+            "{gentle_ms} against {full_ms}"
+        );
+        assert!((ms - gentle_ms).abs() <= 2, "{ms} ms against {gentle_ms}");
+        // The rig measures the jerk of a stop (a hold stays Running).
+        if c == CommandCode::Stop {
+            assert!(jerk > 0.0 && jerk <= 8.0, "{jerk}");
+        }
+        let (ms, full_ms, _) = stop(false);
+        assert!(
+            (ms - full_ms).abs() <= 2,
+            "on receipt: {ms} ms against {full_ms}"
+        );
+    }
+    // A fast segment, then gentle ones. In the first gentle one, dated 1 ms
+    // back: the gentle ramp. Dated 25 ms back, into the fast one, which the
+    // node has dropped (its peers, ticking elsewhere, may not have): the
+    // fast one's ramp all the same, from that instant (25 ms of it behind).
+    let segs = segments_of(&[0.8, 0.4, 0.4, 0.8]);
+    let fast = Rig::loaded_with(rig(), &segs[..1])
+        .node
+        .drive
+        .queue_ramps_ns()
+        .0;
+    let ms_of = |ns: i64| (ns + 99_999) / 100_000 / 10;
+    for (back_us, ramp_ms) in [(1_000, ms_of(gentle)), (25_000, ms_of(fast))] {
+        let mut r = Rig::loaded_with(rig(), &segs);
+        r.start();
+        r.run(830);
+        let ms = r.stop_ms(CommandCode::Stop, (r.t - back_us) as u32, 0);
+        let want = ramp_ms - back_us as i64 / 1000;
+        assert!(
+            (ms - want).abs() <= 2,
+            "dated {back_us} µs back: {ms} ms against {want}"
+        );
+    }
+    assert!(ms_of(gentle) * 10 < ms_of(fast) * 6);
+    // Dated into a gentle segment before the last one dropped (a 5 ms
+    // one): the full ramp (the fast segment's, queued later), though the
+    // window reaches only gentle ones.
+    let segs = segments_of(&[0.4, 0.005, 0.4, 0.8]);
+    let mut r = Rig::loaded_with(rig(), &segs);
+    let full_ms = r.node.drive.queue_ramps_ns().0 / 1_000_000;
+    r.start();
+    r.run(420);
+    let ms = r.stop_ms(CommandCode::Stop, (r.t - 12_000) as u32, 0);
+    assert!(
+        (ms - (full_ms - 12)).abs() <= 2,
+        "two segments back: {ms} ms against {}",
+        full_ms - 12
+    );
 }
 
 /// With an override cap above 1, a dated stop from σ = 1 is held to the

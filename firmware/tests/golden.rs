@@ -29,6 +29,7 @@ use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use triquint_firmware::inbox::Inbox;
+use triquint_firmware::scaling::Phase;
 use triquint_firmware::{Drive, Encoder, MotorOutput, QUEUE_CAPACITY, Receiver, RxFrame};
 use triquint_shared::dynamics;
 use triquint_shared::plan::Plan;
@@ -452,6 +453,18 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     r.command(CommandCode::Resume, 0);
     run(&mut r, &mut next, 300_000);
     assert!(!r.node.scaling().in_transition(), "still in a transition");
+    // A hold dated a millisecond back carrying no ramp, as another process
+    // sends it: the tick sizes the ramp from its queue (here the own ramp
+    // of the segment it begins in, as long as the full one).
+    let host_us = (r.now + 3_000_000 - 1_000) as u32;
+    r.command(CommandCode::FeedHold, host_us);
+    let mut held_us = 0;
+    while r.node.scaling_phase() != Phase::Rest && held_us < 1_000_000 {
+        run(&mut r, &mut next, TICK_US);
+        held_us += TICK_US;
+    }
+    eprintln!("golden frames: a dated hold without a ramp at rest in {held_us} µs");
+    r.command(CommandCode::Resume, 0);
     // The host goes silent at σ = 1: the node faults with Underrun, its
     // tick scans the queue for the ramp it vouches for (Emergency
     // `ramp_100us`), and it comes to rest in Fault.

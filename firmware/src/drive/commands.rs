@@ -66,15 +66,15 @@ impl<const Q: usize> Drive<Q> {
                 let quick = code == CommandCode::QuickStop;
                 match (self.state, self.active) {
                     (State::Running, _) => {
-                        let t = self.apply_ns(c.arg, local_us);
+                        let t = self.applies_at(c, local_us, data);
                         let r = data.retarget();
-                        self.begin_stop_dated(StopReason::Commanded, quick, t, r, c.arg2);
+                        self.begin_stop_dated(StopReason::Commanded, quick, t, r, carried_ramp(c));
                         FaultCode::None
                     }
                     (State::Stopping, Some(a)) => {
                         // A quick stop during a stop: the shorter ramp, from here.
                         if quick {
-                            let t = self.apply_ns(c.arg, local_us);
+                            let t = self.applies_at(c, local_us, data);
                             let r = data.retarget();
                             let quick_ns = self.ramps_ns(&a).1;
                             self.scaling.retarget_ready(t, 0, quick_ns, r);
@@ -115,9 +115,9 @@ impl<const Q: usize> Drive<Q> {
             CommandCode::FeedHold => match self.state {
                 State::Running => {
                     if self.stop_reason != Some(StopReason::Hold) {
-                        let t = self.apply_ns(c.arg, local_us);
+                        let t = self.applies_at(c, local_us, data);
                         let r = data.retarget();
-                        self.begin_stop_dated(StopReason::Hold, false, t, r, c.arg2);
+                        self.begin_stop_dated(StopReason::Hold, false, t, r, carried_ramp(c));
                     }
                     FaultCode::None
                 }
@@ -130,7 +130,7 @@ impl<const Q: usize> Drive<Q> {
             CommandCode::Resume => match (self.state, self.active) {
                 (State::Running, Some(a)) => {
                     if self.stop_reason == Some(StopReason::Hold) {
-                        let t = self.apply_ns(c.arg, local_us);
+                        let t = self.applies_at(c, local_us, data);
                         let (k, r) = (self.override_q16, data.retarget());
                         let stop = self.ramps_ns(&a).0;
                         self.scaling.retarget_ready(t, k, stop, r);
@@ -154,7 +154,7 @@ impl<const Q: usize> Drive<Q> {
                     if let (State::Running, None, Some(a)) =
                         (self.state, self.stop_reason, self.active)
                     {
-                        let t = self.apply_ns(c.arg, local_us);
+                        let t = self.applies_at(c, local_us, data);
                         let (k, r) = (self.override_q16, data.retarget());
                         let stop = self.ramps_ns(&a).0;
                         self.scaling.retarget_ready(t, k, stop, r);
@@ -211,12 +211,6 @@ impl<const Q: usize> Drive<Q> {
             }
         };
         self.command_ack(c, r, 0);
-    }
-
-    /// Host time (ns) a command with argument `arg` applies at
-    /// ([`SyncEstimator::apply_ns`]).
-    pub(super) fn apply_ns(&self, arg: u32, local_us: u64) -> i64 {
-        self.sync.apply_ns(arg, local_us)
     }
 
     /// The configuration's override cap (per mille; 1000 without one).
@@ -319,5 +313,26 @@ impl<const Q: usize> Drive<Q> {
         }
         self.start_ns = Some((now + d) * 1000);
         FaultCode::None
+    }
+}
+
+impl<const Q: usize> Drive<Q> {
+    /// Host time (ns) a feed command applies at: as the receive side
+    /// dated it, else by [`SyncEstimator::apply_ns`] here.
+    fn applies_at(&self, c: &Command, local_us: u64, data: &CommandData) -> i64 {
+        data.applies_at()
+            .unwrap_or_else(|| self.sync.apply_ns(c.arg, local_us))
+    }
+}
+
+/// The stop ramp a Stop, QuickStop or FeedHold carries (100 µs units, 0:
+/// the full one); `None` when it is dated by the host but carries none
+/// (another process's: `triquint stop`, `hold`, the web page), for the
+/// drive to size its own for that instant.
+fn carried_ramp(c: &Command) -> Option<u16> {
+    if c.arg != 0 && c.arg2 == 0 {
+        None
+    } else {
+        Some(c.arg2)
     }
 }

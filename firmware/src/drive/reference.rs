@@ -107,7 +107,9 @@ impl<const Q: usize> Drive<Q> {
             match self.queue.front() {
                 Some(f) if sc.s_ns >= f.end_ns() => {
                     let r = f.ramps_us;
+                    let dropped = (f.start_ns, f.end_ns(), f.unit_ramps_us);
                     self.queue.pop_front();
+                    self.dropped = dropped;
                     // Only the largest leaving changes the largest.
                     if r.0 >= self.queue_ramps_us.0 || r.1 >= self.queue_ramps_us.1 {
                         self.recompute_queue_ramps();

@@ -22,7 +22,7 @@ impl<const Q: usize> Drive<Q> {
     ) {
         match self.state {
             State::Running => {
-                self.begin_stop_dated(StopReason::Fault(code), false, t, ready, ramp_100us)
+                self.begin_stop_dated(StopReason::Fault(code), false, t, ready, Some(ramp_100us))
             }
             State::Stopping if !matches!(self.stop_reason, Some(StopReason::Fault(_))) => {
                 self.stop_reason = Some(StopReason::Fault(code));

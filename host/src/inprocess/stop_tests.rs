@@ -10,11 +10,23 @@
 use triquint_link::{DriveConfigs, Feed};
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
+use triquint_shared::protocol::Command;
 use triquint_shared::protocol::State;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_sim::testplan;
 
 use super::stop_harness::{Ending, Path, Run, SETTLE_NS, bounds, branch_runs, seeded_instants};
+
+/// Who stops the run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum StopBy {
+    /// The upload session (its Stop carries the host's ramp for the path
+    /// ahead).
+    Session,
+    /// Another process (`triquint stop`, the web page): a Stop dated a
+    /// millisecond back that carries no ramp, as `ops::feed` sends it.
+    Other,
+}
 
 /// One stopped run.
 #[derive(Clone, Copy, Debug)]
@@ -38,9 +50,21 @@ struct StopRun {
 
 impl Run {
     /// Sends Stop now and runs to the end: the stopped run's figures.
-    fn stop(mut self, plan: &Plan, configs: &DriveConfigs, at_s: f64) -> StopRun {
-        self.session.feed(Feed::Stop);
+    fn stop(mut self, plan: &Plan, configs: &DriveConfigs, at_s: f64, by: StopBy) -> StopRun {
         let sent = self.sim.now_ns();
+        match by {
+            StopBy::Session => {
+                self.session.feed(Feed::Stop);
+            }
+            StopBy::Other => {
+                let host_us = (sent / 1000 - 1000) as u32;
+                let c = Command {
+                    arg: host_us,
+                    ..Feed::Stop.command(0x81, 0)
+                };
+                self.sim.host_send(c.to_frame(0));
+            }
+        }
         self.sent_ns = Some(sent);
         let outcome = loop {
             if let Some(o) = self.advance() {
@@ -99,7 +123,8 @@ impl Run {
 /// Stops `plan` at `n` seeded instants in [0, T); asserts each and
 /// prints the worst figures.
 fn stops_end_on_the_path(name: &str, plan: &Plan, n: usize, seed: u64) {
-    stops_end_on_the_path_with(name, plan, n, seed, &DriveSettings::default());
+    let s = DriveSettings::default();
+    stops_end_on_the_path_with(name, plan, n, seed, &s, StopBy::Session);
 }
 
 /// [`stops_end_on_the_path`] on drives with `settings`.
@@ -109,7 +134,8 @@ fn stops_end_on_the_path_with(
     n: usize,
     seed: u64,
     settings: &DriveSettings,
-) {
+    by: StopBy,
+) -> f64 {
     let configs = DriveConfigs::for_plan(plan, settings).unwrap();
     let b = bounds(plan, &configs);
     // The drives' own ramp for what they hold never exceeds the host's
@@ -117,7 +143,7 @@ fn stops_end_on_the_path_with(
     let host_ns = (configs.nodes[0].stop_time * 1e6) as i64 * 1000;
     let instants = seeded_instants(seed, n, 0.0..plan.total_time_s);
     let runs = branch_runs(plan, &configs, &instants, |run, at_s| {
-        run.stop(plan, &configs, at_s)
+        run.stop(plan, &configs, at_s, by)
     });
     let unsafe_endings: Vec<&StopRun> = runs
         .iter()
@@ -139,7 +165,7 @@ fn stops_end_on_the_path_with(
     // Stops the host dated with a ramp for the path ahead are shorter.
     let mean_stop = runs.iter().map(|r| r.stop_s).sum::<f64>() / runs.len().max(1) as f64;
     eprintln!(
-        "{name}: {n} stops, T_s {:.3} s: worst off path {:.2} µm (Stop at {worst_at:.3} s; at rest {:.2} µm), \
+        "{name}: {n} stops by {by:?}, T_s {:.3} s: worst off path {:.2} µm (Stop at {worst_at:.3} s; at rest {:.2} µm), \
          mean stop {mean_stop:.3} s (×{:.3} of T_s), worst stop {:.3} s, worst jerk {:.3} m/s³ of {:.3}, worst acceleration {:.3} m/s² of {:.3}, \
          rest speed {:.1e} m/s, drives' own ramp up to {:.3} s; {} unsafe",
         configs.stop_time_s,
@@ -156,6 +182,7 @@ fn stops_end_on_the_path_with(
         unsafe_endings.len()
     );
     assert!(unsafe_endings.is_empty(), "{name}: {unsafe_endings:#?}");
+    mean_stop
 }
 
 #[test]
@@ -172,7 +199,14 @@ fn a_stop_at_50_instants_stays_within_the_drives_jerk_ceiling() {
     let [_, _, j] = kinematics(&plan.segments).largest();
     let mut s = DriveSettings::default();
     s.ceilings.jerk = j + 0.25 * plan.limits.jerk;
-    stops_end_on_the_path_with("15 segments, ceiling j + J/4", &plan, 50, 38, &s);
+    stops_end_on_the_path_with(
+        "15 segments, ceiling j + J/4",
+        &plan,
+        50,
+        38,
+        &s,
+        StopBy::Session,
+    );
 }
 
 #[test]
@@ -186,4 +220,45 @@ fn a_stop_at_100_instants_of_the_2_ms_every_tenth_plan_ends_on_the_path() {
 fn a_stop_at_100_instants_of_the_2000_segment_plan_ends_on_the_path() {
     let plan = testplan::helix(2000, 100.0, None).unwrap();
     stops_end_on_the_path("2000 segments", &plan, 100, 37);
+}
+
+/// A Stop from another process (dated, no ramp) at seeded instants of the
+/// committed plans and the fixtures: every one ends on the path, within
+/// the budget, and the drives size its ramp themselves, so it is as short
+/// as the session's (which carries the host's) and well under T_s.
+#[test]
+fn a_stop_from_another_process_is_as_short_as_the_sessions() {
+    use super::stop_harness::committed_plan;
+    let s = DriveSettings::default();
+    let plans = [
+        ("Case I", committed_plan("case1-spline")),
+        ("Case II", committed_plan("case2-spline")),
+        ("spiral", committed_plan("spiral-spline")),
+        (
+            "15 segments in 0.9 s",
+            testplan::point_to_point(15, 0.9, 0.03).unwrap(),
+        ),
+        (
+            "2 ms every tenth",
+            testplan::helix(100, 20.0, Some(0.002)).unwrap(),
+        ),
+    ];
+    for (i, (name, plan)) in plans.iter().enumerate() {
+        let seed = 60 + i as u64;
+        let session = stops_end_on_the_path_with(name, plan, 30, seed, &s, StopBy::Session);
+        let other = stops_end_on_the_path_with(name, plan, 30, seed, &s, StopBy::Other);
+        let full = DriveConfigs::for_plan(plan, &s).unwrap().stop_time_s;
+        eprintln!(
+            "{name}: mean stop, T_s {full:.3} s: the session's {session:.3} s, another process's {other:.3} s (×{:.2} of T_s)",
+            other / full
+        );
+        assert!(
+            other < 0.85 * full,
+            "{name}: {other} s against T_s {full} s"
+        );
+        assert!(
+            other < session * 1.05,
+            "{name}: {other} s against the session's {session} s"
+        );
+    }
 }
