@@ -717,6 +717,24 @@ fn a_too_short_configured_stop_ramp_cannot_make_the_stop_harder() {
     );
 }
 
+/// A rig whose configured stop ramp (50 ms) is shorter than any segment's
+/// own, jerk limit 5 m/s³ and ceiling 8 m/s³: the stops the dated-stop
+/// tests time.
+fn stop_rig() -> Rig {
+    let mut r = Rig::with_stop_time(0.05);
+    (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
+    r
+}
+
+/// The largest own controlled stop ramp (ns) of `segs` on a [`stop_rig`].
+fn queue_ramp_ns(segs: &[WireSegment]) -> i64 {
+    Rig::loaded_with(stop_rig(), segs)
+        .node
+        .drive
+        .queue_ramps_ns()
+        .0
+}
+
 /// A Stop dated with a ramp for the path ahead runs it when it covers the
 /// own ramps of the segments the stop passes through, and the full ramp
 /// when it does not (docs/protocol.md, "A ramp for the path ahead").
@@ -724,16 +742,8 @@ fn a_too_short_configured_stop_ramp_cannot_make_the_stop_harder() {
 fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
     // Two gentle segments, then two with the same jerk at 4× the speed.
     let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
-    let rig = || {
-        let mut r = Rig::with_stop_time(0.05);
-        (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
-        r
-    };
-    let gentle = Rig::loaded_with(rig(), &segs[..2])
-        .node
-        .drive
-        .queue_ramps_ns()
-        .0;
+    let rig = stop_rig;
+    let gentle = queue_ramp_ns(&segs[..2]);
     // The stop's length from Stop to Idle (ms) and its peak joint jerk.
     let stop_with = |dated_100us: u16| {
         let mut r = Rig::loaded_with(rig(), &segs);
@@ -774,16 +784,8 @@ fn a_dated_stop_ramp_is_run_only_when_it_covers_the_path_ahead() {
 #[test]
 fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
     let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
-    let rig = || {
-        let mut r = Rig::with_stop_time(0.05);
-        (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
-        r
-    };
-    let gentle = Rig::loaded_with(rig(), &segs[..2])
-        .node
-        .drive
-        .queue_ramps_ns()
-        .0;
+    let rig = stop_rig;
+    let gentle = queue_ramp_ns(&segs[..2]);
     for c in [CommandCode::Stop, CommandCode::FeedHold] {
         let stop = |dated: bool| {
             let mut r = Rig::loaded_with(rig(), &segs);
@@ -821,11 +823,7 @@ fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
     // node has dropped (its peers, ticking elsewhere, may not have): the
     // fast one's ramp all the same, from that instant (25 ms of it behind).
     let segs = segments_of(&[0.8, 0.4, 0.4, 0.8]);
-    let fast = Rig::loaded_with(rig(), &segs[..1])
-        .node
-        .drive
-        .queue_ramps_ns()
-        .0;
+    let fast = queue_ramp_ns(&segs[..1]);
     let ms_of = |ns: i64| (ns + 99_999) / 100_000 / 10;
     for (back_us, ramp_ms) in [(1_000, ms_of(gentle)), (25_000, ms_of(fast))] {
         let mut r = Rig::loaded_with(rig(), &segs);
