@@ -31,20 +31,20 @@ for case in root.iter("testcase"):
         print(f"--- {name} ({bad.tag}, {case.get('time')} s)")
         for line in tail(bad.text or bad.get("message") or "", MESSAGE_LINES):
             print(f"    {line[:200]}")
-        # The test's name is in its simulator's (sim-NAME.log): show logs
-        # whose name appears in the test's module.
+        # A simulator's log is sim-NAME.log (or proxy-NAME.log): show those
+        # whose NAME the test's module uses.
         module = case.get("classname", "").split(".")[-1]
-        for log in sorted(glob.glob(os.path.join(out, "*.log"))):
+        src = os.path.join(os.path.dirname(__file__), "..", "hil-sim", "python", f"{module}.py")
+        try:
+            with open(src, encoding="utf-8") as f:
+                source = f.read()
+        except OSError:
+            continue
+        logs = glob.glob(os.path.join(out, "sim-*.log")) + glob.glob(os.path.join(out, "proxy-*.log"))
+        for log in sorted(logs):
             base = os.path.basename(log)
-            if base in ("vm.log", "dmesg.log") or not base.startswith(("sim-", "proxy-")):
-                continue
             stem = base.split("-", 1)[1].split(".")[0]
-            src = os.path.join(os.path.dirname(__file__), "..", "hil-sim", "python", f"{module}.py")
-            try:
-                with open(src, encoding="utf-8") as f:
-                    if f'"{stem}"' not in f.read():
-                        continue
-            except OSError:
+            if f'"{stem}"' not in source:
                 continue
             with open(log, encoding="utf-8", errors="replace") as f:
                 print(f"    {base}:")

@@ -213,6 +213,13 @@ impl<const Q: usize> Drive<Q> {
         self.command_ack(c, r, 0);
     }
 
+    /// Host time (ns) a feed command applies at: as the receive side
+    /// dated it, else by [`SyncEstimator::apply_ns`] here.
+    fn applies_at(&self, c: &Command, local_us: u64, data: &CommandData) -> i64 {
+        data.applies_at()
+            .unwrap_or_else(|| self.sync.apply_ns(c.arg, local_us))
+    }
+
     /// The configuration's override cap (per mille; 1000 without one).
     pub fn override_cap_permille(&self) -> u32 {
         match self.active {
@@ -313,15 +320,6 @@ impl<const Q: usize> Drive<Q> {
         }
         self.start_ns = Some((now + d) * 1000);
         FaultCode::None
-    }
-}
-
-impl<const Q: usize> Drive<Q> {
-    /// Host time (ns) a feed command applies at: as the receive side
-    /// dated it, else by [`SyncEstimator::apply_ns`] here.
-    fn applies_at(&self, c: &Command, local_us: u64, data: &CommandData) -> i64 {
-        data.applies_at()
-            .unwrap_or_else(|| self.sync.apply_ns(c.arg, local_us))
     }
 }
 

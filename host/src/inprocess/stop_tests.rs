@@ -10,7 +10,6 @@
 use triquint_link::{DriveConfigs, Feed};
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
-use triquint_shared::protocol::Command;
 use triquint_shared::protocol::State;
 use triquint_shared::protocol::config::DriveSettings;
 use triquint_sim::testplan;
@@ -57,11 +56,7 @@ impl Run {
                 self.session.feed(Feed::Stop);
             }
             StopBy::Other => {
-                let host_us = (sent / 1000 - 1000) as u32;
-                let c = Command {
-                    arg: host_us,
-                    ..Feed::Stop.command(0x81, 0)
-                };
+                let c = Feed::Stop.command(0x81, sent / 1000 - 1000);
                 self.sim.host_send(c.to_frame(0));
             }
         }
