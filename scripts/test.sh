@@ -40,7 +40,16 @@ fuzz_build_log="${CARGO_TARGET_DIR:-target}/fuzz-build.log"
 FUZZ_BUILD_ONLY=1 ./scripts/fuzz.sh > "$fuzz_build_log" 2>&1 &
 fuzz_build=$!
 trap 'kill "$fuzz_build" 2>/dev/null || true' EXIT
-cargo test --workspace --locked
+# cargo-nextest (on the project's machines) runs every test binary's tests
+# in one pool, so a long test no longer leaves the second core idle while
+# its binary finishes; it does not run doctests, so they run after it.
+if cargo nextest --version >/dev/null 2>&1; then
+    cargo nextest run --workspace --locked --no-fail-fast --config-file scripts/nextest.toml \
+        --status-level fail --final-status-level slow
+    cargo test --workspace --locked --doc
+else
+    cargo test --workspace --locked
+fi
 if ! wait "$fuzz_build"; then
     cat "$fuzz_build_log"
     echo "the fuzz targets' build failed" >&2
