@@ -320,4 +320,236 @@ mod tests {
             );
         }
     }
+
+    /// A stop shape S(u) on [0, 1] (σ = 1 − S for a stop from σ = 1): its
+    /// largest S′ and |S″| on a cell [u0, u1], and S itself.
+    trait Shape {
+        fn s(&self, u: f64) -> f64;
+        fn s1_max(&self, u0: f64, u1: f64) -> f64;
+        fn s2_max(&self, u0: f64, u1: f64) -> f64;
+        /// ∫σ over the stop, per unit of its length (at σ₀ = 1).
+        fn distance(&self) -> f64;
+        /// (S′(u), S″(u)).
+        fn rate(&self, u: f64) -> (f64, f64);
+    }
+
+    /// The drives' transition shape, 10u³ − 15u⁴ + 6u⁵.
+    struct Quintic;
+    impl Shape for Quintic {
+        fn s(&self, u: f64) -> f64 {
+            u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
+        }
+        fn s1_max(&self, u0: f64, u1: f64) -> f64 {
+            let u = 0.5f64.clamp(u0, u1);
+            30.0 * u * u * (1.0 - u) * (1.0 - u)
+        }
+        fn s2_max(&self, u0: f64, u1: f64) -> f64 {
+            let f = |u: f64| (60.0 * u * (1.0 - u) * (1.0 - 2.0 * u)).abs();
+            let r = 0.5 / 3f64.sqrt();
+            let mut m = f(u0).max(f(u1));
+            for p in [0.5 - r, 0.5 + r] {
+                if (u0..=u1).contains(&p) {
+                    m = m.max(f(p));
+                }
+            }
+            m
+        }
+        fn distance(&self) -> f64 {
+            0.5
+        }
+        fn rate(&self, u: f64) -> (f64, f64) {
+            (
+                30.0 * u * u * (1.0 - u) * (1.0 - u),
+                60.0 * u * (1.0 - u) * (1.0 - 2.0 * u),
+            )
+        }
+    }
+
+    /// σ̈ bang-bang: S″ = 2/l up to u = l, then −2/(1 − l).
+    struct Bang(f64);
+    impl Shape for Bang {
+        fn s(&self, u: f64) -> f64 {
+            let l = self.0;
+            if u < l {
+                u * u / l
+            } else {
+                1.0 - (1.0 - u) * (1.0 - u) / (1.0 - l)
+            }
+        }
+        fn s1_max(&self, u0: f64, u1: f64) -> f64 {
+            let l = self.0;
+            let u = l.clamp(u0, u1);
+            if u < l {
+                2.0 * u / l
+            } else {
+                2.0 * (1.0 - u) / (1.0 - l)
+            }
+        }
+        fn s2_max(&self, u0: f64, u1: f64) -> f64 {
+            let l = self.0;
+            let mut m: f64 = 0.0;
+            if u0 < l {
+                m = m.max(2.0 / l);
+            }
+            if u1 > l {
+                m = m.max(2.0 / (1.0 - l));
+            }
+            m
+        }
+        fn distance(&self) -> f64 {
+            (1.0 + self.0) / 3.0
+        }
+        fn rate(&self, u: f64) -> (f64, f64) {
+            let l = self.0;
+            if u < l {
+                (2.0 * u / l, 2.0 / l)
+            } else {
+                (2.0 * (1.0 - u) / (1.0 - l), -2.0 / (1.0 - l))
+            }
+        }
+    }
+
+    /// The shortest length of a transition of `shape` that keeps
+    /// j·σ³ + 3a·σ·|σ̇| + v·|σ̈| within `budget` (the drives' rule in f64
+    /// on a fine grid): over Δσ ∈ (0, `cap`] from σ = `cap` when `full`,
+    /// else only the stop from σ = 1 (Δσ = 1).
+    fn shape_ramp(
+        shape: &dyn Shape,
+        [v, a, j]: [f64; 3],
+        budget: f64,
+        cap: f64,
+        full: bool,
+    ) -> f64 {
+        let bands: Vec<(f64, f64, f64)> = if full {
+            (0..100)
+                .map(|i| (cap, cap * i as f64 / 100.0, cap * (i + 1) as f64 / 100.0))
+                .collect()
+        } else {
+            vec![(1.0, 1.0, 1.0)]
+        };
+        let mut t: f64 = 0.05;
+        for (top, d0, d1) in bands {
+            let m1 = d1.sqrt().min(1.0);
+            let m2 = if d0 > 1.0 { 1.0 / d0 } else { 1.0 };
+            for k in 0..400 {
+                let (u0, u1) = (k as f64 / 400.0, (k + 1) as f64 / 400.0);
+                let sigma = top - d0 * shape.s(u0);
+                let room = (budget - j * sigma.powi(3)).max(1e-12);
+                let b = 3.0 * a * sigma * shape.s1_max(u0, u1) * m1;
+                let c = v * shape.s2_max(u0, u1) * m2;
+                t = t.max((b + (b * b + 4.0 * room * c).sqrt()) / (2.0 * room));
+            }
+        }
+        t
+    }
+
+    /// How much shorter the drives' own stop would be with σ̈ bang-bang
+    /// in place of the quintic smoothstep, sized by the same rule (each
+    /// piece's |q′|, |q″|, |q‴| with the worst signs, the segment's
+    /// budget; the largest over the segments a stop from within the
+    /// estimate margin passes through): the full ramp T_s, the mean stop
+    /// at 40 instants of each committed plan, and every such stop, run
+    /// from five starts across the margin, within its budgets
+    /// (`--nocapture`).
+    #[test]
+    fn a_bang_bang_stop_under_the_drives_rule() {
+        use triquint_shared::protocol::segment_maxima::{inv_h, overall, piece_maxima};
+        use triquint_shared::protocol::stop_ramp::budgets;
+        let shapes: [(&str, Box<dyn Shape>); 4] = [
+            ("quintic", Box::new(Quintic)),
+            ("bang-bang ½", Box::new(Bang(0.5))),
+            ("bang-bang 0.4", Box::new(Bang(0.4))),
+            ("bang-bang 0.3", Box::new(Bang(0.3))),
+        ];
+        for name in ["case1-spline", "case2-spline", "spiral-spline"] {
+            let p = committed_plan(name);
+            let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
+            let c = &configs.nodes[0];
+            let w = p.wire_segments().unwrap();
+            let r = PathRamps::new(&w, c);
+            let margin = ESTIMATE_MARGIN_US * 1e-6;
+            let total = p.duration();
+            let mut line = format!("{name}:");
+            let mut quintic_mean = 0.0;
+            for (label, shape) in &shapes {
+                // Each segment's span (s), budget and own stop ramp.
+                let mut full: f64 = 0.0;
+                let segs: Vec<(f64, f64, f64, f64)> = r
+                    .segments
+                    .iter()
+                    .zip(&w)
+                    .map(|(&(a, e, _), s)| {
+                        let pieces = piece_maxima(&s.normalised_f32(), inv_h(s.duration_us));
+                        let [_, _, j] = overall(&pieces);
+                        let b = budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0] as f64;
+                        let own = pieces
+                            .iter()
+                            .map(|t| shape_ramp(shape.as_ref(), t.map(f64::from), b, 1.0, false))
+                            .fold(0.0, f64::max);
+                        let whole = pieces
+                            .iter()
+                            .map(|t| {
+                                let cap = c.override_cap as f64;
+                                shape_ramp(shape.as_ref(), t.map(f64::from), b, cap, true)
+                            })
+                            .fold(0.0, f64::max);
+                        full = full.max(whole);
+                        (a * 1e-6, e * 1e-6, b, own)
+                    })
+                    .collect();
+                let budget_at = |s: f64| {
+                    segs.iter()
+                        .find(|x| s <= x.1)
+                        .or(segs.last())
+                        .map_or(0.0, |x| x.2)
+                };
+                let (mut sum, mut n, mut worst): (f64, usize, f64) = (0.0, 0, 0.0);
+                for i in 1..40 {
+                    let t0 = total * i as f64 / 40.0;
+                    // The largest own ramp over the segments a stop from the
+                    // margin passes through; the window grows with it.
+                    let mut ramp: f64 = 0.0;
+                    loop {
+                        let reach = t0 + margin + shape.distance() * ramp;
+                        let next = segs
+                            .iter()
+                            .filter(|x| x.1 > t0 - margin && x.0 < reach)
+                            .map(|x| x.3)
+                            .fold(ramp, f64::max);
+                        if next <= ramp {
+                            break;
+                        }
+                        ramp = next;
+                    }
+                    let ramp = ramp.min(full);
+                    for k in [-1.0, -0.5, 0.0, 0.5, 1.0] {
+                        let from = (t0 + k * margin).clamp(0.0, total);
+                        let peak = stop_peak_jerk(&p, from, ramp, |u| shape.rate(u), &budget_at);
+                        worst = worst.max(peak);
+                    }
+                    sum += ramp;
+                    n += 1;
+                }
+                let mean = sum / n as f64;
+                if *label == "quintic" {
+                    quintic_mean = mean;
+                }
+                line += &format!(
+                    " {label}: T_s {full:.3} s, mean stop {mean:.3} s (×{:.2}), worst jerk {worst:.3} of the budget;",
+                    mean / quintic_mean
+                );
+                assert!(worst <= 1.0 + 1e-3, "{name} {label}: {worst}");
+                // Its |S″| peaks at 4 against the quintic's 5.77: the
+                // velocity term, which dominates these stops, needs √(4/5.77)
+                // of the length.
+                if *label == "bang-bang ½" {
+                    assert!(
+                        mean < 0.9 * quintic_mean,
+                        "{name}: {mean} against {quintic_mean}"
+                    );
+                }
+            }
+            eprintln!("{line}");
+        }
+    }
 }
