@@ -112,6 +112,24 @@ mod tests {
         assert!(shorter > 0);
     }
 
+    /// A committed plan, the first node's configuration for it, its wire
+    /// segments and their path ramps.
+    fn committed_rig(
+        name: &str,
+    ) -> (
+        triquint_shared::plan::Plan,
+        DriveConfig,
+        Vec<WireSegment>,
+        PathRamps,
+    ) {
+        let p = committed_plan(name);
+        let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
+        let c = configs.nodes[0];
+        let w = p.wire_segments().unwrap();
+        let r = PathRamps::new(&w, &c);
+        (p, c, w, r)
+    }
+
     /// The shortest time in which one joint at speed `v` and acceleration
     /// `a` can come to rest (speed and acceleration 0) with |jerk| ≤ `b`
     /// and no other limit: jerk −b then +b (or the mirror), closed form.
@@ -210,18 +228,10 @@ mod tests {
     fn where_the_stop_length_goes() {
         use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
         use triquint_shared::protocol::stop_ramp::budgets;
-        let smooth = |u: f64| {
-            (
-                30.0 * u * u * (1.0 - u) * (1.0 - u),
-                60.0 * u * (1.0 - u) * (1.0 - 2.0 * u),
-            )
-        };
+        let smooth = |u: f64| Quintic.rate(u);
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
-            let p = committed_plan(name);
-            let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
-            let c = &configs.nodes[0];
-            let w = p.wire_segments().unwrap();
-            let r = PathRamps::new(&w, c);
+            let (p, c, w, r) = committed_rig(name);
+            let c = &c;
             // Each segment's plan-time span (s, the ramps' own) and its
             // controlled stop budget.
             let spans: Vec<(f64, f64, f64)> = r
@@ -462,11 +472,8 @@ mod tests {
             ("bang-bang 0.3", Box::new(Bang(0.3))),
         ];
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
-            let p = committed_plan(name);
-            let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
-            let c = &configs.nodes[0];
-            let w = p.wire_segments().unwrap();
-            let r = PathRamps::new(&w, c);
+            let (p, c, w, r) = committed_rig(name);
+            let c = &c;
             let margin = ESTIMATE_MARGIN_US * 1e-6;
             let total = p.duration();
             let mut line = format!("{name}:");
