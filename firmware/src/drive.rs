@@ -685,7 +685,7 @@ impl<const Q: usize> Drive<Q> {
                 StopReason::Fault(_) if !quick => self.path_ramp(t, full),
                 _ => (full, 0),
             };
-            self.begin_stop_ramp(reason, t, None, ramp, carried);
+            self.begin_stop_ramp(reason, t, None, (ramp, full), carried);
         }
     }
 
@@ -722,13 +722,15 @@ impl<const Q: usize> Drive<Q> {
                     (ramp, if ramp < full { d } else { 0 })
                 }
             };
-            self.begin_stop_ramp(reason, t, ready, ramp, carried);
+            self.begin_stop_ramp(reason, t, ready, (ramp, full), carried);
         }
     }
 
-    /// Slows to rest from host time `t` over `ramp` (ns), Running only; a
-    /// fault's Emergency carries `carried_100us`, the ramp it runs when
-    /// shorter than the full one, for the peers to run too.
+    /// Slows to rest from host time `t` over `ramp` (ns) where the full
+    /// ramp is `full`, Running only: a shorter one is a ramp for the path
+    /// (σ̈ bang-bang, [`TimeScaling::begin_path_stop`]). A fault's Emergency
+    /// carries `carried_100us`, the ramp it runs when shorter than the full
+    /// one, for the peers to run too.
     // Inline: each caller is cold and out of line already.
     #[inline(always)]
     fn begin_stop_ramp(
@@ -736,7 +738,7 @@ impl<const Q: usize> Drive<Q> {
         reason: StopReason,
         t: i64,
         ready: Option<&Retarget>,
-        ramp: i64,
+        (ramp, full): (i64, i64),
         carried_100us: u16,
     ) {
         // Where a fault's stop begins on the path, for the peers to date theirs.
@@ -744,7 +746,11 @@ impl<const Q: usize> Drive<Q> {
             StopReason::Fault(_) => self.scaling.at(t).s_ns,
             _ => 0,
         };
-        self.scaling.retarget_ready(t, 0, ramp, ready);
+        if ramp < full {
+            self.scaling.begin_path_stop(t, ramp);
+        } else {
+            self.scaling.retarget_ready(t, 0, ramp, ready);
+        }
         self.stop_reason = Some(reason);
         if reason != StopReason::Hold {
             self.state = State::Stopping;

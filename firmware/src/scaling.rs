@@ -9,6 +9,11 @@
 //! reference) are continuous at every change, also in the middle of another
 //! transition. From σ = 1 at rest rates to k = 0 it is the smoothstep
 //! σ = 1 − S(u), S = 10u³ − 15u⁴ + 6u⁵, over the configured stop time.
+//! A stop along the path (a ramp sized for the path it passes through,
+//! [`TimeScaling::begin_path_stop`]) from a constant σ₀ has σ̈ bang-bang
+//! instead, σ = σ₀(1 − S(u)) with S = 2u² up to u = ½ and 1 − 2(1 − u)²
+//! after: σ and σ̇ are continuous, σ̈ steps (docs/protocol.md, "The shape
+//! of a stop along the path").
 //!
 //! Everything is closed form from the anchor (t₀, s₀): every node computes
 //! the same s from the same host time with no drift. The plan time of a
@@ -119,6 +124,9 @@ pub struct TimeScaling {
     /// A retarget deferred to the end of the running transition (target,
     /// nominal ramp): one that would have run σ below 0 from here.
     pending: Option<(u32, i64)>,
+    /// The transition is a stop along the path: σ = σ₀(1 − S(u)) with σ̈
+    /// bang-bang (σ₀ = c₀), not the quintic.
+    bang: bool,
 }
 
 impl TimeScaling {
@@ -142,6 +150,7 @@ impl TimeScaling {
             c: [0.0; 6],
             target_q16: q16,
             pending: None,
+            bang: false,
         }
     }
 
@@ -227,6 +236,9 @@ impl TimeScaling {
     fn transition(&self, dt: i64, ramp: i64) -> Scaled {
         let t = to_f32(ramp);
         let u = to_f32(dt) / t;
+        if self.bang {
+            return self.bang_at(u, t);
+        }
         let c = &self.c;
         let sigma = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (c[4] + u * c[5]))));
         let d1 = c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
@@ -245,6 +257,33 @@ impl TimeScaling {
         }
     }
 
+    /// A stop along the path at u of its length `t` (ns): σ = σ₀(1 − S),
+    /// S = 2u² up to u = ½, then 1 − 2(1 − u)² (S′ = 4u or 4(1 − u), S″ =
+    /// ±4), the plan time it covers σ₀·t·(u − ∫S).
+    // Out of line: only the ticks of such a stop run it.
+    #[inline(never)]
+    fn bang_at(&self, u: f32, t: f32) -> Scaled {
+        let s0 = self.c[0];
+        let (s, d1, d2, int_s) = if u < 0.5 {
+            (2.0 * u * u, 4.0 * u, 4.0, (2.0 / 3.0) * u * u * u)
+        } else {
+            let w = 1.0 - u;
+            (
+                1.0 - 2.0 * w * w,
+                4.0 * w,
+                -4.0,
+                u - 0.5 + (2.0 / 3.0) * w * w * w,
+            )
+        };
+        let inv_t = 1e9 / t;
+        Scaled {
+            s_ns: self.s0_ns + to_i64(t * s0 * (u - int_s)),
+            sigma: s0 * (1.0 - s),
+            sigma_d: -s0 * d1 * inv_t,
+            sigma_dd: -s0 * d2 * inv_t * inv_t,
+        }
+    }
+
     /// From host time `t_ns` on, move σ to `target_q16`/65 536 with the
     /// continuity above. The transition's duration is the shortest of a few
     /// candidates (around the one a move from rest over a nominal ramp of
@@ -258,6 +297,13 @@ impl TimeScaling {
     /// change, unless `full_ns` is shorter than the running transition's
     /// (a quick stop during a stop).
     pub fn retarget(&mut self, t_ns: i64, target_q16: u32, full_ns: i64) {
+        self.retarget_shaped(t_ns, target_q16, full_ns, false);
+    }
+
+    /// [`TimeScaling::retarget`]; a stop (`target_q16` 0) from a constant σ
+    /// with `bang` is σ̈ bang-bang rather than the quintic (a stop along
+    /// the path, sized for that shape).
+    fn retarget_shaped(&mut self, t_ns: i64, target_q16: u32, full_ns: i64, bang: bool) {
         let t_ns = t_ns.max(self.t0_ns);
         let now = self.at(t_ns);
         self.pending = None;
@@ -309,6 +355,7 @@ impl TimeScaling {
             return;
         }
         self.c = q;
+        self.bang = bang && target_q16 == 0 && chosen.is_some();
         self.phase = if target_q16 == 0 {
             Phase::Decel
         } else {
@@ -344,6 +391,14 @@ impl TimeScaling {
     /// Slow to rest from host time `t_ns` (hold, stop, fault).
     pub fn begin_decel(&mut self, t_ns: i64, ramp_ns: i64) {
         self.retarget(t_ns, 0, ramp_ns);
+    }
+
+    /// Slow to rest from host time `t_ns` along the path over a ramp
+    /// `ramp_ns` sized for a stop with σ̈ bang-bang (`stop_ramp.rs`, the
+    /// ramps for a stop from σ ≤ 1): that shape from a constant σ, the
+    /// quintic from within a transition.
+    pub fn begin_path_stop(&mut self, t_ns: i64, ramp_ns: i64) {
+        self.retarget_shaped(t_ns, 0, ramp_ns, true);
     }
 
     /// Accelerate to σ = 1 from host time `t_ns`.

@@ -726,13 +726,21 @@ fn stop_rig() -> Rig {
     r
 }
 
-/// The largest own controlled stop ramp (ns) of `segs` on a [`stop_rig`].
+/// The largest own controlled ramp (ns) of `segs` on a [`stop_rig`] for
+/// a stop along the path from σ ≤ 1.
 fn queue_ramp_ns(segs: &[WireSegment]) -> i64 {
-    Rig::loaded_with(stop_rig(), segs)
-        .node
-        .drive
-        .queue_ramps_ns()
-        .0
+    use crate::ceilings::Maxima;
+    use crate::segment::Seg;
+    let cfg = stop_rig().cfg;
+    segs.iter()
+        .map(|w| {
+            let [_, at_unit] = Maxima::of(&Seg::from_wire(w, 0))
+                .ramps_and_at_unit_us(&cfg)
+                .unwrap();
+            at_unit.0 as i64 * 1000
+        })
+        .max()
+        .unwrap_or(0)
 }
 
 /// A Stop dated with a ramp for the path ahead runs it when it covers the

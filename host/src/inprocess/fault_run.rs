@@ -264,6 +264,16 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
     let mut reset_done = false;
     let limit_ns = ((plan.total_time_s + 15.0) * 1e9) as u64;
     let mut quiet_since: Option<u64> = None;
+    // A node that is bus-off reports its final state only once back on
+    // the bus: quiescence counts from the last bus-off's end.
+    let bus_back_ns = sc
+        .windows
+        .iter()
+        .filter(|w| matches!(w.fault, triquint_sim::Fault::BusOff { .. }))
+        .map(|w| w.until_ns)
+        .filter(|&t| t < limit_ns)
+        .max()
+        .unwrap_or(0);
     loop {
         let now = sim.now_ns();
         if sc.host_killed_ns.is_some_and(|t| now >= t) {
@@ -319,7 +329,7 @@ pub fn run(plan: &Plan, sc: &Scenario) -> RunReport {
             )
         });
         if !busy && (outcome.is_some() || !host_alive) {
-            let q = *quiet_since.get_or_insert(t);
+            let q = (*quiet_since.get_or_insert(t)).max(bus_back_ns);
             // Let a few heartbeats report the final state.
             if t >= q + 300_000_000 {
                 break;

@@ -160,7 +160,7 @@ code_enum! {
 
 /// Protocol version carried in every heartbeat: a host refuses nodes of
 /// another version. What each version changed: the top of `docs/protocol.md`.
-pub const PROTOCOL_VERSION: u8 = 9;
+pub const PROTOCOL_VERSION: u8 = 10;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {

@@ -24,7 +24,9 @@
 //!
 //! The drives' f32 rule ([`pieces_ramp`]) takes one such triple per joint
 //! and piece of a segment: each instant a stop passes through is within
-//! its piece's triple, and F grows with each of v, a and j.
+//! its piece's triple, and F grows with each of v, a and j. The same pass
+//! sizes each segment's ramp for a stop along the path from σ ≤ 1, whose
+//! shape is σ̈ bang-bang ([`pieces_ramp_and_at_unit`]).
 
 use super::config::{SMOOTHSTEP_MAX_D1, SMOOTHSTEP_MAX_D2};
 
@@ -235,6 +237,62 @@ const fn groups<const G: usize>(ranges: [(usize, usize); G]) -> [Group; G] {
     out
 }
 
+/// Cells of u ∈ [0, ½] on which a stop along the path is sized.
+const BANG_CELLS: usize = 12;
+/// Where (1 − 2u²)·4u peaks: u = 1/√6.
+const BANG_PEAK_U: f32 = 0.408_248_3;
+
+/// A stop along the path from σ ≤ 1, σ = σ₀(1 − S(u)) with σ̈ bang-bang
+/// (S = 2u² up to u = ½, then 1 − 2(1 − u)²; `firmware/src/scaling.rs`):
+/// on each cell of u ∈ [0, ½] the coefficients of j, a/T and v/T² in F,
+/// each term at its largest on the cell by its monotonicity there: σ³ = (1 − 2u²)³
+/// at the cell's start, 3·σ·S′ = 3(1 − 2u²)·4u where it peaks on the
+/// cell, and |S″| = 4 (times the drives' slack on ρ for σ̇ and σ̈). Past
+/// ½ each term is at most its mirror's (σ lower, S′ and |S″| the same).
+const BANG_NODES: [[f32; 3]; BANG_CELLS] = bang_nodes();
+/// Each coefficient's largest over the cells: a triple within the budget
+/// with these is within it on every cell.
+const BANG_TOP: [f32; 3] = bang_top();
+
+const fn bang_top() -> [f32; 3] {
+    let mut top = [0.0f32; 3];
+    let mut k = 0;
+    while k < BANG_CELLS {
+        let mut i = 0;
+        while i < 3 {
+            top[i] = max_f32(top[i], BANG_NODES[k][i]);
+            i += 1;
+        }
+        k += 1;
+    }
+    top
+}
+
+const fn bang_nodes() -> [[f32; 3]; BANG_CELLS] {
+    let slack = (RHO_SLACK as f32) * (1.0 + F32_SLACK);
+    let mut t = [[0.0f32; 3]; BANG_CELLS];
+    let mut k = 0;
+    while k < BANG_CELLS {
+        let n = (2 * BANG_CELLS) as f32;
+        let (u0, u1) = (k as f32 / n, (k + 1) as f32 / n);
+        let um = if BANG_PEAK_U < u0 {
+            u0
+        } else if BANG_PEAK_U > u1 {
+            u1
+        } else {
+            BANG_PEAK_U
+        };
+        let g = 1.0 - 2.0 * u0 * u0;
+        t[k] = [
+            g * g * g * (1.0 + F32_SLACK),
+            3.0 * (1.0 - 2.0 * um * um) * 4.0 * um * slack,
+            4.0 * slack,
+        ];
+        k += 1;
+    }
+    t
+}
+
 /// At most this many triples (v, a, j) are sized apart; more are merged
 /// into the last (their largest of each, as sound).
 pub const MAX_TRIPLES: usize = 12;
@@ -313,12 +371,13 @@ pub fn pieces_ramp(triples: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<
     pieces_ramp_and_at_unit(triples, budgets, cap).map(|[full, _]| full)
 }
 
-/// [`pieces_ramp`] and the ramps with which a stop (to σ = 0) from a
-/// constant σ ≤ 1 keeps the joint jerk within each of `budgets` for each
-/// triple: the same bound on the one band Δσ = 1 from σ = 1, which bounds
-/// every stop from σ₀ ≤ 1 term by term (σ ≤ 1 − S, |σ̇| ≤ S′/T and |σ̈| =
-/// |S″|/T² at ρ = √σ₀), sized first: the full ramps are raised from it,
-/// so it is never longer. `[full, at_unit]`.
+/// [`pieces_ramp`] and the ramps with which a stop along the path (to
+/// σ = 0, σ̈ bang-bang) from a constant σ ≤ 1 keeps the joint jerk within
+/// each of `budgets` for each triple: the bound on [`BANG_NODES`] from
+/// σ = 1, which bounds every such stop from σ₀ ≤ 1 term by term (σ ≤
+/// 1 − S, |σ̇| ≤ S′/T and |σ̈| = |S″|/T² at ρ = √σ₀). It is not bounded by
+/// the full ramp (the quintic's): where it is longer the drives run the
+/// full ramp instead. `[full, at_unit]`.
 pub fn pieces_ramp_and_at_unit(
     triples: &[[f32; 3]],
     budgets: [f32; 2],
@@ -336,14 +395,23 @@ pub fn pieces_ramp_and_at_unit(
     let t0 = MIN_RAMP_S as f32;
     // Each ramp so far, with 1/T and 1/T².
     let mut t = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
-    let mut band = Band::default();
-    // Stops from σ ≤ 1 first, the one band; every transition's ramp is
-    // then raised from theirs, which bounds some of those transitions too.
-    band.set(1.0, 1.0, 1.0);
-    for (tk, b) in t.iter_mut().zip(budgets) {
-        band.size(kept, b, tk)?;
+    // Stops along the path from σ ≤ 1 (σ̈ bang-bang) first, on their
+    // cells.
+    let mut unit = t;
+    for (tk, b) in unit.iter_mut().zip(budgets) {
+        for &triple in kept {
+            if jerk(&BANG_TOP, triple[2], triple[1] * tk[1], triple[0] * tk[2]) <= b {
+                continue;
+            }
+            for p in &BANG_NODES {
+                if jerk(p, triple[2], triple[1] * tk[1], triple[0] * tk[2]) > b {
+                    raise(p, &triple, b, tk)?;
+                }
+            }
+        }
     }
-    let at_unit = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    let at_unit = unit.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    let mut band = Band::default();
     // The full stops first: they need the longest ramps, so later bands
     // seldom raise it (a raise costs a division and a square root).
     for i in (0..COARSE_DS_CELLS).rev() {
@@ -657,22 +725,36 @@ mod tests {
         assert!(checked > 150, "{checked}");
     }
 
-    /// The largest F over the stops (to σ = 0) a drive may run from a
-    /// constant σ₀ ≤ 1 at ramp `t` (ρ = √σ₀), sampled densely.
+    /// The largest F over the stops along the path (to σ = 0, σ̈
+    /// bang-bang) a drive may run from a constant σ₀ ≤ 1 at ramp `t`
+    /// (over t·ρ, ρ = √σ₀), sampled on 2 001 points each.
     fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
-        let runs = (1..=100).map(|i| {
+        let mut worst = 0.0f64;
+        for i in 1..=100 {
             let s0 = i as f64 / 100.0;
-            [s0, s0, libm::sqrt(s0)]
-        });
-        worst_of(v, a, j, t, runs)
+            let tt = t * libm::sqrt(s0);
+            for k in 0..=2000 {
+                let u = k as f64 / 2000.0;
+                let (s, s1) = if u < 0.5 {
+                    (2.0 * u * u, 4.0 * u)
+                } else {
+                    (1.0 - 2.0 * (1.0 - u) * (1.0 - u), 4.0 * (1.0 - u))
+                };
+                let sigma = s0 * (1.0 - s);
+                let (sd, sdd) = (s0 * s1 / tt, s0 * 4.0 / (tt * tt));
+                worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
+            }
+        }
+        worst
     }
 
-    /// The ramp for stops from σ ≤ 1 keeps each within the budget, is never
-    /// longer than the ramp for every transition up to the cap, and is
-    /// shorter where the cap is above 1.
+    /// The ramp for stops along the path from σ ≤ 1 keeps each within the
+    /// budget, and is shorter than the ramp for every transition where
+    /// the velocity term binds (|S″| 4 against the quintic's 5.77) or the
+    /// cap is above 1.
     #[test]
-    fn the_stop_ramp_at_unit_is_a_bound_and_never_longer() {
-        let (mut checked, mut shorter) = (0, 0);
+    fn the_stop_ramp_at_unit_is_a_bound_and_shorter_where_velocity_binds() {
+        let (mut checked, mut shorter, mut longer) = (0, 0, 0);
         for v in [0.02, 0.5, 2.0] {
             for a in [0.1, 1.2, 6.0] {
                 for j in [0.0, 1.0, 4.0] {
@@ -687,15 +769,21 @@ mod tests {
                         for ((t, b), f) in unit.iter().zip(bs).zip(full) {
                             let w = worst_stop_jerk_at_most_unit(v, a, j, *t as f64);
                             assert!(w <= b as f64 * (1.0 + 1e-6), "{v} {a} {j} {cap}: {w} > {b}");
-                            assert!(*t <= f, "{v} {a} {j} {cap}: {t} > {f}");
-                            shorter += usize::from(cap > 1.0 && *t < 0.99 * f);
+                            // Not loose by more than the cells' width.
+                            assert!(w >= b as f64 * 0.9, "{v} {a} {j} {cap}: {w} of {b}");
+                            if v >= 0.5 && cap == 1.0 {
+                                assert!(*t < 0.95 * f, "{v} {a} {j}: {t} against {f}");
+                            }
+                            shorter += usize::from(*t < 0.99 * f);
+                            longer += usize::from(*t > f);
                             checked += 1;
                         }
                     }
                 }
             }
         }
-        assert!(checked >= 80 && shorter > 40, "{checked} {shorter}");
+        std::eprintln!("{checked} ramps, {shorter} shorter than the full ramp, {longer} longer");
+        assert!(checked >= 80 && shorter > 60, "{checked} {shorter}");
     }
 
     /// Over sets of triples (a joint's maxima on the pieces of a

@@ -217,10 +217,10 @@ mod tests {
 
     /// Where the stop's length goes, at 40 instants of each committed plan
     /// (σ = 1, the plan's largest budget b): the ramp for the path ahead;
-    /// the smoothstep held to each segment's budget along the path, from
-    /// anywhere in the estimate margin (what drives checking the path
-    /// could run, never longer than the ramp);
-    /// the smoothstep sized for that instant with the jerk's true signs
+    /// the drives' shape (σ̈ bang-bang) held to each segment's budget along
+    /// the path, from anywhere in the estimate margin (what drives checking
+    /// the path could run, never longer than the ramp);
+    /// the quintic smoothstep sized for that instant with the jerk's true signs
     /// (the best any sizing of this shape can do); σ̈ bang-bang (−c then
     /// +c′, switching at the best of nine fractions), sized the same way;
     /// and the lower bound on any stop (`--nocapture`).
@@ -229,6 +229,7 @@ mod tests {
         use triquint_shared::protocol::segment_maxima::{inv_h, maxima};
         use triquint_shared::protocol::stop_ramp::budgets;
         let smooth = |u: f64| Quintic.rate(u);
+        let drives = |u: f64| Bang(0.5).rate(u);
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
             let (p, c, w, r) = committed_rig(name);
             let c = &c;
@@ -270,13 +271,13 @@ mod tests {
                     u => u as f64 * UNIT_US as f64,
                 } * 1e-6;
                 let best_smooth = shortest_of_shape(&p, t0, &|_| b, &smooth).unwrap();
-                // The same smoothstep held to each segment's own budget, from
+                // The drives' shape held to each segment's own budget, from
                 // anywhere within the host's estimate margin of t0: what a
                 // drive that checked the path it holds could run.
                 let checked = [-1.0, -0.5, 0.0, 0.5, 1.0]
                     .map(|k| {
                         let from = (t0 + k * ESTIMATE_MARGIN_US * 1e-6).clamp(0.0, total);
-                        shortest_of_shape(&p, from, &budget_at, &smooth).unwrap()
+                        shortest_of_shape(&p, from, &budget_at, &drives).unwrap()
                     })
                     .into_iter()
                     .fold(0.0, f64::max);
@@ -325,7 +326,7 @@ mod tests {
             }
             let m = sums.map(|x| x / counted as f64);
             eprintln!(
-                "{name} (b {b:.3} m/s³, {counted} instants), mean stop: path-ahead ramp {:.3} s, smoothstep checked along the path {:.3} s, smoothstep sized for the instant {:.3} s, bang-bang sized for the instant {:.3} s, lower bound {:.3} s (within the budgets on its way {:.3} s)",
+                "{name} (b {b:.3} m/s³, {counted} instants), mean stop: path-ahead ramp {:.3} s, its shape checked along the path {:.3} s, the quintic smoothstep sized for the instant {:.3} s, bang-bang sized for the instant {:.3} s, lower bound {:.3} s (within the budgets on its way {:.3} s)",
                 m[0], m[1], m[2], m[3], m[4], m[5]
             );
         }
@@ -453,8 +454,9 @@ mod tests {
         t
     }
 
-    /// How much shorter the drives' own stop would be with σ̈ bang-bang
-    /// in place of the quintic smoothstep, sized by the same rule (each
+    /// Why the drives' stop along the path is σ̈ bang-bang switching at ½
+    /// (version 10) rather than the quintic smoothstep (before) or an
+    /// earlier switch: each shape sized by the same rule in f64 (each
     /// piece's |q′|, |q″|, |q‴| with the worst signs, the segment's
     /// budget; the largest over the segments a stop from within the
     /// estimate margin passes through): the full ramp T_s, the mean stop
