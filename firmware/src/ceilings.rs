@@ -43,15 +43,16 @@ impl Maxima {
     }
 
     /// [`Maxima::ramps_us`] and, from the same pass, the segment's own
-    /// ramps for a stop from σ ≤ 1 (never longer;
-    /// `segment_maxima::piece_ramps_and_at_unit`): what a stop carrying a
-    /// ramp for the path ahead is held to.
+    /// ramps for a stop along the path from σ ≤ 1, its acceleration within
+    /// the configured ceiling (`segment_maxima::piece_ramps_and_at_unit`):
+    /// what a stop carrying a ramp for the path ahead is held to.
     pub fn ramps_and_at_unit_us(&self, cfg: &DriveConfig) -> Result<[(u32, u32); 2], Reject> {
         let r = piece_ramps_and_at_unit(
             &self.pieces,
             cfg.max_jerk,
             cfg.ceiling_jerk,
             cfg.override_cap,
+            cfg.ceiling_acceleration,
         )
         .ok_or(Reject::StopAboveCeiling)?;
         Ok(r.map(|(s, q)| (ramp_us(s), ramp_us(q))))

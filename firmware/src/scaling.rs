@@ -676,6 +676,52 @@ mod tests {
         peaks
     }
 
+    /// A stop along the path from a constant σ₀ (down to one a hundredth,
+    /// where ρ is held at its least): σ and σ̇ continuous, |σ̇| at most
+    /// 2σ₀/T and σ̈ ±4σ₀/T² (T the ramp with ρ), stepping only at the
+    /// start, the middle and the end; at rest after σ₀·T/2 of plan time.
+    /// A quick stop in its middle blends a quintic from where it is.
+    #[test]
+    fn a_path_stop_is_bang_bang_and_rests_after_half_its_ramp() {
+        for k in [UNIT_Q16, UNIT_Q16 / 2, UNIT_Q16 / 100] {
+            let s0 = k as f32 / UNIT_Q16 as f32;
+            let mut ts = TimeScaling::constant(0, 0, k);
+            ts.begin_path_stop(100 * MS, 1000 * MS);
+            assert_eq!(ts.phase, Phase::Decel);
+            let ramp = ts.ramp_ns;
+            let t = ramp as f32 * 1e-9;
+            let step = 8.0 * s0 / (t * t) * 1.01;
+            let ctx = format!("σ₀ {s0}");
+            let (vp, ap, lo, _) =
+                run_with(&mut ts, 100 * MS, 100 * MS + ramp + 10 * MS, &ctx, step);
+            assert!(vp <= 2.0 * s0 / t * 1.001, "{ctx}: σ̇ {vp}");
+            assert!(
+                (ap - 4.0 * s0 / (t * t)).abs() <= 1e-3 * ap,
+                "{ctx}: σ̈ {ap}"
+            );
+            assert!(lo >= 0.0, "{ctx}: σ {lo}");
+            assert_eq!(ts.phase, Phase::Rest, "{ctx}");
+            let end = ts.at(100 * MS + ramp + 20 * MS).s_ns;
+            let expected = (100 * MS) as f32 * s0 + 0.5 * s0 * ramp as f32;
+            assert!(
+                (end as f32 - expected).abs() < 2_000.0,
+                "{ctx}: {end} vs {expected}"
+            );
+        }
+        // A quick stop a third of the way in: from σ, σ̇, σ̈ as they are.
+        let mut ts = TimeScaling::nominal(0, 0);
+        ts.begin_path_stop(0, 1000 * MS);
+        let before = ts.at(333 * MS);
+        ts.retarget(333 * MS, 0, 300 * MS);
+        let after = ts.at(333 * MS);
+        assert_eq!((before.s_ns, before.sigma), (after.s_ns, after.sigma));
+        assert!((before.sigma_d - after.sigma_d).abs() < 1e-4);
+        assert!((before.sigma_dd - after.sigma_dd).abs() < 1e-3);
+        let (_, _, lo, _) = run_with(&mut ts, 333 * MS, 2000 * MS, "quick", 1.0);
+        assert!(lo >= -1e-3);
+        assert_eq!(ts.phase, Phase::Rest);
+    }
+
     /// Commands at random instants (seeded): hold during resume, resume
     /// during hold, override during hold, stop during an override change.
     /// σ reaches each target, stays within [−0.002, max of the targets +

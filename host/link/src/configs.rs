@@ -374,7 +374,8 @@ mod tests {
                 .unwrap()
                 .iter()
                 .map(|w| {
-                    let [_, (r, _)] = wire_ramps_and_at_unit(w, jl, ceiling, cap).unwrap();
+                    let a = s.ceilings.acceleration as f32;
+                    let [_, (r, _)] = wire_ramps_and_at_unit(w, jl, ceiling, cap, a).unwrap();
                     let end = start + w.duration_us as f64 * 1e-6;
                     let row = (start, end, r as f64);
                     start = end;

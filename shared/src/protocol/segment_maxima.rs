@@ -164,21 +164,24 @@ pub fn piece_ramps(
     ceiling: f32,
     cap: f32,
 ) -> Option<(f32, f32)> {
-    piece_ramps_and_at_unit(pieces, jerk_limit, ceiling, cap).map(|[full, _]| full)
+    piece_ramps_and_at_unit(pieces, jerk_limit, ceiling, cap, f32::INFINITY).map(|[full, _]| full)
 }
 
 /// [`piece_ramps`] and, from the same pass, the segment's own ramps for
-/// a stop from σ ≤ 1 ([`pieces_ramp_and_at_unit`]): what a stop carrying
-/// a ramp for the path ahead is held to. `[full, at_unit]`, each
+/// a stop along the path from σ ≤ 1 ([`pieces_ramp_and_at_unit`], its
+/// joint acceleration within `accel_ceiling`): what a stop carrying a
+/// ramp for the path ahead is held to. `[full, at_unit]`, each
 /// (controlled, quick).
 pub fn piece_ramps_and_at_unit(
     pieces: &PieceMaxima,
     jerk_limit: f32,
     ceiling: f32,
     cap: f32,
+    accel_ceiling: f32,
 ) -> Option<[(f32, f32); 2]> {
     let j = overall(pieces)[2];
-    let r = pieces_ramp_and_at_unit(pieces, budgets(j, jerk_limit, ceiling, cap), cap)?;
+    let b = budgets(j, jerk_limit, ceiling, cap);
+    let r = pieces_ramp_and_at_unit(pieces, b, cap, accel_ceiling)?;
     Some(r.map(|[s, q]| (s, q)))
 }
 
@@ -187,20 +190,22 @@ pub fn piece_ramps_and_at_unit(
 /// jerk limit `jerk_limit`, ceiling `ceiling` and override cap `cap`;
 /// `None` if a drive would refuse it for its stop.
 pub fn wire_ramps(w: &WireSegment, jerk_limit: f32, ceiling: f32, cap: f32) -> Option<(f32, f32)> {
-    wire_ramps_and_at_unit(w, jerk_limit, ceiling, cap).map(|[full, _]| full)
+    wire_ramps_and_at_unit(w, jerk_limit, ceiling, cap, f32::INFINITY).map(|[full, _]| full)
 }
 
 /// [`wire_ramps`] and, from the same pass, the segment's own ramps for a
-/// stop from σ ≤ 1, as a drive computes them for it
+/// stop along the path from σ ≤ 1 (its joint acceleration within
+/// `accel_ceiling`), as a drive computes them for it
 /// ([`piece_ramps_and_at_unit`]). `[full, at_unit]`.
 pub fn wire_ramps_and_at_unit(
     w: &WireSegment,
     jerk_limit: f32,
     ceiling: f32,
     cap: f32,
+    accel_ceiling: f32,
 ) -> Option<[(f32, f32); 2]> {
     let pieces = piece_maxima(&w.normalised_f32(), inv_h(w.duration_us));
-    piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap)
+    piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap, accel_ceiling)
 }
 
 /// The controlled and quick stop ramps (s) the drives need for the whole

@@ -254,6 +254,25 @@ const BANG_NODES: [[f32; 3]; BANG_CELLS] = bang_nodes();
 /// with these is within it on every cell.
 const BANG_TOP: [f32; 3] = bang_top();
 
+/// The same cells for the joint acceleration q″σ² + q′σ̇ of a stop along
+/// the path: σ² at the cell's start and S′ = 4u at the cell's end (times
+/// the drives' slack on ρ), so it is at most a·c₀ + v·c₁/T there.
+const BANG_ACCEL: [[f32; 2]; BANG_CELLS] = bang_accel();
+
+const fn bang_accel() -> [[f32; 2]; BANG_CELLS] {
+    let slack = (RHO_SLACK as f32) * (1.0 + F32_SLACK);
+    let mut t = [[0.0f32; 2]; BANG_CELLS];
+    let mut k = 0;
+    while k < BANG_CELLS {
+        let n = (2 * BANG_CELLS) as f32;
+        let (u0, u1) = (k as f32 / n, (k + 1) as f32 / n);
+        let g = 1.0 - 2.0 * u0 * u0;
+        t[k] = [g * g * (1.0 + F32_SLACK), 4.0 * u1 * slack];
+        k += 1;
+    }
+    t
+}
+
 const fn bang_top() -> [f32; 3] {
     let mut top = [0.0f32; 3];
     let mut k = 0;
@@ -368,20 +387,23 @@ fn frontier(triples: &[[f32; 3]]) -> ([[f32; 3]; MAX_TRIPLES], usize) {
 /// `None` when no ramp up to [`MAX_RAMP_S`] does (a triple's own jerk at
 /// the cap leaves no room) or an input is not a finite number ≥ 0.
 pub fn pieces_ramp(triples: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
-    pieces_ramp_and_at_unit(triples, budgets, cap).map(|[full, _]| full)
+    pieces_ramp_and_at_unit(triples, budgets, cap, f32::INFINITY).map(|[full, _]| full)
 }
 
 /// [`pieces_ramp`] and the ramps with which a stop along the path (to
 /// σ = 0, σ̈ bang-bang) from a constant σ ≤ 1 keeps the joint jerk within
 /// each of `budgets` for each triple: the bound on [`BANG_NODES`] from
 /// σ = 1, which bounds every such stop from σ₀ ≤ 1 term by term (σ ≤
-/// 1 − S, |σ̇| ≤ S′/T and |σ̈| = |S″|/T² at ρ = √σ₀). It is not bounded by
-/// the full ramp (the quintic's): where it is longer the drives run the
-/// full ramp instead. `[full, at_unit]`.
+/// 1 − S, |σ̇| ≤ S′/T and |σ̈| = |S″|/T² at ρ ≥ √σ₀), and its joint
+/// acceleration within `accel_ceiling` ([`BANG_ACCEL`]; [`MAX_RAMP_S`]
+/// where no ramp keeps it there). It is not bounded by the full ramp
+/// (the quintic's): where it is longer the drives run the full ramp
+/// instead. `[full, at_unit]`.
 pub fn pieces_ramp_and_at_unit(
     triples: &[[f32; 3]],
     budgets: [f32; 2],
     cap: f32,
+    accel_ceiling: f32,
 ) -> Option<[[f32; 2]; 2]> {
     if !(finite_and_positive(triples.as_flattened())
         && finite_and_positive(&budgets)
@@ -410,7 +432,7 @@ pub fn pieces_ramp_and_at_unit(
             }
         }
     }
-    let at_unit = unit.map(|tk| tk[0] * (1.0 + F32_SLACK));
+    let at_unit = unit.map(|tk| unit_within_acceleration(kept, accel_ceiling, tk[0]));
     let mut band = Band::default();
     // The full stops first: they need the longest ramps, so later bands
     // seldom raise it (a raise costs a division and a square root).
@@ -561,6 +583,31 @@ fn raise(p: &[f32; 3], [v, a, j]: &[f32; 3], budget: f32, tk: &mut [f32; 3]) -> 
         *tk = [cell, x, x * x];
     }
     Some(())
+}
+
+/// The ramp `t` of a stop along the path, raised until its joint
+/// acceleration a·σ² + v·|σ̇| stays within `ceiling` for every triple of
+/// `kept`, with the f32 slack; [`MAX_RAMP_S`] (never run: not shorter
+/// than a full ramp) where a triple's own acceleration leaves no room.
+#[inline(never)]
+fn unit_within_acceleration(kept: &[[f32; 3]], ceiling: f32, mut t: f32) -> f32 {
+    let top = [1.0 + F32_SLACK, BANG_ACCEL[BANG_CELLS - 1][1]];
+    for &[v, a, _] in kept {
+        if a * top[0] + v * top[1] / t <= ceiling {
+            continue;
+        }
+        for [c0, c1] in BANG_ACCEL {
+            let room = ceiling - a * c0;
+            if room <= 0.0 {
+                return MAX_RAMP_S;
+            }
+            let need = v * c1 / room;
+            if need > t {
+                t = need;
+            }
+        }
+    }
+    (t * (1.0 + F32_SLACK)).min(MAX_RAMP_S)
 }
 
 /// [`pieces_ramp`] for one triple: a segment's maxima `v`, `a`, `j` over
@@ -725,27 +772,30 @@ mod tests {
         assert!(checked > 150, "{checked}");
     }
 
-    /// The largest F over the stops along the path (to σ = 0, σ̈
-    /// bang-bang) a drive may run from a constant σ₀ ≤ 1 at ramp `t`
-    /// (over t·ρ, ρ = √σ₀), sampled on 2 001 points each.
-    fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
-        let mut worst = 0.0f64;
-        for i in 1..=100 {
+    /// σ, |σ̇| and |σ̈| of the stops along the path (to σ = 0, σ̈
+    /// bang-bang) a drive may run from a constant σ₀ = 0.01 … 1 at ramp `t`
+    /// (over t·ρ, ρ = √σ₀), on 2 001 points each.
+    fn bang_stop_states(t: f64) -> impl Iterator<Item = [f64; 3]> {
+        (1..=100).flat_map(move |i| {
             let s0 = i as f64 / 100.0;
             let tt = t * libm::sqrt(s0);
-            for k in 0..=2000 {
+            (0..=2000).map(move |k| {
                 let u = k as f64 / 2000.0;
                 let (s, s1) = if u < 0.5 {
                     (2.0 * u * u, 4.0 * u)
                 } else {
                     (1.0 - 2.0 * (1.0 - u) * (1.0 - u), 4.0 * (1.0 - u))
                 };
-                let sigma = s0 * (1.0 - s);
-                let (sd, sdd) = (s0 * s1 / tt, s0 * 4.0 / (tt * tt));
-                worst = worst.max(j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd);
-            }
-        }
-        worst
+                [s0 * (1.0 - s), s0 * s1 / tt, s0 * 4.0 / (tt * tt)]
+            })
+        })
+    }
+
+    /// The largest F over the stops along the path at ramp `t`.
+    fn worst_stop_jerk_at_most_unit(v: f64, a: f64, j: f64, t: f64) -> f64 {
+        bang_stop_states(t)
+            .map(|[sigma, sd, sdd]| j * sigma.powi(3) + 3.0 * a * sigma * sd + v * sdd)
+            .fold(0.0, f64::max)
     }
 
     /// The ramp for stops along the path from σ ≤ 1 keeps each within the
@@ -761,7 +811,8 @@ mod tests {
                     for cap in [1.0, 1.4, 3.0] {
                         let bs = budgets(j as f32, 5.0, 40.0, cap as f32);
                         let triple = [[v as f32, a as f32, j as f32]];
-                        let Some([full, unit]) = pieces_ramp_and_at_unit(&triple, bs, cap as f32)
+                        let Some([full, unit]) =
+                            pieces_ramp_and_at_unit(&triple, bs, cap as f32, f32::INFINITY)
                         else {
                             continue;
                         };
@@ -783,7 +834,55 @@ mod tests {
             }
         }
         std::eprintln!("{checked} ramps, {shorter} shorter than the full ramp, {longer} longer");
-        assert!(checked >= 80 && shorter > 60, "{checked} {shorter}");
+        assert!(
+            checked >= 80 && shorter > 60 && longer == 0,
+            "{checked} {shorter} {longer}"
+        );
+    }
+
+    /// The largest joint acceleration a·σ² + v·|σ̇| over the stops along
+    /// the path at ramp `t`.
+    fn worst_stop_acceleration(v: f64, a: f64, t: f64) -> f64 {
+        bang_stop_states(t)
+            .map(|[sigma, sd, _]| a * sigma * sigma + v * sd)
+            .fold(0.0, f64::max)
+    }
+
+    /// A stop along the path keeps the joint acceleration within the
+    /// drive's acceleration ceiling: its ramp grows where the jerk's alone
+    /// would pass it, and is never offered ([`MAX_RAMP_S`]) where the
+    /// segment's own acceleration leaves no room.
+    #[test]
+    fn the_stop_ramp_at_unit_holds_the_acceleration_ceiling() {
+        let bs = budgets(1.0, 5.0, 40.0, 1.0);
+        let mut raised = 0;
+        for v in [0.1, 0.5, 2.0] {
+            for a in [0.1, 1.2] {
+                for ceiling in [1.25, 2.0, 5.0] {
+                    let triple = [[v as f32, a as f32, 1.0]];
+                    let [_, free] =
+                        pieces_ramp_and_at_unit(&triple, bs, 1.0, f32::INFINITY).unwrap();
+                    let [_, held] =
+                        pieces_ramp_and_at_unit(&triple, bs, 1.0, ceiling as f32).unwrap();
+                    for (h, f) in held.iter().zip(free) {
+                        assert!(*h >= f, "{v} {a} {ceiling}: {h} {f}");
+                        if *h >= MAX_RAMP_S {
+                            // None offered: not even the longest ramp is
+                            // well within the ceiling.
+                            let w = worst_stop_acceleration(v, a, MAX_RAMP_S as f64);
+                            assert!(w > 0.9 * ceiling, "{v} {a} {ceiling}: {w}");
+                            continue;
+                        }
+                        let w = worst_stop_acceleration(v, a, *h as f64);
+                        assert!(w <= ceiling * (1.0 + 1e-6), "{v} {a} {ceiling}: {w}");
+                        raised += usize::from(*h > f);
+                    }
+                }
+            }
+        }
+        assert!(raised >= 6, "{raised}");
+        let none = pieces_ramp_and_at_unit(&[[0.5, 2.0, 1.0]], bs, 1.0, 2.0).unwrap();
+        assert_eq!(none[1], [MAX_RAMP_S; 2]);
     }
 
     /// Over sets of triples (a joint's maxima on the pieces of a

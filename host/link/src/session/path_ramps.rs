@@ -35,9 +35,14 @@ impl PathRamps {
             .iter()
             .map(|w| {
                 let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
-                let [ramps, at_unit] =
-                    wire_ramps_and_at_unit(w, c.max_jerk, c.ceiling_jerk, c.override_cap)
-                        .map_or([[f64::INFINITY; 2]; 2], |r| r.map(us));
+                let [ramps, at_unit] = wire_ramps_and_at_unit(
+                    w,
+                    c.max_jerk,
+                    c.ceiling_jerk,
+                    c.override_cap,
+                    c.ceiling_acceleration,
+                )
+                .map_or([[f64::INFINITY; 2]; 2], |r| r.map(us));
                 let end = start + w.duration_us as f64;
                 let row = (start, end, at_unit);
                 start = end;
