@@ -78,6 +78,16 @@ impl Run {
         }
     }
 
+    /// [`Run::new`] on the flexible machine (screw, coupling and strut
+    /// compliance, an accelerometer on the platform).
+    pub(super) fn flexible(plan: &Plan, configs: &DriveConfigs) -> Self {
+        let mut run = Self::new(plan, configs);
+        let q0 = Vector3::from(plan.segments[0].quintic().eval(0.0).q);
+        let flex = triquint_sim::flex::FlexParams::default();
+        run.sim = Sim::flexible(&plan.robot, q0, SimConfig::default(), &flex).unwrap();
+        run
+    }
+
     pub(super) fn track_ramps(&mut self) {
         for n in &self.sim.nodes {
             self.own_ramp_ns = self.own_ramp_ns.max(n.node.drive.queue_ramps_ns().0);

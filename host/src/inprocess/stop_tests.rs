@@ -7,6 +7,7 @@
 //! reference within the stop budget (docs/protocol.md, "Stop ramp"). The
 //! figures are printed (`--nocapture`) for docs/protocol.md.
 
+use nalgebra::Vector3;
 use triquint_link::{DriveConfigs, Feed};
 use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
@@ -256,4 +257,67 @@ fn a_stop_from_another_process_is_as_short_as_the_sessions() {
             "{name}: {other} s against the session's {session} s"
         );
     }
+}
+
+/// How much a Stop rings the flexible machine: the session's Stop at 8
+/// seeded instants of Case II on the flexible plant, and the residual
+/// vibration of the platform over the settle window from the instant
+/// every drive is Idle (`--nocapture`; docs/protocol.md, "The shape of a
+/// stop along the path"). Each stop ends at rest without a fault.
+#[test]
+fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
+    use triquint_sim::vibration::SETTLE_WINDOW_S;
+    let plan = testplan::paper_case2().unwrap();
+    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default()).unwrap();
+    let (mut peak, mut rms_sum, mut stop_sum, mut n) = (0.0f64, 0.0f64, 0.0f64, 0);
+    for at_s in seeded_instants(7, 8, 0.3..plan.total_time_s - 0.3) {
+        let mut run = Run::flexible(&plan, &configs);
+        while !run.reached(at_s) {
+            assert!(run.advance().is_none(), "ended before {at_s}");
+        }
+        let sent = run.sim.now_ns();
+        run.session.feed(Feed::Stop);
+        while run.advance().is_none() {}
+        let mut sim = run.sim;
+        let idle_at = sim
+            .nodes
+            .iter()
+            .filter_map(|n| {
+                n.states
+                    .iter()
+                    .find(|(t, s)| *t >= sent && *s == State::Idle)
+            })
+            .map(|x| x.0)
+            .max()
+            .expect("every drive Idle");
+        sim.run_until(idle_at + (SETTLE_WINDOW_S * 1e9) as u64 + 1_000_000)
+            .unwrap();
+        assert!(sim.faults().is_empty(), "{at_s}: {:?}", sim.faults());
+        let q = Vector3::from(sim.samples.last().unwrap().q);
+        let r = sim
+            .plant
+            .flexible()
+            .unwrap()
+            .residual(idle_at as f64 * 1e-9, SETTLE_WINDOW_S, q)
+            .unwrap()
+            .expect("a settle window");
+        eprintln!(
+            "Case II Stop at {at_s:.3} s: stop {:.3} s, residual peak {:.3} µm, RMS {:.3} µm, peak {:.4} m/s²",
+            (idle_at - sent) as f64 * 1e-9,
+            r.peak_position_m * 1e6,
+            r.rms_position_m * 1e6,
+            r.peak_accel_m_s2
+        );
+        peak = peak.max(r.peak_position_m);
+        rms_sum += r.rms_position_m;
+        stop_sum += (idle_at - sent) as f64 * 1e-9;
+        n += 1;
+    }
+    eprintln!(
+        "Case II, {n} Stops on the flexible machine: mean stop {:.3} s, residual peak {:.3} µm, mean RMS {:.3} µm",
+        stop_sum / n as f64,
+        peak * 1e6,
+        rms_sum / n as f64 * 1e6
+    );
+    assert!(peak < 50e-6, "{peak}");
 }
