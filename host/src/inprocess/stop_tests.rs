@@ -263,7 +263,8 @@ fn a_stop_from_another_process_is_as_short_as_the_sessions() {
 /// seeded instants of Case II on the flexible plant, and the residual
 /// vibration of the platform over the settle window from the instant
 /// every drive is Idle (`--nocapture`; docs/protocol.md, "The shape of a
-/// stop along the path"). Each stop ends at rest without a fault.
+/// stop along the path"). Each stop ends stopped, at rest, without a
+/// fault, the residual peak under 10 µm.
 #[test]
 fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
     use triquint_sim::vibration::SETTLE_WINDOW_S;
@@ -277,7 +278,12 @@ fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
         }
         let sent = run.sim.now_ns();
         run.session.feed(Feed::Stop);
-        while run.advance().is_none() {}
+        let outcome = loop {
+            if let Some(o) = run.advance() {
+                break o;
+            }
+        };
+        assert!(outcome.stopped && outcome.faults.is_empty(), "{at_s}");
         let mut sim = run.sim;
         let idle_at = sim
             .nodes
@@ -319,5 +325,6 @@ fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
         peak * 1e6,
         rms_sum / n as f64 * 1e6
     );
-    assert!(peak < 50e-6, "{peak}");
+    // Version 10 measured 2.84 µm: a few times that is a regression.
+    assert!(peak < 10e-6, "{peak}");
 }

@@ -395,8 +395,8 @@ pub fn pieces_ramp(triples: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<
 /// each of `budgets` for each triple: the bound on [`BANG_NODES`] from
 /// σ = 1, which bounds every such stop from σ₀ ≤ 1 term by term (σ ≤
 /// 1 − S, |σ̇| ≤ S′/T and |σ̈| = |S″|/T² at ρ ≥ √σ₀), and its joint
-/// acceleration within `accel_ceiling` ([`BANG_ACCEL`]; [`MAX_RAMP_S`]
-/// where no ramp keeps it there). It is not bounded by the full ramp
+/// acceleration within `accel_ceiling` ([`BANG_ACCEL`]; infinite where
+/// no ramp keeps it there). It is not bounded by the full ramp
 /// (the quintic's): where it is longer the drives run the full ramp
 /// instead. `[full, at_unit]`.
 pub fn pieces_ramp_and_at_unit(
@@ -587,10 +587,14 @@ fn raise(p: &[f32; 3], [v, a, j]: &[f32; 3], budget: f32, tk: &mut [f32; 3]) -> 
 
 /// The ramp `t` of a stop along the path, raised until its joint
 /// acceleration a·σ² + v·|σ̇| stays within `ceiling` for every triple of
-/// `kept`, with the f32 slack; [`MAX_RAMP_S`] (never run: not shorter
-/// than a full ramp) where a triple's own acceleration leaves no room.
+/// `kept`, with the f32 slack; infinite (never run: no full ramp is
+/// longer) where a triple's own acceleration leaves no room or the
+/// ceiling is not a number above 0.
 #[inline(never)]
 fn unit_within_acceleration(kept: &[[f32; 3]], ceiling: f32, mut t: f32) -> f32 {
+    if ceiling.is_nan() || ceiling <= 0.0 {
+        return f32::INFINITY;
+    }
     let top = [1.0 + F32_SLACK, BANG_ACCEL[BANG_CELLS - 1][1]];
     for &[v, a, _] in kept {
         if a * top[0] + v * top[1] / t <= ceiling {
@@ -599,7 +603,7 @@ fn unit_within_acceleration(kept: &[[f32; 3]], ceiling: f32, mut t: f32) -> f32 
         for [c0, c1] in BANG_ACCEL {
             let room = ceiling - a * c0;
             if room <= 0.0 {
-                return MAX_RAMP_S;
+                return f32::INFINITY;
             }
             let need = v * c1 / room;
             if need > t {
@@ -607,7 +611,7 @@ fn unit_within_acceleration(kept: &[[f32; 3]], ceiling: f32, mut t: f32) -> f32 
             }
         }
     }
-    (t * (1.0 + F32_SLACK)).min(MAX_RAMP_S)
+    t * (1.0 + F32_SLACK)
 }
 
 /// [`pieces_ramp`] for one triple: a segment's maxima `v`, `a`, `j` over
@@ -850,8 +854,8 @@ mod tests {
 
     /// A stop along the path keeps the joint acceleration within the
     /// drive's acceleration ceiling: its ramp grows where the jerk's alone
-    /// would pass it, and is never offered ([`MAX_RAMP_S`]) where the
-    /// segment's own acceleration leaves no room.
+    /// would pass it, and is never offered (infinite) where the segment's
+    /// own acceleration leaves no room.
     #[test]
     fn the_stop_ramp_at_unit_holds_the_acceleration_ceiling() {
         let bs = budgets(1.0, 5.0, 40.0, 1.0);
@@ -867,7 +871,7 @@ mod tests {
                     for (h, f) in held.iter().zip(free) {
                         assert!(*h >= f, "{v} {a} {ceiling}: {h} {f}");
                         if *h >= MAX_RAMP_S {
-                            // None offered: not even the longest ramp is
+                            // Longer than any full ramp: not even that is
                             // well within the ceiling.
                             let w = worst_stop_acceleration(v, a, MAX_RAMP_S as f64);
                             assert!(w > 0.9 * ceiling, "{v} {a} {ceiling}: {w}");
@@ -881,8 +885,13 @@ mod tests {
             }
         }
         assert!(raised >= 6, "{raised}");
-        let none = pieces_ramp_and_at_unit(&[[0.5, 2.0, 1.0]], bs, 1.0, 2.0).unwrap();
-        assert_eq!(none[1], [MAX_RAMP_S; 2]);
+        // None offered (infinite): the segment's own acceleration is the
+        // ceiling, or the ceiling is not a number; so a configured full
+        // ramp of any length is shorter.
+        for ceiling in [2.0, f32::NAN, 0.0] {
+            let none = pieces_ramp_and_at_unit(&[[0.5, 2.0, 1.0]], bs, 1.0, ceiling).unwrap();
+            assert_eq!(none[1], [f32::INFINITY; 2], "{ceiling}");
+        }
     }
 
     /// Over sets of triples (a joint's maxima on the pieces of a
