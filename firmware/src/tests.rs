@@ -726,21 +726,23 @@ fn stop_rig() -> Rig {
     r
 }
 
+/// The largest own controlled ramps (µs) of `segs` on a drive with
+/// `cfg`: for every transition, and for a stop along the path from σ ≤ 1.
+fn own_ramps_us(cfg: &DriveConfig, segs: &[WireSegment]) -> (u32, u32) {
+    use crate::ceilings::Maxima;
+    use crate::segment::Seg;
+    segs.iter().fold((0, 0), |(full_us, unit_us), w| {
+        let [full, at_unit] = Maxima::of(&Seg::from_wire(w, 0))
+            .ramps_and_at_unit_us(cfg)
+            .unwrap();
+        (full_us.max(full.0), unit_us.max(at_unit.0))
+    })
+}
+
 /// The largest own controlled ramp (ns) of `segs` on a [`stop_rig`] for
 /// a stop along the path from σ ≤ 1.
 fn queue_ramp_ns(segs: &[WireSegment]) -> i64 {
-    use crate::ceilings::Maxima;
-    use crate::segment::Seg;
-    let cfg = stop_rig().cfg;
-    segs.iter()
-        .map(|w| {
-            let [_, at_unit] = Maxima::of(&Seg::from_wire(w, 0))
-                .ramps_and_at_unit_us(&cfg)
-                .unwrap();
-            at_unit.0 as i64 * 1000
-        })
-        .max()
-        .unwrap_or(0)
+    own_ramps_us(&stop_rig().cfg, segs).1 as i64 * 1000
 }
 
 /// A Stop dated with a ramp for the path ahead runs it when it covers the
@@ -866,8 +868,6 @@ fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
 /// every transition up to the cap; from σ above 1 it runs the full ramp.
 #[test]
 fn a_dated_stop_is_held_to_the_ramps_of_stops_from_unit_sigma() {
-    use crate::ceilings::Maxima;
-    use crate::segment::Seg;
     let segs = segments_of(&[0.4, 0.4, 0.8, 0.8]);
     let rig = || {
         let mut r = Rig::with_stop_time(0.05);
@@ -876,15 +876,7 @@ fn a_dated_stop_is_held_to_the_ramps_of_stops_from_unit_sigma() {
     };
     // The first two segments' own ramps: for every transition, for stops
     // from σ ≤ 1.
-    let (mut cap_us, mut unit_us) = (0, 0);
-    let cfg = rig().cfg;
-    for w in &segs[..2] {
-        let [full, at_unit] = Maxima::of(&Seg::from_wire(w, 0))
-            .ramps_and_at_unit_us(&cfg)
-            .unwrap();
-        cap_us = cap_us.max(full.0);
-        unit_us = unit_us.max(at_unit.0);
-    }
+    let (cap_us, unit_us) = own_ramps_us(&rig().cfg, &segs[..2]);
     assert!(
         unit_us * 10 < cap_us * 9,
         "{unit_us} µs against {cap_us} µs"

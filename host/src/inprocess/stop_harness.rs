@@ -68,24 +68,32 @@ pub(super) struct Run {
 impl Run {
     pub(super) fn new(plan: &Plan, configs: &DriveConfigs) -> Self {
         let q0 = plan.segments[0].quintic().eval(0.0).q;
+        Self::on(
+            Sim::new(&plan.robot, q0, SimConfig::default()),
+            plan,
+            configs,
+        )
+    }
+
+    /// [`Run::new`] on the flexible machine (screw, coupling and strut
+    /// compliance, an accelerometer on the platform).
+    pub(super) fn flexible(plan: &Plan, configs: &DriveConfigs) -> Self {
+        let q0 = Vector3::from(plan.segments[0].quintic().eval(0.0).q);
+        let flex = triquint_sim::flex::FlexParams::default();
+        let sim = Sim::flexible(&plan.robot, q0, SimConfig::default(), &flex).unwrap();
+        Self::on(sim, plan, configs)
+    }
+
+    /// A run of `plan` on `sim`, before the session's first poll.
+    fn on(sim: Sim, plan: &Plan, configs: &DriveConfigs) -> Self {
         Run {
-            sim: Sim::new(&plan.robot, q0, SimConfig::default()),
+            sim,
             session: Session::new(plan, configs.nodes, SessionOptions::default()).unwrap(),
             limit_ns: ((plan.total_time_s + 30.0) * 1e9) as u64,
             sent_ns: None,
             accel: 0.0,
             own_ramp_ns: 0,
         }
-    }
-
-    /// [`Run::new`] on the flexible machine (screw, coupling and strut
-    /// compliance, an accelerometer on the platform).
-    pub(super) fn flexible(plan: &Plan, configs: &DriveConfigs) -> Self {
-        let mut run = Self::new(plan, configs);
-        let q0 = Vector3::from(plan.segments[0].quintic().eval(0.0).q);
-        let flex = triquint_sim::flex::FlexParams::default();
-        run.sim = Sim::flexible(&plan.robot, q0, SimConfig::default(), &flex).unwrap();
-        run
     }
 
     pub(super) fn track_ramps(&mut self) {

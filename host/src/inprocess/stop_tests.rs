@@ -13,7 +13,7 @@ use triquint_shared::plan::Plan;
 use triquint_shared::plan::figures::kinematics;
 use triquint_shared::protocol::State;
 use triquint_shared::protocol::config::DriveSettings;
-use triquint_sim::testplan;
+use triquint_sim::{Sim, testplan};
 
 use super::stop_harness::{Ending, Path, Run, SETTLE_NS, bounds, branch_runs, seeded_instants};
 
@@ -75,18 +75,7 @@ impl Run {
             ..
         } = self;
         sim.run_until(sim.now_ns() + SETTLE_NS).unwrap();
-        let idle_at = sim
-            .nodes
-            .iter()
-            .map(|n| {
-                n.states
-                    .iter()
-                    .filter(|(t, _)| *t >= sent)
-                    .find(|(_, s)| *s == State::Idle)
-                    .map_or(u64::MAX, |x| x.0)
-            })
-            .max()
-            .unwrap_or(u64::MAX);
+        let idle_at = all_idle_at(&sim, sent);
         // Drives that were already Idle (the plan ended first) stopped at once.
         let idle_at =
             if idle_at == u64::MAX && sim.nodes.iter().all(|n| n.node.state() == State::Idle) {
@@ -114,6 +103,22 @@ impl Run {
             clean,
         }
     }
+}
+
+/// When the last drive went Idle at or after `sent` (ns); `u64::MAX` if
+/// one has not.
+fn all_idle_at(sim: &Sim, sent: u64) -> u64 {
+    sim.nodes
+        .iter()
+        .map(|n| {
+            n.states
+                .iter()
+                .filter(|(t, _)| *t >= sent)
+                .find(|(_, s)| *s == State::Idle)
+                .map_or(u64::MAX, |x| x.0)
+        })
+        .max()
+        .unwrap_or(u64::MAX)
 }
 
 /// Stops `plan` at `n` seeded instants in [0, T); asserts each and
@@ -285,17 +290,8 @@ fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
         };
         assert!(outcome.stopped && outcome.faults.is_empty(), "{at_s}");
         let mut sim = run.sim;
-        let idle_at = sim
-            .nodes
-            .iter()
-            .filter_map(|n| {
-                n.states
-                    .iter()
-                    .find(|(t, s)| *t >= sent && *s == State::Idle)
-            })
-            .map(|x| x.0)
-            .max()
-            .expect("every drive Idle");
+        let idle_at = all_idle_at(&sim, sent);
+        assert_ne!(idle_at, u64::MAX, "{at_s}: every drive Idle");
         sim.run_until(idle_at + (SETTLE_WINDOW_S * 1e9) as u64 + 1_000_000)
             .unwrap();
         assert!(sim.faults().is_empty(), "{at_s}: {:?}", sim.faults());

@@ -260,17 +260,25 @@ const BANG_TOP: [f32; 3] = bang_top();
 const BANG_ACCEL: [[f32; 2]; BANG_CELLS] = bang_accel();
 
 const fn bang_accel() -> [[f32; 2]; BANG_CELLS] {
-    let slack = (RHO_SLACK as f32) * (1.0 + F32_SLACK);
     let mut t = [[0.0f32; 2]; BANG_CELLS];
     let mut k = 0;
     while k < BANG_CELLS {
-        let n = (2 * BANG_CELLS) as f32;
-        let (u0, u1) = (k as f32 / n, (k + 1) as f32 / n);
-        let g = 1.0 - 2.0 * u0 * u0;
-        t[k] = [g * g * (1.0 + F32_SLACK), 4.0 * u1 * slack];
+        let (_, u1, g) = bang_cell(k);
+        t[k] = [g * g * (1.0 + F32_SLACK), 4.0 * u1 * BANG_SLACK];
         k += 1;
     }
     t
+}
+
+/// The drives' slack on ρ (for σ̇ and σ̈) with the f32 slack.
+const BANG_SLACK: f32 = (RHO_SLACK as f32) * (1.0 + F32_SLACK);
+
+/// Cell `k` of u ∈ [0, ½]: its start u₀, its end u₁, and σ = 1 − 2u₀² at
+/// its start (the largest on it).
+const fn bang_cell(k: usize) -> (f32, f32, f32) {
+    let n = (2 * BANG_CELLS) as f32;
+    let (u0, u1) = (k as f32 / n, (k + 1) as f32 / n);
+    (u0, u1, 1.0 - 2.0 * u0 * u0)
 }
 
 const fn bang_top() -> [f32; 3] {
@@ -288,12 +296,10 @@ const fn bang_top() -> [f32; 3] {
 }
 
 const fn bang_nodes() -> [[f32; 3]; BANG_CELLS] {
-    let slack = (RHO_SLACK as f32) * (1.0 + F32_SLACK);
     let mut t = [[0.0f32; 3]; BANG_CELLS];
     let mut k = 0;
     while k < BANG_CELLS {
-        let n = (2 * BANG_CELLS) as f32;
-        let (u0, u1) = (k as f32 / n, (k + 1) as f32 / n);
+        let (u0, u1, g) = bang_cell(k);
         let um = if BANG_PEAK_U < u0 {
             u0
         } else if BANG_PEAK_U > u1 {
@@ -301,11 +307,10 @@ const fn bang_nodes() -> [[f32; 3]; BANG_CELLS] {
         } else {
             BANG_PEAK_U
         };
-        let g = 1.0 - 2.0 * u0 * u0;
         t[k] = [
             g * g * g * (1.0 + F32_SLACK),
-            3.0 * (1.0 - 2.0 * um * um) * 4.0 * um * slack,
-            4.0 * slack,
+            3.0 * (1.0 - 2.0 * um * um) * 4.0 * um * BANG_SLACK,
+            4.0 * BANG_SLACK,
         ];
         k += 1;
     }
@@ -595,7 +600,8 @@ fn unit_within_acceleration(kept: &[[f32; 3]], ceiling: f32, mut t: f32) -> f32 
     if ceiling.is_nan() || ceiling <= 0.0 {
         return f32::INFINITY;
     }
-    let top = [1.0 + F32_SLACK, BANG_ACCEL[BANG_CELLS - 1][1]];
+    // c₀ is largest on the first cell, c₁ on the last.
+    let top = [BANG_ACCEL[0][0], BANG_ACCEL[BANG_CELLS - 1][1]];
     for &[v, a, _] in kept {
         if a * top[0] + v * top[1] / t <= ceiling {
             continue;
