@@ -50,6 +50,7 @@
 mod banded;
 mod bounded_read;
 mod check;
+mod coarse_start;
 mod error;
 #[cfg(any(test, feature = "evolution"))]
 pub mod evolution;

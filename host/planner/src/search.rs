@@ -8,6 +8,7 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use crate::coarse_start::coarse_starts;
 use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
 use crate::problem::{Problem, Solution};
@@ -166,19 +167,22 @@ const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 /// would make it depend on T (docs/planner-speed.md). Searched at T when
 /// the scaled intervals leave [h_min, h_max].
 pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
+    relaxed_search(p, opts, false)
+}
+
+/// [`relaxed_global`]; `for_starts` when the result only starts a finer
+/// path's search: then its starts end at the first refined agreement
+/// whatever the path's length.
+fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<SearchResult> {
     let target = p.relaxed();
-    let direct = || multistart(&target, &start_points(p, opts.starts, opts.seed), opts);
+    let direct = || searched(&target, opts, for_starts);
     let t_ref = REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64;
     if (t_ref - p.total_time).abs() <= 1e-12 * p.total_time {
         return direct();
     }
     let mut reference = target.clone();
     reference.total_time = t_ref;
-    let r = multistart(
-        &reference,
-        &start_points(&reference, opts.starts, opts.seed),
-        opts,
-    )?;
+    let r = searched(&reference, opts, for_starts)?;
     let within = |s: &Solution| s.h.iter().all(|&h| h >= p.h_min && h <= p.h_max);
     let shapes: Vec<Solution> = r
         .shapes
@@ -206,12 +210,31 @@ pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult
     })
 }
 
+/// The jerk-only problem `p`'s multistart search: a long path from its
+/// coarser path's optima ([`coarse_starts`], whose own search ends at the
+/// first refined agreement), else from [`start_points`].
+fn searched(p: &Problem, opts: &Options, for_starts: bool) -> Option<SearchResult> {
+    let refined_agreement = for_starts || refined_agreement(p);
+    let Some((starts, coarse_solves)) = coarse_starts(p, |c| {
+        relaxed_search(c, opts, true).map(|r| (r.shapes, r.lp_solves))
+    }) else {
+        let starts = start_points(p, opts.starts, opts.seed);
+        return multistart_with(p, &starts, opts, refined_agreement);
+    };
+    let mut r = multistart_with(p, &starts, opts, refined_agreement)?;
+    r.lp_solves += coarse_solves;
+    Some(r)
+}
+
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
-    // Where a limit other than jerk binds, a coarse search costs hundreds
-    // of solves: the refined agreement spares the further starts
-    // (docs/planner-speed.md has what it saves).
-    let refined_agreement = p.knots.len() > REFINED_AGREEMENT_KNOTS || !p.jerk_only;
-    multistart_with(p, starts, opts, refined_agreement)
+    multistart_with(p, starts, opts, refined_agreement(p))
+}
+
+/// Where a limit other than jerk binds, a coarse search costs hundreds of
+/// solves: the refined agreement spares the further starts
+/// (docs/planner-speed.md has what it saves).
+fn refined_agreement(p: &Problem) -> bool {
+    p.knots.len() > REFINED_AGREEMENT_KNOTS || !p.jerk_only
 }
 
 /// [`multistart`]; `refined_agreement` lets two refined results that

@@ -4,15 +4,18 @@
 
 #[path = "../examples/support/closed_curve.rs"]
 mod closed_curve;
+#[path = "../examples/support/random_walk.rs"]
+mod random_walk;
 
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::coarse_start::{COARSE_ABOVE_KNOTS, coarse_starts};
 use crate::evolution::{EvolutionOptions, differential_evolution};
 use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
 use crate::run_state::RunState;
-use crate::search::{global, multistart_with, start_points};
+use crate::search::{global, multistart_with, relaxed_global, start_points};
 use crate::{Job, Options, Plan, check, plan};
 
 fn job_problem(job: &Job) -> Result<Problem, crate::PlanError> {
@@ -292,4 +295,60 @@ fn refined_agreement_keeps_the_optimum_of_every_start() {
         early.best.jerk,
         all.best.jerk
     );
+}
+
+#[test]
+fn a_long_path_started_from_its_coarser_one_keeps_the_optimum() {
+    // The relaxation of the speed figures' closed curve of 200 via-points
+    // at its reference time: searched as `global` searches it (from the
+    // optima of every fourth via-point's path) and from the usual starts
+    // alone. The usual starts' own
+    // refined results end 1.6e-6 apart on this path: the search's
+    // precision here, so the two searches are compared to 1e-5.
+    let n = 200;
+    assert!(n > COARSE_ABOVE_KNOTS);
+    let job = closed_curve(n, 0.5 * (n - 1) as f64);
+    let p = job_problem(&job).unwrap().relaxed();
+    let o = Options::default();
+    let coarse = relaxed_global(&p, &o).unwrap();
+    let usual = multistart_with(&p, &start_points(&p, o.starts, o.seed), &o, true).unwrap();
+    eprintln!(
+        "from the coarser path: {} LPs, max jerk {:.12}; from the usual starts: {} LPs, {:.12}",
+        coarse.lp_solves, coarse.best.jerk, usual.lp_solves, usual.best.jerk
+    );
+    assert!(
+        coarse.best.merit(p.weight) <= usual.best.merit(p.weight) * (1.0 + 1e-5),
+        "{} > {}",
+        coarse.best.jerk,
+        usual.best.jerk
+    );
+    assert!(coarse.lp_solves < usual.lp_solves);
+}
+
+#[test]
+fn only_a_path_its_coarse_path_resolves_starts_from_it() {
+    // A closed curve's every fourth via-point is within 5 % of its length;
+    // a random walk's is half of it, and its coarse optimum says little
+    // about where the walk's turns need time.
+    let starts = |points: Vec<[f64; 3]>| {
+        let job = Job::builder()
+            .points_mm(points)
+            .total_time(50.0)
+            .build()
+            .unwrap();
+        let p = job_problem(&job).unwrap().relaxed();
+        coarse_starts(&p, |c| {
+            assert!(c.knots.len() < p.knots.len());
+            relaxed_global(c, &Options::default()).map(|r| (r.shapes, r.lp_solves))
+        })
+    };
+    let (curve, solves) = starts(closed_curve::closed_curve_mm(100)).expect("the curve's");
+    assert!(solves > 0);
+    for h in &curve {
+        assert_eq!(h.len(), 99);
+        assert!(h.iter().all(|&x| x > 0.0));
+        assert!((h.iter().sum::<f64>() - 50.0).abs() < 1e-9);
+    }
+    assert!(starts(random_walk::random_walk_mm(100)).is_none());
+    assert!(starts(closed_curve::closed_curve_mm(COARSE_ABOVE_KNOTS)).is_none());
 }

@@ -41,6 +41,7 @@ const LAYERS: &[&str] = &[
     "inner",        // the inner solve at fixed intervals, by a method
     "step",         // the trust-region step
     "time_scaling", // a shape time-scaled
+    "coarse_start", // a long path's starts from its coarser path
     "search",       // the multistart search
     "time_descent", // the descent on the total time
     "min_time",     // the shortest total time

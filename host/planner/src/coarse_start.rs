@@ -1,0 +1,186 @@
+//! Starts for a long path from a coarser one: every `STRIDE`-th knot is
+//! planned first (itself from a coarser one while it is long), and the
+//! coarse optimum's time law is carried to the fine knots along the fine
+//! path's chord length. The fine search then only refines: on a long path
+//! a start far from the optimum (the rest ends want intervals several
+//! times the others') costs dozens of trust-region steps at the full size,
+//! while the coarse path's steps cost a quarter as much.
+
+use crate::problem::{Problem, Solution};
+use crate::spline::Knots;
+
+/// Paths of more knots than this are started from a coarser one.
+pub(crate) const COARSE_ABOVE_KNOTS: usize = 64;
+/// Every this many knots are kept in the coarser path.
+const STRIDE: usize = 4;
+/// Samples of a coarse segment's arc length.
+const SAMPLES: usize = 256;
+/// The coarse path stands for the fine one when the fine path is at most
+/// this much longer (in joint space): its corners are resolved. A path
+/// that turns between every few via-points (a random walk is about twice
+/// its coarse path's length) is searched from the usual starts.
+const RESOLVED_LENGTH: f64 = 1.05;
+/// Starts closer than this (relative, in every interval) are one.
+const SAME_START: f64 = 1e-6;
+
+/// The fine knots the coarse path keeps: every `STRIDE`-th and the last
+/// (a remainder under half a stride joins the segment before it).
+fn kept(n: usize) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..n).step_by(STRIDE).collect();
+    let last = n - 1;
+    if let Some(&l) = idx.last()
+        && l != last
+    {
+        if last - l < STRIDE / 2 && idx.len() > 1 {
+            idx.pop();
+        }
+        idx.push(last);
+    }
+    idx
+}
+
+/// Interval starts for the jerk-only problem `p` (at its total time) from
+/// the optimum shapes of its coarser path, best first and distinct, and
+/// the LP solves they took. `search` gives a path's optimum shapes, best
+/// first, and its LP solves (the relaxation's global search). None for a
+/// path of at most [`COARSE_ABOVE_KNOTS`] knots, one its coarse path does
+/// not resolve, or when the coarse search fails.
+pub(crate) fn coarse_starts(
+    p: &Problem,
+    search: impl Fn(&Problem) -> Option<(Vec<Solution>, u64)>,
+) -> Option<(Vec<Vec<f64>>, u64)> {
+    if p.knots.len() <= COARSE_ABOVE_KNOTS {
+        return None;
+    }
+    let idx = kept(p.knots.len());
+    let length = |q: &mut dyn Iterator<Item = [f64; 3]>| {
+        let first = q.next()?;
+        Some(q.fold((0.0, first), |(l, a), b| (l + dist(&a, &b), b)).0)
+    };
+    let fine_length = length(&mut p.knots.q.iter().copied())?;
+    let coarse_length = length(&mut idx.iter().map(|&i| p.knots.q[i]))?;
+    if fine_length > RESOLVED_LENGTH * coarse_length {
+        return None;
+    }
+    let coarse = Problem {
+        knots: Knots {
+            q: idx.iter().map(|&i| p.knots.q[i]).collect(),
+        },
+        // A coarse segment spans several fine ones.
+        h_max: f64::INFINITY,
+        ..p.relaxed()
+    };
+    let (shapes, solves) = search(&coarse)?;
+    let mut starts: Vec<Vec<f64>> = Vec::new();
+    for s in &shapes {
+        let h = fine_intervals(&p.knots, &coarse.knots, &idx, &s.h, &s.x);
+        let same = |t: &Vec<f64>| {
+            t.iter()
+                .zip(&h)
+                .all(|(a, b)| (a - b).abs() <= SAME_START * a.abs())
+        };
+        if !starts.iter().any(same) {
+            starts.push(h);
+        }
+    }
+    (!starts.is_empty()).then_some((starts, solves))
+}
+
+/// The fine intervals of the coarse plan (`h`, `x` on `coarse`, whose knot
+/// i is fine knot `idx[i]`): each fine knot is placed at the time the
+/// coarse trajectory has covered the same share of its segment's joint
+/// space arc length as the fine path's chords have of theirs.
+fn fine_intervals(
+    fine: &Knots,
+    coarse: &Knots,
+    idx: &[usize],
+    h: &[f64],
+    x: &[Vec<f64>; 3],
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(fine.segments());
+    for (i, w) in idx.windows(2).enumerate() {
+        let (a, b) = (w[0], w[1]);
+        let big = h[i];
+        let c: [[f64; 6]; 3] = std::array::from_fn(|j| coarse.coefficients(&x[j], j, i, big));
+        let at = |t: f64| -> [f64; 3] {
+            std::array::from_fn(|j| c[j].iter().rev().fold(0.0, |acc, &ck| acc * t + ck))
+        };
+        // Arc length of the coarse segment at SAMPLES + 1 instants.
+        let mut arc = vec![0.0; SAMPLES + 1];
+        let mut prev = at(0.0);
+        for l in 1..=SAMPLES {
+            let q = at(big * l as f64 / SAMPLES as f64);
+            arc[l] = arc[l - 1] + dist(&prev, &q);
+            prev = q;
+        }
+        let chords: Vec<f64> = (a..b).map(|k| dist(&fine.q[k], &fine.q[k + 1])).collect();
+        let total: f64 = chords.iter().sum();
+        let mut times = Vec::with_capacity(b - a + 1);
+        times.push(0.0);
+        let mut covered = 0.0;
+        for d in &chords[..chords.len() - 1] {
+            covered += d;
+            let t = if total > 0.0 && arc[SAMPLES] > 0.0 {
+                time_at(&arc, covered / total * arc[SAMPLES]) * big
+            } else {
+                big * (times.len() as f64) / (b - a) as f64
+            };
+            times.push(t);
+        }
+        times.push(big);
+        // No interval collapses: at least a thousandth of an even share.
+        let floor = 1e-3 * big / (b - a) as f64;
+        let seg: Vec<f64> = times.windows(2).map(|t| (t[1] - t[0]).max(floor)).collect();
+        let sum: f64 = seg.iter().sum();
+        out.extend(seg.iter().map(|s| s * big / sum));
+    }
+    out
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q) * (p - q))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The normalised time (0..1) at which the sampled arc length `arc`
+/// (nondecreasing) reaches `s`, interpolated linearly.
+fn time_at(arc: &[f64], s: f64) -> f64 {
+    let n = arc.len() - 1;
+    let l = arc.partition_point(|&a| a < s).clamp(1, n);
+    let (a0, a1) = (arc[l - 1], arc[l]);
+    let frac = if a1 > a0 { (s - a0) / (a1 - a0) } else { 0.0 };
+    ((l - 1) as f64 + frac.clamp(0.0, 1.0)) / n as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_coarse_path_keeps_both_ends_and_every_stride() {
+        assert_eq!(kept(9), vec![0, 4, 8]);
+        assert_eq!(kept(10), vec![0, 4, 9]);
+        assert_eq!(kept(11), vec![0, 4, 8, 10]);
+        assert_eq!(kept(100).len(), 26);
+        for n in 3..200 {
+            let k = kept(n);
+            assert_eq!((k[0], *k.last().unwrap()), (0, n - 1));
+            assert!(
+                k.windows(2)
+                    .all(|w| w[1] > w[0] && w[1] - w[0] < 2 * STRIDE)
+            );
+        }
+    }
+
+    #[test]
+    fn time_at_inverts_the_arc_length() {
+        let arc: Vec<f64> = (0..=100).map(|l| (l as f64 / 100.0).powi(3)).collect();
+        for s in [0.0, 0.001, 0.125, 0.5, 0.9, 1.0] {
+            let t = time_at(&arc, s);
+            assert!((t.powi(3) - s).abs() < 2e-3, "{s}: {t}");
+        }
+    }
+}
