@@ -68,6 +68,7 @@ pub(crate) fn coarse_starts(
         },
         // A coarse segment spans several fine ones.
         h_max: f64::INFINITY,
+        shown_jerk: None,
         ..p.relaxed()
     };
     let (shapes, solves) = search(&coarse)?;

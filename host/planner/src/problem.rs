@@ -77,6 +77,11 @@ pub(crate) struct Problem {
     /// Jerk only: velocity, acceleration and torque are neither constrained
     /// nor evaluated (the relaxation solved first, see [`Problem::relaxed`]).
     pub(crate) jerk_only: bool,
+    /// The factor that takes this problem's max jerk to the job's, for the
+    /// observer's best so far: 1 for the job's own problem, (t/T)³ for its
+    /// shape searched at another total time t; None for a coarser path's
+    /// search, whose jerk is not the job's at any scale.
+    pub(crate) shown_jerk: Option<f64>,
 }
 
 /// A candidate plan: intervals, knot derivatives, and its exact figures.
@@ -518,6 +523,7 @@ pub(crate) fn problem(
         run: Arc::new(RunState::new(None)),
         torque_samples: TORQUE_SAMPLES,
         jerk_only: false,
+        shown_jerk: Some(1.0),
         weight: 1e3 * limits.jerk.max(1.0),
         knots,
         limits: limits.clone(),

@@ -182,6 +182,7 @@ fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<Searc
     }
     let mut reference = target.clone();
     reference.total_time = t_ref;
+    reference.shown_jerk = p.shown_jerk.map(|f| f * (t_ref / p.total_time).powi(3));
     let r = searched(&reference, opts, for_starts)?;
     let within = |s: &Solution| s.h.iter().all(|&h| h >= p.h_min && h <= p.h_max);
     let shapes: Vec<Solution> = r
@@ -295,8 +296,10 @@ pub(crate) fn multistart_with(
         coarse.extend(parallel(batch, opts.threads, |h| {
             let first = p.inner(h, &p.zero_x(), Method::Direct, ROUNDS)?;
             let sol = p.local_search(&first, 60, 1e-5);
-            if sol.violation == 0.0 {
-                p.run.offer_jerk(sol.jerk);
+            if sol.violation == 0.0
+                && let Some(f) = p.shown_jerk
+            {
+                p.run.offer_jerk(sol.jerk * f);
             }
             Some(sol)
         }));
