@@ -8,6 +8,7 @@
 
 use crate::problem::{Problem, Solution};
 use crate::spline::Knots;
+use crate::time_scaling::within_bounds;
 
 /// Paths of more knots than this are started from a coarser one.
 pub(crate) const COARSE_ABOVE_KNOTS: usize = 64;
@@ -17,8 +18,8 @@ const STRIDE: usize = 4;
 const SAMPLES: usize = 256;
 /// The coarse path stands for the fine one when the fine path is at most
 /// this much longer (in joint space): its corners are resolved. A path
-/// that turns between every few via-points (a random walk is about twice
-/// its coarse path's length) is searched from the usual starts.
+/// that turns between every few via-points (a random walk) is searched
+/// from the usual starts.
 const RESOLVED_LENGTH: f64 = 1.05;
 /// Starts closer than this (relative, in every interval) are one.
 const SAME_START: f64 = 1e-6;
@@ -40,8 +41,8 @@ fn kept(n: usize) -> Vec<usize> {
 }
 
 /// Interval starts for the jerk-only problem `p` (at its total time) from
-/// the optimum shapes of its coarser path, best first and distinct, and
-/// the LP solves they took. `search` gives a path's optimum shapes, best
+/// the optimum shapes of its coarser path that fall within its interval
+/// bounds, best first and distinct, and the LP solves they took. `search` gives a path's optimum shapes, best
 /// first, and its LP solves (the relaxation's global search). None for a
 /// path of at most [`COARSE_ABOVE_KNOTS`] knots, one its coarse path does
 /// not resolve, or when the coarse search fails.
@@ -74,7 +75,9 @@ pub(crate) fn coarse_starts(
     let (shapes, solves) = search(&coarse)?;
     let mut starts: Vec<Vec<f64>> = Vec::new();
     for s in &shapes {
-        let h = fine_intervals(&p.knots, &coarse.knots, &idx, &s.h, &s.x);
+        let mut h = fine_intervals(&p.knots, &coarse.knots, &idx, &s.h, &s.x, p.h_min);
+        // The coarse problem's intervals are not bounded above.
+        within_bounds(&mut h, p.h_min, p.h_max);
         let same = |t: &Vec<f64>| {
             t.iter()
                 .zip(&h)
@@ -97,6 +100,7 @@ fn fine_intervals(
     idx: &[usize],
     h: &[f64],
     x: &[Vec<f64>; 3],
+    h_min: f64,
 ) -> Vec<f64> {
     let mut out = Vec::with_capacity(fine.segments());
     for (i, w) in idx.windows(2).enumerate() {
@@ -129,8 +133,9 @@ fn fine_intervals(
             times.push(t);
         }
         times.push(big);
-        // No interval collapses: at least a thousandth of an even share.
-        let floor = 1e-3 * big / (b - a) as f64;
+        // No interval collapses: at least a thousandth of an even share
+        // and the shortest interval.
+        let floor = (1e-3 * big / (b - a) as f64).max(h_min);
         let seg: Vec<f64> = times.windows(2).map(|t| (t[1] - t[0]).max(floor)).collect();
         let sum: f64 = seg.iter().sum();
         out.extend(seg.iter().map(|s| s * big / sum));

@@ -39,11 +39,7 @@ pub(crate) fn min_time(
     opts: &Options,
     relaxed: Option<SearchResult>,
 ) -> Result<(Solution, SearchResult), MinTimeFailure> {
-    let at = |t: f64| {
-        let mut p = template.clone();
-        p.total_time = t;
-        p
-    };
+    let at = |t: f64| template.retimed(t);
     // A reference time of 0.5 s per segment: in theory any would do (but
     // for h_min and h_max); the search's absolute tolerances make it matter
     // in practice (docs/planner-speed.md).

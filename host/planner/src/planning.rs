@@ -111,6 +111,17 @@ fn run(job: &Job, opts: &Options, state: &Arc<RunState>) -> Result<Plan, PlanErr
     if let Some(e) = leaves_travel(&plan, job.travel()) {
         return Err(e);
     }
+    // The guard that nothing written has a segment the wire cannot carry.
+    if let Some((k, h)) = plan
+        .intervals_s
+        .iter()
+        .enumerate()
+        .find(|(_, h)| **h > MAX_SEGMENT_S)
+    {
+        return Err(PlanError::Solver(format!(
+            "segment {k} lasts {h} s, more than the {MAX_SEGMENT_S} s a segment may"
+        )));
+    }
     streams(&plan)?;
     if let Some(limit) = job.max_deviation_m() {
         // Recorded, so that `check` proves it without being told.

@@ -480,6 +480,18 @@ impl Problem {
         }
     }
 
+    /// This problem at another total time, its jerk shown to the observer
+    /// at this one's time scale (a fixed shape's jerk scales as T⁻³).
+    pub(crate) fn retimed(&self, total_time: f64) -> Problem {
+        Problem {
+            total_time,
+            shown_jerk: self
+                .shown_jerk
+                .map(|f| f * (total_time / self.total_time).powi(3)),
+            ..self.clone()
+        }
+    }
+
     /// Exact figures of (h, x) under this problem's limits.
     pub(crate) fn evaluate(&self, h: &[f64], x: &[Vec<f64>; 3]) -> Solution {
         let f = self.evaluation(h, x, self.torque_samples);

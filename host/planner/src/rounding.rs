@@ -4,7 +4,7 @@
 
 use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
-use crate::time_scaling::scaled_x;
+use crate::time_scaling::{scaled_x, within_bounds};
 
 /// Torque samples per segment in the final solve (the search uses fewer).
 pub(crate) const FINAL_TORQUE_SAMPLES: usize = 400;
@@ -54,12 +54,14 @@ pub(crate) fn fine(p: &Problem, total: f64) -> Problem {
 }
 
 /// Min-max-jerk: the solution's intervals stretched to the whole budget (more
-/// time never raises the jerk) and rounded to whole µs within it, re-solved
-/// exactly; None when that breaks a limit.
+/// time never raises the jerk; none past the longest interval) and rounded
+/// to whole µs within it, re-solved exactly; None when that breaks a limit.
 pub(crate) fn round_within(p: &Problem, s: &Solution, total_time: f64) -> Option<Solution> {
     let total: f64 = s.h.iter().sum();
     let stretch = total_time / total;
-    let h: Vec<f64> = s.h.iter().map(|x| x * stretch).collect();
+    let mut h: Vec<f64> = s.h.iter().map(|x| x * stretch).collect();
+    // Not past the longest interval (the rest take the time instead).
+    within_bounds(&mut h, p.h_min, p.h_max);
     let h = round_to_microseconds(&h, total_time);
     let f = fine(p, h.iter().sum());
     let x0 = scaled_x(&s.x, stretch);

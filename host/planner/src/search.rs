@@ -12,7 +12,7 @@ use crate::coarse_start::coarse_starts;
 use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
 use crate::problem::{Problem, Solution};
-use crate::time_scaling::scaled_x;
+use crate::time_scaling::{scaled_x, within_bounds};
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
@@ -67,6 +67,7 @@ pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
     for h in &mut out {
         let sum: f64 = h.iter().sum();
         h.iter_mut().for_each(|x| *x *= p.total_time / sum);
+        within_bounds(h, p.h_min, p.h_max);
     }
     out
 }
@@ -180,9 +181,7 @@ fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<Searc
     if (t_ref - p.total_time).abs() <= 1e-12 * p.total_time {
         return direct();
     }
-    let mut reference = target.clone();
-    reference.total_time = t_ref;
-    reference.shown_jerk = p.shown_jerk.map(|f| f * (t_ref / p.total_time).powi(3));
+    let reference = target.retimed(t_ref);
     let r = searched(&reference, opts, for_starts)?;
     let within = |s: &Solution| s.h.iter().all(|&h| h >= p.h_min && h <= p.h_max);
     let shapes: Vec<Solution> = r
