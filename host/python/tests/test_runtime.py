@@ -66,17 +66,23 @@ def test_stubs_cover_the_module():
     assert installed.with_name("py.typed").exists()
 
 
+def zigzag_circle():
+    a = np.linspace(0, 2 * np.pi, 601)[:-1]
+    r = 120 + 3 * (-1.0) ** np.arange(600)
+    return np.c_[r * np.cos(a), r * np.sin(a), 600 + 0 * a]
+
+
 def test_the_gil_is_released_while_planning():
-    # A 100-point circle plans for tens of seconds; the progress callable
-    # cancels it after a second, long enough to see the GIL released.
-    a = np.linspace(0, 2 * np.pi, 101)[:-1]
-    circle = np.c_[120 * np.cos(a), 120 * np.sin(a), 600 + 0 * a]
+    # A 600-point circle that zig-zags 3 mm in and out (so no coarser path
+    # stands for it) plans for several seconds; the progress callable
+    # cancels it after one, long enough to see the GIL released.
+    circle = zigzag_circle()
     result = {}
 
     def work():
         t = time.perf_counter()
         try:
-            triquint.plan(circle, total_time=20.0, progress=lambda p: p.elapsed < 1.0)
+            triquint.plan(circle, total_time=300.0, progress=lambda p: p.elapsed < 1.0)
         except triquint.CancelledError:
             result["cancelled"] = True
         result["seconds"] = time.perf_counter() - t
@@ -102,12 +108,13 @@ def test_ctrl_c_raises_keyboard_interrupt_within_a_second():
         import sys, time
         import numpy as np
         import triquint
-        a = np.linspace(0, 2 * np.pi, 101)[:-1]
-        pts = np.c_[120 * np.cos(a), 120 * np.sin(a), 600 + 0 * a]  # ~28 s to plan
+        a = np.linspace(0, 2 * np.pi, 601)[:-1]
+        r = 120 + 3 * (-1.0) ** np.arange(600)
+        pts = np.c_[r * np.cos(a), r * np.sin(a), 600 + 0 * a]  # several seconds to plan
         print("planning", flush=True)
         t = time.perf_counter()
         try:
-            triquint.plan(pts, total_time=20.0)
+            triquint.plan(pts, total_time=300.0)
         except KeyboardInterrupt:
             print(f"interrupted after {time.perf_counter() - t:.3f} s", flush=True)
             sys.exit(42)
