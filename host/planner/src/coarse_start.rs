@@ -41,11 +41,12 @@ fn kept(n: usize) -> Vec<usize> {
 }
 
 /// Interval starts for the jerk-only problem `p` (at its total time) from
-/// the optimum shapes of its coarser path that fall within its interval
-/// bounds, best first and distinct, and the LP solves they took. `search` gives a path's optimum shapes, best
-/// first, and its LP solves (the relaxation's global search). None for a
-/// path of at most [`COARSE_ABOVE_KNOTS`] knots, one its coarse path does
-/// not resolve, or when the coarse search fails.
+/// the optimum shapes of its coarser path, brought within its interval
+/// bounds, best first and distinct, and the LP solves they took. `search`
+/// gives a path's optimum shapes, best first, and its LP solves (the
+/// relaxation's global search). None for a path of at most
+/// [`COARSE_ABOVE_KNOTS`] knots, one its coarse path does not resolve, or
+/// when the coarse search fails.
 pub(crate) fn coarse_starts(
     p: &Problem,
     search: impl Fn(&Problem) -> Option<(Vec<Solution>, u64)>,
@@ -54,19 +55,12 @@ pub(crate) fn coarse_starts(
         return None;
     }
     let idx = kept(p.knots.len());
-    let length = |q: &mut dyn Iterator<Item = [f64; 3]>| {
-        let first = q.next()?;
-        Some(q.fold((0.0, first), |(l, a), b| (l + dist(&a, &b), b)).0)
-    };
-    let fine_length = length(&mut p.knots.q.iter().copied())?;
-    let coarse_length = length(&mut idx.iter().map(|&i| p.knots.q[i]))?;
-    if fine_length > RESOLVED_LENGTH * coarse_length {
+    let coarse_q: Vec<[f64; 3]> = idx.iter().map(|&i| p.knots.q[i]).collect();
+    if length(&p.knots.q) > RESOLVED_LENGTH * length(&coarse_q) {
         return None;
     }
     let coarse = Problem {
-        knots: Knots {
-            q: idx.iter().map(|&i| p.knots.q[i]).collect(),
-        },
+        knots: Knots { q: coarse_q },
         // A coarse segment spans several fine ones.
         h_max: f64::INFINITY,
         shown_jerk: None,
@@ -141,6 +135,11 @@ fn fine_intervals(
         out.extend(seg.iter().map(|s| s * big / sum));
     }
     out
+}
+
+/// The length of the polyline through `q`.
+fn length(q: &[[f64; 3]]) -> f64 {
+    q.windows(2).map(|w| dist(&w[0], &w[1])).sum()
 }
 
 fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {

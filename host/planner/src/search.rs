@@ -214,13 +214,11 @@ fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<Searc
 /// coarser path's optima ([`coarse_starts`], whose own search ends at the
 /// first refined agreement), else from [`start_points`].
 fn searched(p: &Problem, opts: &Options, for_starts: bool) -> Option<SearchResult> {
-    let refined_agreement = for_starts || refined_agreement(p);
-    let Some((starts, coarse_solves)) = coarse_starts(p, |c| {
+    let (starts, coarse_solves) = coarse_starts(p, |c| {
         relaxed_search(c, opts, true).map(|r| (r.shapes, r.lp_solves))
-    }) else {
-        let starts = start_points(p, opts.starts, opts.seed);
-        return multistart_with(p, &starts, opts, refined_agreement);
-    };
+    })
+    .unwrap_or_else(|| (start_points(p, opts.starts, opts.seed), 0));
+    let refined_agreement = for_starts || refined_agreement(p);
     let mut r = multistart_with(p, &starts, opts, refined_agreement)?;
     r.lp_solves += coarse_solves;
     Some(r)

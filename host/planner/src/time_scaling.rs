@@ -113,11 +113,10 @@ pub(crate) fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
     let mut guess = scale(p, s, t)?;
     let mut p = p.clone();
     p.total_time = t;
-    if guess.h.iter().any(|x| !(p.h_min..=p.h_max).contains(x)) {
+    let mut h = guess.h.clone();
+    if within_bounds(&mut h, p.h_min, p.h_max) {
         // Scaled past the longest interval: the search's trust region would
         // keep it there, so it starts from the shape brought within.
-        let mut h = guess.h.clone();
-        within_bounds(&mut h, p.h_min, p.h_max);
         guess = p.inner(&h, &guess.x, Method::ViaRelaxation, ROUNDS)?;
     }
     Some(p.local_search(&guess, 200, 1e-9))
@@ -127,24 +126,27 @@ pub(crate) fn stretch(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
 /// outside are clamped and the rest scaled to make up the difference, until
 /// none is outside. The search's trust region only keeps a move within the
 /// bounds, so a start must begin there. Intervals already within are
-/// untouched.
-pub(crate) fn within_bounds(h: &mut [f64], lo: f64, hi: f64) {
+/// untouched; true when any was not.
+pub(crate) fn within_bounds(h: &mut [f64], lo: f64, hi: f64) -> bool {
     let total: f64 = h.iter().sum();
+    let mut moved = false;
     for _ in 0..h.len() {
         if h.iter().all(|x| (lo..=hi).contains(x)) {
-            return;
+            return moved;
         }
+        moved = true;
         h.iter_mut().for_each(|x| *x = x.clamp(lo, hi));
         let held: f64 = h.iter().filter(|&&x| x == lo || x == hi).sum();
         let free: f64 = h.iter().filter(|&&x| x != lo && x != hi).sum();
         if free <= 0.0 {
-            return;
+            return moved;
         }
         let f = (total - held) / free;
         h.iter_mut()
             .filter(|x| **x != lo && **x != hi)
             .for_each(|x| *x *= f);
     }
+    moved
 }
 
 #[cfg(test)]
@@ -186,11 +188,11 @@ mod tests {
     fn within_bounds_keeps_the_sum_and_leaves_a_start_within_alone() {
         let mut h = vec![96.0, 59.0, 40.0, 10.0, 0.0005];
         let total: f64 = h.iter().sum();
-        within_bounds(&mut h, 1e-3, 60.0);
+        assert!(within_bounds(&mut h, 1e-3, 60.0));
         assert!((h.iter().sum::<f64>() - total).abs() < 1e-9 * total);
         assert!(h.iter().all(|x| (1e-3..=60.0).contains(x)), "{h:?}");
         let mut inside = vec![0.5, 0.25, 1.25];
-        within_bounds(&mut inside, 1e-3, 60.0);
+        assert!(!within_bounds(&mut inside, 1e-3, 60.0));
         assert_eq!(inside, vec![0.5, 0.25, 1.25]);
     }
 }

@@ -321,6 +321,6 @@ fn a_stop_on_the_flexible_machine_and_what_rings_after_it() {
         peak * 1e6,
         rms_sum / n as f64 * 1e6
     );
-    // Version 10 measured 2.84 µm: a few times that is a regression.
+    // A few times the figure docs/protocol.md records is a regression.
     assert!(peak < 10e-6, "{peak}");
 }
