@@ -384,3 +384,29 @@ fn a_slow_plan_keeps_every_segment_within_the_wire_limit() {
     assert!(longest <= MAX_SEGMENT_S, "a segment of {longest} s");
     assert_checks(&p);
 }
+
+#[test]
+fn the_observer_is_offered_the_jobs_own_jerk() {
+    // The relaxation is searched at 0.5 s a segment and time-scaled: the
+    // best max jerk offered to the observer (what `Progress` shows) is at
+    // the job's total time (Case II's points in 4.5 s, its reference 5 s:
+    // 1.37 times the reference's jerk). At 4.5 s only jerk binds, so the
+    // offered best is the search's optimum, to the solves' accuracy, or a
+    // little above it.
+    let case2 = example("paper-case2.toml");
+    let job = Job::builder()
+        .points_m(case2.points_m().to_vec())
+        .total_time(4.5)
+        .build()
+        .unwrap();
+    let state = Arc::new(RunState::new(None));
+    let p = crate::planning::job_problem(&job, &state).unwrap();
+    let r = global(&p, &opts(Options::default().starts)).unwrap();
+    let offered = state.progress().best_max_jerk.expect("a best offered");
+    eprintln!("offered {offered}, optimum {}", r.best.jerk);
+    assert!(
+        offered >= r.best.jerk * (1.0 - 1e-6) && offered <= r.best.jerk * 1.1,
+        "offered {offered} against the optimum {}",
+        r.best.jerk
+    );
+}
