@@ -4,7 +4,7 @@
 
 use crate::options::Options;
 use crate::problem::{Problem, Solution, feasible};
-use crate::search::{SearchResult, global};
+use crate::search::{SearchResult, relaxed_shapes};
 use crate::time_descent::descend_time;
 use crate::time_scaling::{scale, shortest_scaling};
 
@@ -46,7 +46,7 @@ pub(crate) fn min_time(
     let t_ref = 0.5 * template.knots.segments() as f64;
     let probe = match relaxed {
         Some(r) => r,
-        None => global(&at(t_ref).relaxed(), opts).ok_or(MinTimeFailure { best: None })?,
+        None => relaxed_shapes(&at(t_ref), opts).ok_or(MinTimeFailure { best: None })?,
     };
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();

@@ -110,8 +110,10 @@ const BATCH: usize = 2;
 const AGREEING: usize = 2;
 /// Above this many knots (and on the full problem, at any size) two coarse
 /// results that do not agree are refined and compared before more starts
-/// run. Below it the jerk-only relaxation's starts are cheap and the
-/// further starts' shapes help min-time (docs/planner-speed.md).
+/// run. Below it the jerk-only relaxation's starts are cheap, and where
+/// its optimum is the plan every start runs (only the shapes it gives
+/// min-time and the full search end at the first refined agreement:
+/// docs/planner-speed.md).
 const REFINED_AGREEMENT_KNOTS: usize = 64;
 
 /// Multistart global search for min-max jerk at the problem's total time.
@@ -121,6 +123,7 @@ const REFINED_AGREEMENT_KNOTS: usize = 64;
 /// Its global optimum bounds the problem's from below, so when it meets
 /// every other limit it is the answer; otherwise the full problem is
 /// searched, from the relaxation's optimum and the same starts.
+#[cfg(any(test, feature = "evolution"))]
 pub(crate) fn global(p: &Problem, opts: &Options) -> Option<SearchResult> {
     global_from(p, opts, relaxed_global(p, opts))
 }
@@ -161,6 +164,19 @@ pub(crate) fn global_from(
 /// Seconds per segment of the reference time at which the relaxation is searched.
 const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 
+/// How far the relaxation's multistart goes.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Reach {
+    /// Its starts end at the first refined agreement: it only starts a
+    /// finer path's search or min-time's descent.
+    Shapes,
+    /// As [`Reach::Shapes`] while a limit other than jerk binds at its
+    /// optimum (its shapes then only start the full problem's search and
+    /// min-time); else it is the plan, and every start of
+    /// [`refined_agreement`]'s rule runs.
+    Answer,
+}
+
 /// The jerk-only relaxation's global optimum at the problem's total time T,
 /// searched at a reference time (0.5 s a segment) and time-scaled to T.
 /// Exact: a shape's jerk scales as T⁻³, so the relaxation's optimum at any
@@ -168,28 +184,72 @@ const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 /// would make it depend on T (docs/planner-speed.md). Searched at T when
 /// the scaled intervals leave [h_min, h_max].
 pub(crate) fn relaxed_global(p: &Problem, opts: &Options) -> Option<SearchResult> {
-    relaxed_search(p, opts, false)
+    relaxed_search(p, opts, Reach::Answer)
 }
 
-/// [`relaxed_global`]; `for_starts` when the result only starts a finer
-/// path's search: then its starts end at the first refined agreement
-/// whatever the path's length.
-fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<SearchResult> {
+/// The relaxation's shapes for min-time: [`relaxed_global`] with its
+/// starts ending at the first refined agreement (min-time descends from
+/// its shapes; it is never the answer).
+pub(crate) fn relaxed_shapes(p: &Problem, opts: &Options) -> Option<SearchResult> {
+    relaxed_search(p, opts, Reach::Shapes)
+}
+
+fn relaxed_search(p: &Problem, opts: &Options, reach: Reach) -> Option<SearchResult> {
     let target = p.relaxed();
-    let direct = || searched(&target, opts, for_starts);
     let t_ref = REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64;
     if (t_ref - p.total_time).abs() <= 1e-12 * p.total_time {
-        return direct();
+        return relaxed_at(p, &target, opts, reach, Some).flatten();
     }
     let reference = target.retimed(t_ref);
-    let r = searched(&reference, opts, for_starts)?;
+    match relaxed_at(p, &reference, opts, reach, |r| time_scaled(p, &target, r))? {
+        Some(r) => Some(r),
+        // Searched at T itself when the scaled intervals leave the bounds.
+        None => relaxed_at(p, &target, opts, reach, Some).flatten(),
+    }
+}
+
+/// The relaxation's search on `q` (the relaxation of `p` at some total
+/// time), its result taken to `p`'s time by `to_p`. None when the search
+/// found nothing, Some(None) when `to_p` refused its result.
+fn relaxed_at(
+    p: &Problem,
+    q: &Problem,
+    opts: &Options,
+    reach: Reach,
+    to_p: impl Fn(SearchResult) -> Option<SearchResult>,
+) -> Option<Option<SearchResult>> {
+    // Whether `s`, time-scaled to p's time, meets every limit of p: then
+    // the relaxation is p's plan.
+    let is_plan = |s: &Solution| {
+        let alpha = p.total_time / s.h.iter().sum::<f64>();
+        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+        let x = scaled_x(&s.x, alpha);
+        p.accept_relaxed(&Solution { h, x, ..s.clone() }).is_some()
+    };
+    let may_end_early =
+        |best: &Solution| reach == Reach::Shapes || refined_agreement(q) || !is_plan(best);
+    let mut search = searched(q, opts, &may_end_early);
+    loop {
+        let r = search.result()?;
+        // A best point the coarse results did not show to be the plan
+        // may still be: then every start runs.
+        if search.ended == Ended::RefinedAgreement && !may_end_early(&r.best) {
+            search.run(&|_| false);
+            continue;
+        }
+        return Some(to_p(r));
+    }
+}
+
+/// The reference time's result time-scaled to `p`'s total time (the shapes
+/// evaluated, not re-solved: C3 and the rest ends are homogeneous in
+/// time, so it is exact); None when a scaled interval leaves the bounds.
+fn time_scaled(p: &Problem, target: &Problem, r: SearchResult) -> Option<SearchResult> {
     let within = |s: &Solution| s.h.iter().all(|&h| h >= p.h_min && h <= p.h_max);
     let shapes: Vec<Solution> = r
         .shapes
         .iter()
         .map(|s| {
-            // The same shape in time-scaled form, evaluated, not re-solved:
-            // C3 and the rest ends are homogeneous in time, so it is exact.
             let alpha = p.total_time / s.h.iter().sum::<f64>();
             let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
             Solution {
@@ -199,29 +259,33 @@ fn relaxed_search(p: &Problem, opts: &Options, for_starts: bool) -> Option<Searc
         })
         .collect();
     if !shapes.iter().all(within) {
-        return direct();
+        return None;
     }
-    let lp_solves = r.lp_solves;
     Some(SearchResult {
         best: shapes.first()?.clone(),
         shapes,
-        lp_solves,
+        lp_solves: r.lp_solves,
         starts: r.starts,
     })
 }
 
 /// The jerk-only problem `p`'s multistart search: a long path from its
 /// coarser path's optima ([`coarse_starts`], whose own search ends at the
-/// first refined agreement), else from [`start_points`].
-fn searched(p: &Problem, opts: &Options, for_starts: bool) -> Option<SearchResult> {
+/// first refined agreement), else from [`start_points`]; run until
+/// `refined_agreement` of the best coarse point lets a refined agreement end it.
+fn searched<'a>(
+    p: &'a Problem,
+    opts: &'a Options,
+    refined_agreement: &dyn Fn(&Solution) -> bool,
+) -> Multistart<'a> {
     let (starts, coarse_solves) = coarse_starts(p, |c| {
-        relaxed_search(c, opts, true).map(|r| (r.shapes, r.lp_solves))
+        relaxed_search(c, opts, Reach::Shapes).map(|r| (r.shapes, r.lp_solves))
     })
     .unwrap_or_else(|| (start_points(p, opts.starts, opts.seed), 0));
-    let refined_agreement = for_starts || refined_agreement(p);
-    let mut r = multistart_with(p, &starts, opts, refined_agreement)?;
-    r.lp_solves += coarse_solves;
-    Some(r)
+    let mut search = Multistart::new(p, starts, opts);
+    search.extra_solves = coarse_solves;
+    search.run(refined_agreement);
+    search
 }
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
@@ -243,144 +307,233 @@ pub(crate) fn multistart_with(
     opts: &Options,
     refined_agreement: bool,
 ) -> Option<SearchResult> {
-    let merit = |s: &Solution| s.merit(p.weight);
-    // Starts that reached the same point (same intervals, same merit) are
-    // one basin: only the first of them is refined.
-    let same_merit =
-        |a: &Solution, b: &Solution| (merit(a) - merit(b)).abs() <= AGREE * merit(a).abs();
-    let same = |a: &Solution, b: &Solution| {
-        same_merit(a, b)
+    let mut search = Multistart::new(p, starts.to_vec(), opts);
+    search.run(&|_| refined_agreement);
+    search.result()
+}
+
+/// What ended a multistart's batches.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Ended {
+    /// Not run yet.
+    NotRun,
+    /// Two coarse results reached the best point: more starts would find it again.
+    CoarseAgreement,
+    /// Two refined results agreed in merit: further starts could still
+    /// find a better point, and [`Multistart::run`] may go on.
+    RefinedAgreement,
+    /// Every start ran.
+    Starts,
+}
+
+/// A multistart search of the trust-region step: coarse searches from the
+/// starts in fixed batches (the plan must not depend on the thread count)
+/// until two reach the best point so far, then the best few refined to
+/// convergence. It can stop early, at the first two refined results that
+/// agree, and go on from there.
+struct Multistart<'a> {
+    p: &'a Problem,
+    opts: &'a Options,
+    starts: Vec<Vec<f64>>,
+    coarse: Vec<Option<Solution>>,
+    refined: Vec<Option<Solution>>,
+    ended: Ended,
+    /// Solves spent before the starts (a coarser path's search).
+    extra_solves: u64,
+    /// Solves spent re-solving shapes, by every [`Multistart::result`].
+    resolves: u64,
+}
+
+impl<'a> Multistart<'a> {
+    fn new(p: &'a Problem, starts: Vec<Vec<f64>>, opts: &'a Options) -> Self {
+        Multistart {
+            p,
+            opts,
+            starts,
+            coarse: Vec::new(),
+            refined: Vec::new(),
+            ended: Ended::NotRun,
+            extra_solves: 0,
+            resolves: 0,
+        }
+    }
+
+    fn merit(&self, s: &Solution) -> f64 {
+        s.merit(self.p.weight)
+    }
+
+    fn same_merit(&self, a: &Solution, b: &Solution) -> bool {
+        (self.merit(a) - self.merit(b)).abs() <= AGREE * self.merit(a).abs()
+    }
+
+    /// Starts that reached the same point (same intervals, same merit) are
+    /// one basin: only the first of them is refined.
+    fn same(&self, a: &Solution, b: &Solution) -> bool {
+        self.same_merit(a, b)
             && a.h
                 .iter()
                 .zip(&b.h)
                 .all(|(x, y)| (x - y).abs() <= AGREE * x.abs())
-    };
-    let refine = |s: &Solution| p.local_search(s, 400, 1e-10);
-    // Coarse searches in fixed batches (the plan must not depend on the
-    // thread count), stopping once the best point so far has been reached
-    // from enough starts: more starts would only find it again. Coarse
-    // results a little apart may still reach one optimum (the
-    // `refined_agreement_keeps_the_optimum_of_every_start` test), so on
-    // large jobs the two best are refined and compared when they do not
-    // agree: refined results of the same merit end the starts.
-    let mut coarse: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
-    let mut refined: Vec<Option<Solution>> = Vec::with_capacity(starts.len());
-    let by_merit = |coarse: &[Option<Solution>]| {
-        let mut order: Vec<usize> = (0..coarse.len()).filter(|&i| coarse[i].is_some()).collect();
+    }
+
+    /// The coarse results' indices, best merit first (ties in start order).
+    fn by_merit(&self) -> Vec<usize> {
+        let c = &self.coarse;
+        let mut order: Vec<usize> = (0..c.len()).filter(|&i| c[i].is_some()).collect();
         order.sort_by(|&a, &b| {
             let (ma, mb) = (
-                coarse[a].as_ref().map_or(f64::INFINITY, merit),
-                coarse[b].as_ref().map_or(f64::INFINITY, merit),
+                c[a].as_ref().map_or(f64::INFINITY, |s| self.merit(s)),
+                c[b].as_ref().map_or(f64::INFINITY, |s| self.merit(s)),
             );
             ma.total_cmp(&mb).then(a.cmp(&b))
         });
         order
-    };
-    let refine_missing =
-        |coarse: &[Option<Solution>], refined: &mut Vec<Option<Solution>>, which: &[usize]| {
-            refined.resize(coarse.len(), None);
-            let todo: Vec<usize> = which
-                .iter()
-                .copied()
-                .filter(|&i| refined[i].is_none())
-                .collect();
-            let done = parallel(&todo, opts.threads, |&i| coarse[i].as_ref().map(refine));
-            for (i, r) in todo.into_iter().zip(done) {
-                refined[i] = r;
-            }
-        };
-    for batch in starts.chunks(BATCH) {
-        coarse.extend(parallel(batch, opts.threads, |h| {
-            let first = p.inner(h, &p.zero_x(), Method::Direct, ROUNDS)?;
-            let sol = p.local_search(&first, 60, 1e-5);
-            if sol.violation == 0.0
-                && let Some(f) = p.shown_jerk
-            {
-                p.run.offer_jerk(sol.jerk * f);
-            }
-            Some(sol)
-        }));
-        let order = by_merit(&coarse);
-        let Some(&best) = order.first() else {
-            continue;
-        };
-        let best_sol = coarse[best].as_ref()?;
-        let agreeing = order
+    }
+
+    fn refine_missing(&mut self, which: &[usize]) {
+        self.refined.resize(self.coarse.len(), None);
+        let todo: Vec<usize> = which
             .iter()
-            .filter(|&&i| coarse[i].as_ref().is_some_and(|s| same(best_sol, s)))
-            .count();
-        if agreeing >= AGREEING {
-            break;
+            .copied()
+            .filter(|&i| self.refined[i].is_none())
+            .collect();
+        let (p, coarse) = (self.p, &self.coarse);
+        let done = parallel(&todo, self.opts.threads, |&i| {
+            coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10))
+        });
+        for (i, r) in todo.into_iter().zip(done) {
+            self.refined[i] = r;
         }
-        if refined_agreement && let [a, b, ..] = order[..] {
-            refine_missing(&coarse, &mut refined, &[a, b]);
-            // The merit alone: on long paths some intervals are nearly free
-            // at the optimum, so refined results agree in merit long
-            // before they agree in every interval.
-            if let (Some(ra), Some(rb)) = (&refined[a], &refined[b])
-                && same_merit(ra, rb)
+    }
+
+    /// Runs the starts not yet run, batch by batch, until two coarse
+    /// results reach the best point (or, with `refined_agreement`, two
+    /// refined results agree in merit). Coarse results a little apart may
+    /// still reach one optimum (the
+    /// `refined_agreement_keeps_the_optimum_of_every_start` test).
+    fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> bool) {
+        let p = self.p;
+        self.ended = Ended::Starts;
+        while self.coarse.len() < self.starts.len() {
+            let from = self.coarse.len();
+            let batch = &self.starts[from..(from + BATCH).min(self.starts.len())];
+            let results = parallel(batch, self.opts.threads, |h| {
+                let first = p.inner(h, &p.zero_x(), Method::Direct, ROUNDS)?;
+                let sol = p.local_search(&first, 60, 1e-5);
+                if sol.violation == 0.0
+                    && let Some(f) = p.shown_jerk
+                {
+                    p.run.offer_jerk(sol.jerk * f);
+                }
+                Some(sol)
+            });
+            self.coarse.extend(results);
+            let order = self.by_merit();
+            let Some(&best) = order.first() else {
+                continue;
+            };
+            let Some(best_sol) = self.coarse[best].as_ref() else {
+                continue;
+            };
+            let agreeing = order
+                .iter()
+                .filter(|&&i| {
+                    self.coarse[i]
+                        .as_ref()
+                        .is_some_and(|s| self.same(best_sol, s))
+                })
+                .count();
+            if agreeing >= AGREEING {
+                self.ended = Ended::CoarseAgreement;
+                return;
+            }
+            if refined_agreement(best_sol)
+                && let [a, b, ..] = order[..]
             {
+                self.refine_missing(&[a, b]);
+                // The merit alone: on long paths some intervals are nearly free
+                // at the optimum, so refined results agree in merit long
+                // before they agree in every interval.
+                if let (Some(ra), Some(rb)) = (&self.refined[a], &self.refined[b])
+                    && self.same_merit(ra, rb)
+                {
+                    self.ended = Ended::RefinedAgreement;
+                    return;
+                }
+            }
+        }
+    }
+
+    /// The best few distinct coarse results refined; every refined result
+    /// is a shape, best first.
+    fn result(&mut self) -> Option<SearchResult> {
+        let p = self.p;
+        let order = self.by_merit();
+        if order.is_empty() {
+            return None;
+        }
+        let mut chosen: Vec<usize> = Vec::with_capacity(REFINE);
+        for &i in &order {
+            let Some(s) = self.coarse[i].as_ref() else {
+                continue;
+            };
+            if chosen.len() == REFINE {
                 break;
             }
+            if !chosen
+                .iter()
+                .any(|&c| self.coarse[c].as_ref().is_some_and(|t| self.same(s, t)))
+            {
+                chosen.push(i);
+            }
         }
-    }
-    let order = by_merit(&coarse);
-    if order.is_empty() {
-        return None;
-    }
-    let mut chosen: Vec<usize> = Vec::with_capacity(REFINE);
-    for &i in &order {
-        let Some(s) = coarse[i].as_ref() else {
-            continue;
-        };
-        if chosen.len() == REFINE {
-            break;
+        self.refine_missing(&chosen);
+        let mut lp_solves: u64 = self.extra_solves
+            + self
+                .coarse
+                .iter()
+                .flatten()
+                .map(|s| s.lp_solves)
+                .sum::<u64>();
+        for (r, c) in self.refined.iter().zip(&self.coarse) {
+            if let (Some(r), Some(c)) = (r, c) {
+                lp_solves += r.lp_solves - c.lp_solves;
+            }
         }
-        if !chosen
-            .iter()
-            .any(|&c| coarse[c].as_ref().is_some_and(|t| same(s, t)))
-        {
-            chosen.push(i);
-        }
-    }
-    refine_missing(&coarse, &mut refined, &chosen);
-    let mut lp_solves: u64 = coarse.iter().flatten().map(|s| s.lp_solves).sum();
-    for (r, c) in refined.iter().zip(&coarse) {
-        if let (Some(r), Some(c)) = (r, c) {
-            lp_solves += r.lp_solves - c.lp_solves;
-        }
-    }
-    // Every refined result is a shape (those refined for the agreement
-    // check too), in the starts' order before the sort below.
-    let refined: Vec<Solution> = refined.into_iter().flatten().collect();
-    // The direct jerk-only solve puts every joint at its own optimum; the
-    // shapes' knot derivatives are re-solved by the interior-point method,
-    // whose non-binding joints sit central (their velocities and
-    // accelerations decide what the full problem and min-time make of them).
-    let refined: Vec<Solution> = if p.jerk_only {
-        refined
-            .into_iter()
-            .map(|s| match p.inner(&s.h, &s.x, Method::CuttingPlanes, 1) {
-                Some(c) => {
-                    lp_solves += c.lp_solves;
-                    Solution {
-                        lp_solves: s.lp_solves + c.lp_solves,
-                        ..c
+        // Every refined result is a shape (those refined for the agreement
+        // check too), in the starts' order before the sort below.
+        let refined: Vec<Solution> = self.refined.iter().flatten().cloned().collect();
+        // The direct jerk-only solve puts every joint at its own optimum; the
+        // shapes' knot derivatives are re-solved by the interior-point method,
+        // whose non-binding joints sit central (their velocities and
+        // accelerations decide what the full problem and min-time make of them).
+        let refined: Vec<Solution> = if p.jerk_only {
+            refined
+                .into_iter()
+                .map(|s| match p.inner(&s.h, &s.x, Method::CuttingPlanes, 1) {
+                    Some(c) => {
+                        self.resolves += c.lp_solves;
+                        Solution {
+                            lp_solves: s.lp_solves + c.lp_solves,
+                            ..c
+                        }
                     }
-                }
-                None => s,
-            })
-            .collect()
-    } else {
-        refined
-    };
-    // Best first; the sort is stable, so equal merits keep the starts' order.
-    let mut shapes = refined;
-    shapes.sort_by(|a, b| merit(a).total_cmp(&merit(b)));
-    Some(SearchResult {
-        best: shapes.first()?.clone(),
-        shapes,
-        starts: coarse.len(),
-        lp_solves,
-    })
+                    None => s,
+                })
+                .collect()
+        } else {
+            refined
+        };
+        // An earlier result's re-solves count too (the search went on after it).
+        lp_solves += self.resolves;
+        // Best first; the sort is stable, so equal merits keep the starts' order.
+        let mut shapes = refined;
+        shapes.sort_by(|a, b| self.merit(a).total_cmp(&self.merit(b)));
+        Some(SearchResult {
+            best: shapes.first()?.clone(),
+            shapes,
+            starts: self.coarse.len(),
+            lp_solves,
+        })
+    }
 }

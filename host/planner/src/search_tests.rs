@@ -16,7 +16,7 @@ use crate::evolution::{EvolutionOptions, differential_evolution};
 use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
 use crate::run_state::RunState;
-use crate::search::{global, multistart_with, relaxed_global, start_points};
+use crate::search::{global, multistart_with, relaxed_global, relaxed_shapes, start_points};
 use crate::{Job, Options, Plan, check, plan};
 
 fn job_problem(job: &Job) -> Result<Problem, crate::PlanError> {
@@ -296,6 +296,58 @@ fn refined_agreement_keeps_the_optimum_of_every_start() {
         early.best.jerk,
         all.best.jerk
     );
+}
+
+/// A regression job's problem (tests/regression/NAME.toml).
+fn regression_problem(name: &str) -> Problem {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/regression/{name}.toml"));
+    job_problem(&Job::load(&path).unwrap()).unwrap()
+}
+
+/// The relaxation's full multistart at the reference time (0.5 s a
+/// segment), every start allowed to run, time-scaled to the problem's.
+fn every_start_relaxed(p: &Problem, o: &Options) -> (usize, Vec<f64>) {
+    let reference = p.relaxed().retimed(0.5 * p.knots.segments() as f64);
+    let starts = start_points(&reference, o.starts, o.seed);
+    let all = multistart_with(&reference, &starts, o, false).unwrap();
+    let alpha = p.total_time / all.best.h.iter().sum::<f64>();
+    (all.starts, all.best.h.iter().map(|h| h * alpha).collect())
+}
+
+#[test]
+fn a_relaxation_that_is_the_plan_runs_every_start() {
+    // Lissajous-10: jerk alone binds, so the relaxation's optimum is the
+    // plan and every start runs as before; its shapes for min-time end at
+    // the first refined agreement.
+    let p = regression_problem("lissajous-10");
+    let o = Options::default();
+    let plan = relaxed_global(&p, &o).unwrap();
+    assert!(p.accept_relaxed(&plan.best).is_some());
+    let (starts, h) = every_start_relaxed(&p, &o);
+    assert_eq!(plan.starts, starts);
+    for (a, b) in plan.best.h.iter().zip(&h) {
+        assert!((a - b).abs() <= 1e-12 * b, "{a} against {b}");
+    }
+    let shapes = relaxed_shapes(&p, &o).unwrap();
+    eprintln!(
+        "every start: {} starts, {} LPs; to the first refined agreement: {} starts, {} LPs",
+        plan.starts, plan.lp_solves, shapes.starts, shapes.lp_solves
+    );
+    assert!(shapes.starts < plan.starts);
+    assert!(shapes.lp_solves < plan.lp_solves);
+}
+
+#[test]
+fn a_relaxation_that_is_not_the_plan_ends_at_the_first_refined_agreement() {
+    // The closed curve of 10 via-points in 2.7 s (the speed figures'
+    // verdict): acceleration binds at the relaxation's optimum, whose
+    // shapes only start min-time; every start would not change them much.
+    let p = job_problem(&closed_curve(10, 2.7)).unwrap();
+    let o = Options::default();
+    let r = relaxed_global(&p, &o).unwrap();
+    assert!(p.accept_relaxed(&r.best).is_none());
+    let (starts, _) = every_start_relaxed(&p, &o);
+    assert!(r.starts < starts, "{} starts against {starts}", r.starts);
 }
 
 #[test]
