@@ -4,7 +4,7 @@
 
 use crate::options::Options;
 use crate::problem::{Problem, Solution, feasible};
-use crate::search::{SearchResult, relaxed_shapes};
+use crate::search::{REFERENCE_S_PER_SEGMENT, SearchResult, global_from, relaxed_shapes};
 use crate::time_descent::descend_time;
 use crate::time_scaling::{scale, shortest_scaling};
 
@@ -25,7 +25,9 @@ const LOWER_BOUND_MET: f64 = 1e-8;
 ///
 /// Jerk alone gives a lower bound: the jerk-only optimum's shape does not
 /// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
-/// to the jerk limit, is the shortest time when nothing else binds. Each
+/// to the jerk limit, is the shortest time when nothing else binds (its
+/// search ends at the first refined agreement, so the bound is as good as
+/// the optimum that search finds). Each
 /// refined shape of that relaxation is time-scaled until velocity,
 /// acceleration and torque hold too, then shortened by the descent on Σh
 /// ([`descend_time`], every iterate feasible); the shortest wins.
@@ -43,10 +45,15 @@ pub(crate) fn min_time(
     // A reference time of 0.5 s per segment: in theory any would do (but
     // for h_min and h_max); the search's absolute tolerances make it matter
     // in practice (docs/planner-speed.md).
-    let t_ref = 0.5 * template.knots.segments() as f64;
-    let probe = match relaxed {
+    let t_ref = REFERENCE_S_PER_SEGMENT * template.knots.segments() as f64;
+    // Only the shapes `relaxed_shapes` gives: a search that ran further
+    // would make the verdict's shortest time depend on the time asked.
+    let probe = match relaxed.filter(|r| r.as_shapes) {
         Some(r) => r,
-        None => relaxed_shapes(&at(t_ref), opts).ok_or(MinTimeFailure { best: None })?,
+        // The relaxation's travel rows too (`global_from` searches on when
+        // its best breaks them).
+        _ => global_from(&at(t_ref).relaxed(), opts, relaxed_shapes(&at(t_ref), opts))
+            .ok_or(MinTimeFailure { best: None })?,
     };
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();

@@ -5,6 +5,7 @@
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
 
+use std::cell::Cell;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -22,6 +23,13 @@ pub(crate) struct SearchResult {
     pub(crate) shapes: Vec<Solution>,
     pub(crate) starts: usize,
     pub(crate) lp_solves: u64,
+    /// The starts ended at a refined agreement where the plan's rule
+    /// ([`refined_agreement`]) runs on: the best may then be a local
+    /// optimum a further start would better, not the global one.
+    pub(crate) ended_early: bool,
+    /// What [`relaxed_shapes`] gives for the problem (min-time descends
+    /// from it; a search that ran further gives min-time other shapes).
+    pub(crate) as_shapes: bool,
 }
 
 /// SplitMix64: a tiny, portable, seeded generator (the plan must not depend
@@ -111,9 +119,9 @@ const AGREEING: usize = 2;
 /// Above this many knots (and on the full problem, at any size) two coarse
 /// results that do not agree are refined and compared before more starts
 /// run. Below it the jerk-only relaxation's starts are cheap, and where
-/// its optimum is the plan every start runs (only the shapes it gives
-/// min-time and the full search end at the first refined agreement:
-/// docs/planner-speed.md).
+/// its optimum is the plan they run until two coarse results agree (only
+/// the shapes it gives min-time and the full search end at the first
+/// refined agreement: docs/planner-speed.md).
 const REFINED_AGREEMENT_KNOTS: usize = 64;
 
 /// Multistart global search for min-max jerk at the problem's total time.
@@ -140,10 +148,11 @@ pub(crate) fn global_from(
         if let Some(best) = p.accept_relaxed(&r.best) {
             return Some(SearchResult { best, ..r });
         }
-        // The relaxation bounds the jerk from below: when even it breaks the
-        // jerk limit no plan at this total time meets it, and the full
-        // search would only confirm that.
-        if !p.jerk_only && r.best.jerk > p.limits.jerk * (1.0 + 1e-9) {
+        // The relaxation's global optimum bounds the jerk from below: when
+        // even it breaks the jerk limit no plan at this total time meets
+        // it, and the full search would only confirm that. A search that
+        // ended early bounds nothing.
+        if !p.jerk_only && !r.ended_early && r.best.jerk > p.limits.jerk * (1.0 + 1e-9) {
             let best = Solution {
                 lp_solves: r.best.lp_solves,
                 ..p.evaluate(&r.best.h, &r.best.x)
@@ -162,7 +171,7 @@ pub(crate) fn global_from(
 }
 
 /// Seconds per segment of the reference time at which the relaxation is searched.
-const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
+pub(crate) const REFERENCE_S_PER_SEGMENT: f64 = 0.5;
 
 /// How far the relaxation's multistart goes.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -170,10 +179,11 @@ enum Reach {
     /// Its starts end at the first refined agreement: it only starts a
     /// finer path's search or min-time's descent.
     Shapes,
-    /// As [`Reach::Shapes`] while a limit other than jerk binds at its
-    /// optimum (its shapes then only start the full problem's search and
-    /// min-time); else it is the plan, and every start of
-    /// [`refined_agreement`]'s rule runs.
+    /// As [`Reach::Shapes`] while its best point breaks another limit of
+    /// the problem (its shapes then only start the full problem's search
+    /// and min-time); where it meets them it is the plan, and the starts
+    /// run as [`refined_agreement`] has them (until two coarse results
+    /// agree, on up to 64 knots).
     Answer,
 }
 
@@ -226,17 +236,25 @@ fn relaxed_at(
         let x = scaled_x(&s.x, alpha);
         p.accept_relaxed(&Solution { h, x, ..s.clone() }).is_some()
     };
-    let may_end_early =
-        |best: &Solution| reach == Reach::Shapes || refined_agreement(q) || !is_plan(best);
+    // Whether a batch whose best coarse point is `best` may end the starts
+    // at a refined agreement; a Shapes search always may.
+    let went_further = Cell::new(false);
+    let may_end_early = |best: &Solution| {
+        let may = reach == Reach::Shapes || refined_agreement(q) || !is_plan(best);
+        went_further.set(went_further.get() || !may);
+        may
+    };
     let mut search = searched(q, opts, &may_end_early);
     loop {
-        let r = search.result()?;
+        let mut r = search.result()?;
         // A best point the coarse results did not show to be the plan
-        // may still be: then every start runs.
+        // may still be: then the rest of the starts run.
         if search.ended == Ended::RefinedAgreement && !may_end_early(&r.best) {
             search.run(&|_| false);
             continue;
         }
+        r.ended_early = search.ended == Ended::RefinedAgreement && !refined_agreement(q);
+        r.as_shapes = !went_further.get();
         return Some(to_p(r));
     }
 }
@@ -264,8 +282,7 @@ fn time_scaled(p: &Problem, target: &Problem, r: SearchResult) -> Option<SearchR
     Some(SearchResult {
         best: shapes.first()?.clone(),
         shapes,
-        lp_solves: r.lp_solves,
-        starts: r.starts,
+        ..r
     })
 }
 
@@ -330,8 +347,10 @@ enum Ended {
 /// starts in fixed batches (the plan must not depend on the thread count)
 /// until two reach the best point so far, then the best few refined to
 /// convergence. It can stop early, at the first two refined results that
-/// agree, and go on from there.
-struct Multistart<'a> {
+/// agree, and go on from there: it then runs the starts a search run on
+/// from the beginning would, and keeps every shape refined so far, so its
+/// best is at least as good as that search's.
+pub(crate) struct Multistart<'a> {
     p: &'a Problem,
     opts: &'a Options,
     starts: Vec<Vec<f64>>,
@@ -345,7 +364,7 @@ struct Multistart<'a> {
 }
 
 impl<'a> Multistart<'a> {
-    fn new(p: &'a Problem, starts: Vec<Vec<f64>>, opts: &'a Options) -> Self {
+    pub(crate) fn new(p: &'a Problem, starts: Vec<Vec<f64>>, opts: &'a Options) -> Self {
         Multistart {
             p,
             opts,
@@ -411,8 +430,12 @@ impl<'a> Multistart<'a> {
     /// refined results agree in merit). Coarse results a little apart may
     /// still reach one optimum (the
     /// `refined_agreement_keeps_the_optimum_of_every_start` test).
-    fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> bool) {
+    pub(crate) fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> bool) {
         let p = self.p;
+        // Two coarse results agreeing end the starts for good.
+        if self.ended == Ended::CoarseAgreement {
+            return;
+        }
         self.ended = Ended::Starts;
         while self.coarse.len() < self.starts.len() {
             let from = self.coarse.len();
@@ -466,7 +489,7 @@ impl<'a> Multistart<'a> {
 
     /// The best few distinct coarse results refined; every refined result
     /// is a shape, best first.
-    fn result(&mut self) -> Option<SearchResult> {
+    pub(crate) fn result(&mut self) -> Option<SearchResult> {
         let p = self.p;
         let order = self.by_merit();
         if order.is_empty() {
@@ -534,6 +557,8 @@ impl<'a> Multistart<'a> {
             shapes,
             starts: self.coarse.len(),
             lp_solves,
+            ended_early: self.ended == Ended::RefinedAgreement,
+            as_shapes: false,
         })
     }
 }

@@ -16,7 +16,10 @@ use crate::evolution::{EvolutionOptions, differential_evolution};
 use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
 use crate::run_state::RunState;
-use crate::search::{global, multistart_with, relaxed_global, relaxed_shapes, start_points};
+use crate::search::{
+    Multistart, REFERENCE_S_PER_SEGMENT, global, multistart_with, relaxed_global, relaxed_shapes,
+    start_points,
+};
 use crate::{Job, Options, Plan, check, plan};
 
 fn job_problem(job: &Job) -> Result<Problem, crate::PlanError> {
@@ -304,10 +307,15 @@ fn regression_problem(name: &str) -> Problem {
     job_problem(&Job::load(&path).unwrap()).unwrap()
 }
 
-/// The relaxation's full multistart at the reference time (0.5 s a
-/// segment), every start allowed to run, time-scaled to the problem's.
+/// The relaxation's multistart at the reference time without the refined
+/// agreement (its starts end only where two coarse results agree; a path
+/// of at most 64 knots, which has no coarser path to start from), its best
+/// intervals time-scaled to the problem's.
 fn every_start_relaxed(p: &Problem, o: &Options) -> (usize, Vec<f64>) {
-    let reference = p.relaxed().retimed(0.5 * p.knots.segments() as f64);
+    assert!(p.knots.len() <= COARSE_ABOVE_KNOTS);
+    let reference = p
+        .relaxed()
+        .retimed(REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64);
     let starts = start_points(&reference, o.starts, o.seed);
     let all = multistart_with(&reference, &starts, o, false).unwrap();
     let alpha = p.total_time / all.best.h.iter().sum::<f64>();
@@ -328,6 +336,7 @@ fn a_relaxation_that_is_the_plan_runs_every_start() {
     for (a, b) in plan.best.h.iter().zip(&h) {
         assert!((a - b).abs() <= 1e-12 * b, "{a} against {b}");
     }
+    assert!(!plan.ended_early && !plan.as_shapes);
     let shapes = relaxed_shapes(&p, &o).unwrap();
     eprintln!(
         "every start: {} starts, {} LPs; to the first refined agreement: {} starts, {} LPs",
@@ -335,19 +344,54 @@ fn a_relaxation_that_is_the_plan_runs_every_start() {
     );
     assert!(shapes.starts < plan.starts);
     assert!(shapes.lp_solves < plan.lp_solves);
+    assert!(shapes.ended_early && shapes.as_shapes);
 }
 
 #[test]
 fn a_relaxation_that_is_not_the_plan_ends_at_the_first_refined_agreement() {
     // The closed curve of 10 via-points in 2.7 s (the speed figures'
     // verdict): acceleration binds at the relaxation's optimum, whose
-    // shapes only start min-time; every start would not change them much.
+    // shapes only start min-time: they are the ones min-time's own
+    // relaxation gives, so the verdict and the job's shortest time agree.
     let p = job_problem(&closed_curve(10, 2.7)).unwrap();
     let o = Options::default();
     let r = relaxed_global(&p, &o).unwrap();
     assert!(p.accept_relaxed(&r.best).is_none());
     let (starts, _) = every_start_relaxed(&p, &o);
     assert!(r.starts < starts, "{} starts against {starts}", r.starts);
+    assert!(r.ended_early && r.as_shapes);
+    let shapes = relaxed_shapes(&p, &o).unwrap();
+    assert_eq!(r.starts, shapes.starts);
+    assert_eq!(r.best.h, shapes.best.h);
+}
+
+#[test]
+fn a_multistart_that_goes_on_keeps_every_start_of_one_run_to_the_end() {
+    // Lissajous-10's relaxation ends at a refined agreement after its
+    // first two starts (the test above); going on from there runs the
+    // rest, as a search without the refined agreement does.
+    let p = regression_problem("lissajous-10").relaxed();
+    let p = p.retimed(REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64);
+    let o = Options::default();
+    let starts = start_points(&p, o.starts, o.seed);
+    let mut search = Multistart::new(&p, starts.clone(), &o);
+    search.run(&|_| true);
+    let early = search.result().unwrap();
+    search.run(&|_| false);
+    let resumed = search.result().unwrap();
+    let all = multistart_with(&p, &starts, &o, false).unwrap();
+    assert!(early.ended_early && early.starts < all.starts);
+    assert!(!resumed.ended_early);
+    assert_eq!(resumed.starts, all.starts);
+    assert!(
+        resumed.best.merit(p.weight) <= all.best.merit(p.weight),
+        "{} > {}",
+        resumed.best.jerk,
+        all.best.jerk
+    );
+    // It counts the solves of both results.
+    assert!(resumed.lp_solves > early.lp_solves);
+    assert!(resumed.lp_solves >= all.lp_solves);
 }
 
 #[test]
