@@ -52,8 +52,11 @@ pub(crate) fn min_time(
         Some(r) => r,
         // The relaxation's travel rows too (`global_from` searches on when
         // its best breaks them).
-        _ => global_from(&at(t_ref).relaxed(), opts, relaxed_shapes(&at(t_ref), opts))
-            .ok_or(MinTimeFailure { best: None })?,
+        None => {
+            let reference = at(t_ref);
+            global_from(&reference.relaxed(), opts, relaxed_shapes(&reference, opts))
+                .ok_or(MinTimeFailure { best: None })?
+        }
     };
     let s = &probe.best;
     let total: f64 = s.h.iter().sum();

@@ -28,7 +28,7 @@ use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
 use crate::stats::{PathDeviation, path_deviation_within};
 use crate::streaming::{shortfall, streams};
-use crate::time_scaling::{scaled_x, stretch};
+use crate::time_scaling::{scaled_shape, stretch};
 
 /// How often [`plan_with`] calls its observer.
 const OBSERVER_PERIOD: Duration = Duration::from_millis(25);
@@ -587,11 +587,10 @@ fn solve_free(
 /// verdict's most expensive solves (docs/planner-speed.md).
 fn too_short(p: &Problem, s: &Solution, total_time: f64) -> PlanError {
     let t: f64 = s.h.iter().sum();
-    let alpha = total_time / t;
-    let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+    let (h, x) = scaled_shape(s, total_time);
     let mut at = p.clone();
     at.total_time = total_time;
-    let scaled = at.evaluate(&h, &scaled_x(&s.x, alpha));
+    let scaled = at.evaluate(&h, &x);
     if scaled.jerk.is_finite() && scaled.violation.is_finite() {
         infeasible(p, &scaled, Some(t))
     } else {

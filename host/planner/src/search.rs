@@ -13,7 +13,7 @@ use crate::coarse_start::coarse_starts;
 use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
 use crate::problem::{Problem, Solution};
-use crate::time_scaling::{scaled_x, within_bounds};
+use crate::time_scaling::{scaled_shape, within_bounds};
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
@@ -231,9 +231,7 @@ fn relaxed_at(
     // Whether `s`, time-scaled to p's time, meets every limit of p: then
     // the relaxation is p's plan.
     let is_plan = |s: &Solution| {
-        let alpha = p.total_time / s.h.iter().sum::<f64>();
-        let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
-        let x = scaled_x(&s.x, alpha);
+        let (h, x) = scaled_shape(s, p.total_time);
         p.accept_relaxed(&Solution { h, x, ..s.clone() }).is_some()
     };
     // Whether a batch whose best coarse point is `best` may end the starts
@@ -268,11 +266,10 @@ fn time_scaled(p: &Problem, target: &Problem, r: SearchResult) -> Option<SearchR
         .shapes
         .iter()
         .map(|s| {
-            let alpha = p.total_time / s.h.iter().sum::<f64>();
-            let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+            let (h, x) = scaled_shape(s, p.total_time);
             Solution {
                 lp_solves: 0,
-                ..target.evaluate(&h, &scaled_x(&s.x, alpha))
+                ..target.evaluate(&h, &x)
             }
         })
         .collect();

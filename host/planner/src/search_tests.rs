@@ -455,8 +455,12 @@ fn a_slow_long_path_keeps_every_segment_within_the_wire_limit() {
     // and is searched at the job's time; the coarser path's intervals are
     // unbounded, so its starts must not carry that into the plan.
     let n = 100;
-    let job = closed_curve(n, 59.0 * (n - 1) as f64);
-    let p = plan(&job, &Options::default()).unwrap();
+    plans_within_the_wire_limit(&closed_curve(n, 59.0 * (n - 1) as f64));
+}
+
+/// `job` plans, every segment within what the wire carries, and checks.
+fn plans_within_the_wire_limit(job: &Job) {
+    let p = plan(job, &Options::default()).unwrap();
     let longest = p.intervals_s.iter().fold(0.0, |a: f64, b| a.max(*b));
     assert!(longest <= MAX_SEGMENT_S, "a segment of {longest} s");
     assert_checks(&p);
@@ -475,10 +479,7 @@ fn a_slow_plan_keeps_every_segment_within_the_wire_limit() {
         })
         .build()
         .unwrap();
-    let p = plan(&job, &Options::default()).unwrap();
-    let longest = p.intervals_s.iter().fold(0.0, |a: f64, b| a.max(*b));
-    assert!(longest <= MAX_SEGMENT_S, "a segment of {longest} s");
-    assert_checks(&p);
+    plans_within_the_wire_limit(&job);
 }
 
 #[test]

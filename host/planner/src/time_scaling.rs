@@ -97,14 +97,22 @@ pub(crate) fn shortest_scaling_cuts(
     ))
 }
 
-/// A solution's shape time-scaled to total time `t` (velocities ÷ α,
-/// accelerations ÷ α²) and re-solved exactly at the scaled intervals.
-pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+/// A solution's intervals and knot derivatives time-scaled to total time
+/// `t` (intervals × α, velocities ÷ α, accelerations ÷ α²): the same
+/// shape, not re-solved.
+pub(crate) fn scaled_shape(s: &Solution, t: f64) -> (Vec<f64>, [Vec<f64>; 3]) {
     let alpha = t / s.h.iter().sum::<f64>();
     let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
+    (h, scaled_x(&s.x, alpha))
+}
+
+/// A solution's shape time-scaled to total time `t` ([`scaled_shape`]) and
+/// re-solved exactly at the scaled intervals.
+pub(crate) fn scale(p: &Problem, s: &Solution, t: f64) -> Option<Solution> {
+    let (h, x) = scaled_shape(s, t);
     let mut p = p.clone();
     p.total_time = t;
-    p.inner(&h, &scaled_x(&s.x, alpha), Method::ViaRelaxation, ROUNDS)
+    p.inner(&h, &x, Method::ViaRelaxation, ROUNDS)
 }
 
 /// A solution's shape time-scaled to total time `t` (its intervals kept
