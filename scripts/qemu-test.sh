@@ -95,3 +95,16 @@ python3 "$root/scripts/elf_check.py" --self-test
 python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver8on_frame=HandOff6accept' \
     "$objdump" target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1
 "$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 | grep -E "^(section|\.vector_table|\.text|\.rodata|\.ccmram_text|\.data|\.bss) "
+# Flash left for what varies between machines: panic locations name source
+# files by absolute path (the cargo registry, the target directory), so a
+# longer CARGO_HOME or checkout path makes the same image larger.
+esc1_flash_margin=1024
+used=$("$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 |
+    awk '$1 ~ /^\.(vector_table|text|rodata|ccmram_text|data)$/ { s += $2 } END { print s }')
+region=$(sed -n 's/^ *FLASH *: *ORIGIN *= *[0-9a-fA-Fx]*, *LENGTH *= *\([0-9]*\)K.*/\1/p' memory.x)
+left=$((region * 1024 - used))
+echo "ESC1 flash: $used B of $((region * 1024)) ($left B left; at least $esc1_flash_margin required)"
+if [ "$left" -lt "$esc1_flash_margin" ]; then
+    echo "FAIL: the ESC1 image leaves $left B of flash, under $esc1_flash_margin B" >&2
+    exit 1
+fi

@@ -267,15 +267,14 @@ pub fn all_messages() -> [&'static MessageDef; 15] {
 /// (0 = host or broadcast). Segment parts are returned undecoded: feed their
 /// payload to a [`SegmentRx`].
 pub fn decode(frame: &Frame) -> Result<(Msg, u8), DecodeError> {
-    for kind in MsgKind::ALL {
-        let def = kind.def();
-        if let Some(node) = def.addr.matches(frame.id) {
+    for (kind, &(addr, len, name)) in MsgKind::ALL.into_iter().zip(ROUTES.iter()) {
+        if let Some(node) = addr.matches(frame.id) {
             let p = frame.payload();
-            if p.len() < def.len {
+            if p.len() < len {
                 return Err(DecodeError::Length {
-                    name: def.name,
+                    name,
                     got: p.len(),
-                    want: def.len,
+                    want: len,
                 });
             }
             return Ok((kind.decode(p), node));
@@ -283,6 +282,20 @@ pub fn decode(frame: &Frame) -> Result<(Msg, u8), DecodeError> {
     }
     Err(DecodeError::UnknownId(frame.id))
 }
+
+/// What [`decode`] reads of each declaration, in `MsgKind::ALL`'s order:
+/// taken at compile time, so that a drive's image carries these and not
+/// the declarations' documentation (the spec's text, field tables).
+const ROUTES: [(Addr, usize, &str); MsgKind::ALL.len()] = {
+    let mut routes = [(Addr::Broadcast(0), 0, ""); MsgKind::ALL.len()];
+    let mut i = 0;
+    while i < routes.len() {
+        let def = MsgKind::ALL[i].def();
+        routes[i] = (def.addr, def.len, def.name);
+        i += 1;
+    }
+    routes
+};
 
 /// ConfigWrite frame to node `node`.
 pub fn config_write_frame(node: u8, index: u8, value: f32) -> Frame {
