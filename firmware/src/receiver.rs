@@ -42,28 +42,25 @@ pub struct Receiver {
 }
 
 /// Velocity, acceleration and jerk of every axis within the configured
-/// limits (with [`RELATIVE_LIMIT_MARGIN`]), else `Invalid`, and this axis's position
-/// within its soft limits, else `OutsideSoftLimits`; checked at
-/// [`LIMIT_CHECK_INTERVALS`] + 1 points of the segment.
-fn within_limits(seg: &Seg, cfg: &DriveConfig) -> Result<(), Reject> {
+/// limits (with [`RELATIVE_LIMIT_MARGIN`]) by the segment's exact maxima
+/// `m`, else `Invalid`; every position finite and this axis's within its
+/// soft limits at [`LIMIT_CHECK_INTERVALS`] + 1 points of the segment,
+/// else `Invalid` or `OutsideSoftLimits`.
+fn within_limits(seg: &Seg, m: &Maxima, cfg: &DriveConfig) -> Result<(), Reject> {
     let k = 1.0 + RELATIVE_LIMIT_MARGIN;
-    let (v, a, j) = (
-        cfg.max_velocity * k,
-        cfg.max_acceleration * k,
-        cfg.max_jerk * k,
-    );
+    if !(m.v <= cfg.max_velocity * k && m.a <= cfg.max_acceleration * k && m.j <= cfg.max_jerk * k)
+    {
+        return Err(Reject::Invalid);
+    }
     let axis = (cfg.axis as usize).min(2);
+    // A power of two: every sample's u is exact.
+    let du = 1.0 / LIMIT_CHECK_INTERVALS as f32;
     for i in 0..=LIMIT_CHECK_INTERVALS {
-        let m = seg.eval(seg.start_ns + seg.duration_ns() * i / LIMIT_CHECK_INTERVALS);
-        if !(m.q.iter().all(|x| x.is_finite())
-            && m.qd.amax() <= v
-            && m.qdd.amax() <= a
-            && m.qddd.amax() <= j)
-        {
+        let q = seg.positions(i as f32 * du);
+        if !q.iter().all(|x| x.is_finite()) {
             return Err(Reject::Invalid);
         }
-        let q = m.q[axis];
-        if !(cfg.soft_limit_min..=cfg.soft_limit_max).contains(&q) {
+        if !(cfg.soft_limit_min..=cfg.soft_limit_max).contains(&q[axis]) {
             return Err(Reject::OutsideSoftLimits);
         }
     }
@@ -296,8 +293,8 @@ impl Receiver {
     }
 
     /// The expensive part of accepting a segment, done here so the tick does
-    /// not: conversion, limit checks at 65 points, the ceilings on its
-    /// exact maxima, start and end motion.
+    /// not: conversion, the ceilings and limits on its exact maxima, soft
+    /// limits at 65 points, start and end motion.
     fn check(&self, w: &WireSegment, pred_crc: Option<u32>, active_crc: u32) -> CheckedSegment {
         let mut seg = Seg::from_wire(w, 0);
         let cfg = self
@@ -319,7 +316,7 @@ impl Receiver {
                 m.check(cfg)
                     .and_then(|()| m.ramps_and_at_unit_us(cfg))
                     .map(|[full, at_unit]| (seg.ramps_us, seg.unit_ramps_us) = (full, at_unit))
-                    .and_then(|()| within_limits(&seg, cfg))
+                    .and_then(|()| within_limits(&seg, &m, cfg))
             }
         };
         CheckedSegment {

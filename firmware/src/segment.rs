@@ -67,6 +67,12 @@ impl Seg {
         Vector3::from_fn(|j, _| self.b[j].iter().sum())
     }
 
+    /// The three joints' positions at u = t/h (u in [0, 1]).
+    pub fn positions(&self, u: f32) -> [f32; 3] {
+        self.b
+            .map(|b| b.iter().rev().fold(0.0, |acc, c| acc * u + c))
+    }
+
     /// q, q', q'', q''' (derivatives with respect to plan time) at plan time `s_ns`,
     /// clamped into the segment.
     pub fn eval(&self, s_ns: i64) -> JointMotion<f32> {

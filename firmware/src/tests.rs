@@ -1017,6 +1017,34 @@ fn a_segment_beyond_the_soft_limits_is_rejected_never_queued() {
 }
 
 #[test]
+fn a_segment_above_a_configured_limit_by_its_exact_maxima_is_rejected() {
+    use triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN;
+    let segs = segments(3, 0.3);
+    let m = crate::ceilings::Maxima::of(&crate::segment::Seg::from_wire(&segs[0], 0));
+    let k = 1.0 + RELATIVE_LIMIT_MARGIN;
+    type Limit = fn(&mut DriveConfig) -> &mut f32;
+    let limits: [(Limit, f32); 3] = [
+        (|c| &mut c.max_velocity, m.v),
+        (|c| &mut c.max_acceleration, m.a),
+        (|c| &mut c.max_jerk, m.j),
+    ];
+    for (limit, peak) in limits {
+        for (scale, want) in [(1.0001, Reject::Accepted), (0.99999, Reject::Invalid)] {
+            let mut r = Rig::new();
+            *limit(&mut r.cfg) = peak / k * scale;
+            r.configure();
+            r.run(50);
+            assert_eq!(
+                r.send_segment(&segs[0]).map(|a| a.0),
+                Some(want),
+                "peak {peak} at {scale} of the limit with its margin"
+            );
+            assert_eq!(r.node.queue_depth(), (want == Reject::Accepted) as usize);
+        }
+    }
+}
+
+#[test]
 fn a_measured_position_beyond_the_soft_limits_stops_with_its_code() {
     let segs = segments(4, 0.3);
     let (a, b) = own_span(&segs[0]);

@@ -18,9 +18,10 @@ pub const RELATIVE_LIMIT_MARGIN: f32 = 0.01;
 /// previous segment's end (m), on every axis: f32 rounding of positions, not
 /// a gap in the plan.
 pub const MAX_POSITION_JUMP_M: f32 = 10e-6;
-/// The limits and soft limits are checked at `LIMIT_CHECK_INTERVALS + 1`
+/// Positions (finite, soft limits) are checked at `LIMIT_CHECK_INTERVALS + 1`
 /// evenly spaced points of a segment (a safety net behind the host's exact
-/// verification, not a replacement for it).
+/// verification, not a replacement for it); velocity, acceleration and jerk
+/// by the segment's exact maxima.
 pub const LIMIT_CHECK_INTERVALS: i64 = 64;
 /// A command repeated (same code, token, argument) within this time is a
 /// duplicate frame, answered again and not executed again (µs): CAN resends
@@ -80,7 +81,7 @@ pub const BOUNDS: &[Bound] = &[
         value: RELATIVE_LIMIT_MARGIN as f64 * 100.0,
         unit: "%",
         doc: spec_text!(
-            "Velocity, acceleration and jerk of every axis may exceed the configured limits by this much (`Invalid` beyond), and their exact maxima the ceilings (`Above…Ceiling`, `OverrideAboveCeiling`, `StopAboveCeiling` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond)."
+            "The exact maxima of every axis's velocity, acceleration and jerk over a segment may exceed the configured limits by this much (`Invalid` beyond), and the ceilings (`Above…Ceiling`, `OverrideAboveCeiling`, `StopAboveCeiling` beyond); also the largest jump of q', q'', q''' between segments, as a fraction of the limits (`Discontinuous` beyond)."
         ),
     },
     Bound {
@@ -88,7 +89,7 @@ pub const BOUNDS: &[Bound] = &[
         value: (LIMIT_CHECK_INTERVALS + 1) as f64,
         unit: "per segment",
         doc: spec_text!(
-            "Evenly spaced points (both ends included) at which limits and soft limits are checked."
+            "Evenly spaced points (both ends included) at which every axis's position is checked finite (`Invalid`) and the node's own axis within its soft limits (`OutsideSoftLimits`)."
         ),
     },
     Bound {
