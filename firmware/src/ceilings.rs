@@ -7,12 +7,12 @@
 
 use triquint_shared::protocol::contract::RELATIVE_LIMIT_MARGIN;
 use triquint_shared::protocol::segment_maxima::{
-    PieceMaxima, overall, piece_maxima, piece_ramps_and_at_unit,
+    PieceMaxima, overall, piece_maxima, piece_ramps_and_units,
 };
 use triquint_shared::protocol::{DriveConfig, Reject};
 
-use crate::f32_cast::ramp_us;
-use crate::segment::Seg;
+use crate::f32_cast::{ramp_units, ramp_us};
+use crate::segment::{Seg, UnitRamps};
 
 /// Largest |q′|, |q″|, |q‴| over the three joints of a segment (m/s,
 /// m/s², m/s³), exact up to f32 rounding, and each joint's on each piece.
@@ -39,15 +39,16 @@ impl Maxima {
     /// (`segment_maxima::piece_ramps`). None within the longest ramp:
     /// `StopAboveCeiling`.
     pub fn ramps_us(&self, cfg: &DriveConfig) -> Result<(u32, u32), Reject> {
-        self.ramps_and_at_unit_us(cfg).map(|[full, _]| full)
+        self.ramps_and_units(cfg).map(|(full, _)| full)
     }
 
-    /// [`Maxima::ramps_us`] and, from the same pass, the segment's own
+    /// [`Maxima::ramps_us`] and, from the same pass, each piece's own
     /// ramps for a stop along the path from σ ≤ 1, its acceleration within
-    /// the configured ceiling (`segment_maxima::piece_ramps_and_at_unit`):
-    /// what a stop carrying a ramp for the path ahead is held to.
-    pub fn ramps_and_at_unit_us(&self, cfg: &DriveConfig) -> Result<[(u32, u32); 2], Reject> {
-        let r = piece_ramps_and_at_unit(
+    /// the configured ceiling (`segment_maxima::piece_ramps_and_units`;
+    /// 100 µs units, rounded up): what a stop carrying a ramp for the path
+    /// ahead is held to where it passes that piece.
+    pub fn ramps_and_units(&self, cfg: &DriveConfig) -> Result<((u32, u32), UnitRamps), Reject> {
+        let (full, units) = piece_ramps_and_units(
             &self.pieces,
             cfg.max_jerk,
             cfg.ceiling_jerk,
@@ -55,7 +56,10 @@ impl Maxima {
             cfg.ceiling_acceleration,
         )
         .ok_or(Reject::StopAboveCeiling)?;
-        Ok(r.map(|(s, q)| (ramp_us(s), ramp_us(q))))
+        Ok((
+            (ramp_us(full.0), ramp_us(full.1)),
+            units.map(|(s, q)| [ramp_units(s), ramp_units(q)]),
+        ))
     }
 
     /// Held to `cfg`'s ceilings (with [`RELATIVE_LIMIT_MARGIN`]):
@@ -110,7 +114,7 @@ mod tests {
             last: false,
             crc: 0,
             ramps_us: (0, 0),
-            unit_ramps_us: (0, 0),
+            unit_ramps: [[0; 2]; triquint_shared::protocol::segment_maxima::PIECES],
         }
     }
 
@@ -190,6 +194,48 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Each piece's own ramps for a stop from σ ≤ 1 are its three joints'
+    /// on that piece: the largest of each joint's triple there sized alone
+    /// (in 100 µs units, rounded up), and a segment's largest is the one
+    /// over all its triples at once.
+    #[test]
+    fn each_piece_is_held_to_its_own_joints_ramps() {
+        use triquint_shared::protocol::segment_maxima::{PIECES, overall};
+        use triquint_shared::protocol::stop_ramp::{budgets, pieces_ramp_and_at_unit};
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut cfg = config();
+        (cfg.ceiling_acceleration, cfg.ceiling_jerk) = (50.0, 500.0);
+        (cfg.max_jerk, cfg.override_cap) = (100.0, 1.0);
+        let mut differ = 0;
+        for _ in 0..200 {
+            let b: [[f32; 6]; 3] =
+                core::array::from_fn(|_| core::array::from_fn(|_| rng.random_range(-0.2..0.2)));
+            let s = seg(b, rng.random_range(0.5..2.0));
+            let m = Maxima::of(&s);
+            let (_, units) = m.ramps_and_units(&cfg).unwrap();
+            let bs = budgets(overall(&m.pieces)[2], cfg.max_jerk, cfg.ceiling_jerk, 1.0);
+            let alone = |t: [f32; 3], k: usize| {
+                let [_, at_unit] = pieces_ramp_and_at_unit(&[t], bs, 1.0, 50.0).unwrap();
+                ramp_units(at_unit[k])
+            };
+            for (p, u) in units.iter().enumerate() {
+                for (k, got) in u.iter().enumerate() {
+                    let own = (0..3)
+                        .map(|j| alone(m.pieces[j * PIECES + p], k))
+                        .max()
+                        .unwrap();
+                    assert!(got.abs_diff(own) <= 1, "piece {p}: {got} against {own}");
+                }
+            }
+            let [_, at_unit] = pieces_ramp_and_at_unit(&m.pieces, bs, 1.0, 50.0).unwrap();
+            let largest = units.iter().map(|u| u[0]).max().unwrap();
+            assert!(largest.abs_diff(ramp_units(at_unit[0])) <= 1);
+            differ += usize::from(units.iter().any(|u| u[0] + 5 < largest));
+        }
+        // The pieces differ: a stop that passes only some is held to less.
+        assert!(differ > 100, "{differ}");
     }
 
     /// q = 0.3 + t³/6 on every joint over 1 s: v ½, a 1, jerk 1.

@@ -32,8 +32,9 @@ use crate::inbox::{Item, Source, TAKE_PER_TICK, TickSnapshot};
 use crate::law::{self, Gains, LawState};
 use crate::reaction::{self, Reaction};
 use crate::scaling::{Phase, Retarget, TimeScaling, UNIT_Q16};
-use crate::segment::Seg;
+use crate::segment::{Seg, UnitRamps};
 use crate::sync::SyncEstimator;
+use triquint_shared::protocol::segment_maxima::PIECES;
 
 /// The feedforward is evaluated this many control periods ahead on the
 /// path: the torque computed now acts from the next tick on, held for one.
@@ -50,7 +51,16 @@ pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 pub const OUTBOX: usize = 64;
 
 /// No segment dropped since the last flush: it ends before any plan time.
-const NONE_DROPPED: (i64, i64, (u32, u32)) = (i64::MIN, i64::MIN, (0, 0));
+const NONE_DROPPED: Dropped = (i64::MIN, 0, [[0; 2]; PIECES]);
+
+/// A piece of a segment of 1 µs lasts this many ns: 1 000 ns a µs divides
+/// by the pieces.
+const PIECE_NS_PER_US: i64 = 1000 / PIECES as i64;
+const _: () = assert!(1000 % PIECES == 0);
+
+/// What a node keeps of the segment it last dropped: its start (plan ns),
+/// duration (µs) and its pieces' own ramps for stops from σ ≤ 1.
+type Dropped = (i64, u32, UnitRamps);
 
 /// Why the node is slowing down.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,12 +114,12 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     /// quick (µs): the drive's floor under the configured ones.
     queue_ramps_us: (u32, u32),
     /// The last segment the queue dropped (the one before its front):
-    /// start and end (plan ns) and its own ramps for stops from σ ≤ 1
-    /// (µs). A dated stop applies up to `APPLY_LATE_MAX_US` late, by when
+    /// its span and its pieces' own ramps for stops from σ ≤ 1. A dated
+    /// stop applies up to `APPLY_LATE_MAX_US` late, by when
     /// a node may have dropped the segment it begins in (and its peers,
     /// whose ticks fall elsewhere, not): every node counts it all the
     /// same, and one that begins earlier still gets the full ramp.
-    dropped: (i64, i64, (u32, u32)),
+    dropped: Dropped,
     /// End motion (q, q', q'', q''') of the last accepted segment.
     prev_end: Option<JointMotion<f32>>,
     /// Body CRC of the last accepted segment (valid with `prev_end`).
@@ -300,9 +310,8 @@ impl<const Q: usize> Drive<Q> {
     #[cold]
     #[inline(never)]
     fn dated_ramp_ns(&self, t: i64, dated_100us: u16, full_ns: i64, quick: bool) -> i64 {
-        let dated_us = dated_100us as u32 * 100;
-        let dated = dated_us as i64 * 1000;
-        // Held to the segments' ramps for stops from σ ≤ 1 only.
+        let dated = dated_100us as i64 * 100_000;
+        // Held to the pieces' ramps for stops from σ ≤ 1 only.
         if dated == 0
             || dated >= full_ns
             || self.scaling.in_transition()
@@ -311,34 +320,50 @@ impl<const Q: usize> Drive<Q> {
             return full_ns;
         }
         let s = self.scaling.constant_plan_time_ns(t);
-        // The segment before the front, if the stop begins in it.
-        let (from, to, (c, q)) = self.dropped;
-        if to > s && (from > s || if quick { q } else { c } > dated_us) {
-            return full_ns;
-        }
         // At σ ≤ 1 the stop covers at most T/2 of plan time.
         let end = s + (dated >> 1);
-        // The queue is in plan order: from the front up to the window's end.
+        // The segment before the front first, then the queue in plan
+        // order, piece by piece up to the window's end; a stop that begins
+        // before the dropped segment gets the full ramp.
+        let (from, us, ramps) = &self.dropped;
+        if *from > s && *from != i64::MIN {
+            return full_ns;
+        }
+        let k = quick as usize;
+        // Some(true): a piece in the window needs a longer ramp; Some(false):
+        // the segment reaches past the window's end.
+        let scan = |a: i64, us: u32, ramps: &UnitRamps| {
+            let piece = us as i64 * PIECE_NS_PER_US;
+            let mut p1 = a;
+            for r in ramps {
+                if p1 >= end {
+                    return Some(false);
+                }
+                p1 += piece;
+                if p1 > s && r[k] > dated_100us {
+                    return Some(true);
+                }
+            }
+            None
+        };
+        let mut verdict = scan(*from, *us, ramps);
         for q in self.queue.iter() {
-            if q.start_ns >= end {
+            if verdict.is_some() {
                 break;
             }
-            let own = if quick {
-                q.unit_ramps_us.1
-            } else {
-                q.unit_ramps_us.0
-            };
-            if own > dated_us && q.start_ns + q.duration_us as i64 * 1000 > s {
-                return full_ns;
-            }
+            verdict = scan(q.start_ns, q.duration_us, &q.unit_ramps);
         }
-        dated
+        if verdict == Some(true) {
+            full_ns
+        } else {
+            dated
+        }
     }
 
     /// The ramp (ns) this node vouches for, for a controlled stop for its
     /// own fault from host time `t`, and in 100 µs units (rounded up) for
     /// its Emergency: the largest own ramp for a stop from σ ≤ 1 of the
-    /// queued segments overlapping [s − 1 µs, s + `PEER_RAMP_MARGIN_US` +
+    /// queued pieces overlapping [s − 1 µs, s + `PEER_RAMP_MARGIN_US` +
     /// T/2] for plan time s, the window every peer that takes its
     /// Emergency within the margin checks. The full ramp `full_ns` (and 0) from a transition or
     /// σ above 1, when the queue does not hold that window (nor the plan's
@@ -353,42 +378,45 @@ impl<const Q: usize> Drive<Q> {
             return (full_ns, 0);
         }
         let s = self.scaling.constant_plan_time_ns(t);
+        // A µs before s too: a peer dates its stop to s rounded to the µs.
+        let lo = s - 1_000;
         // The segment before the front, if the stop begins in it.
-        let (from, to, (before, _)) = self.dropped;
-        let before = if to > s - 1_000 {
-            if from > s - 1_000 {
-                return (full_ns, 0);
+        let (from, us, ramps) = &self.dropped;
+        if *from > lo && *from != i64::MIN {
+            return (full_ns, 0);
+        }
+        let mut units = 0u16;
+        let mut reach = s + MARGIN_NS;
+        // In plan order, piece by piece; the window grows with the ramp.
+        // False once a segment begins past the window.
+        let mut scan = |a: i64, us: u32, ramps: &UnitRamps| {
+            let piece = us as i64 * PIECE_NS_PER_US;
+            let mut p0 = a;
+            for r in ramps {
+                if p0 >= reach {
+                    return false;
+                }
+                p0 += piece;
+                if p0 > lo && r[0] > units {
+                    units = r[0];
+                    reach = s + MARGIN_NS + units as i64 * 50_000;
+                }
             }
-            before
-        } else {
-            0
+            true
         };
-        // In 100 µs units, rounded up; u32 arithmetic: a 64-bit division
-        // is a library call on the drives, and this runs in the tick.
-        let mut units = before.div_ceil(100);
-        let mut reach = s + MARGIN_NS + units as i64 * 50_000;
-        // The queue is in plan order; the window grows with the ramp.
-        for q in self.queue.iter() {
-            if q.start_ns >= reach {
-                break;
-            }
-            // A µs before s too: a peer dates its stop to s rounded to the µs.
-            if q.end_ns() <= s - 1_000 {
-                continue;
-            }
-            let own = q.unit_ramps_us.0.div_ceil(100);
-            if own > units {
-                units = own;
-                reach = s + MARGIN_NS + units as i64 * 50_000;
+        if scan(*from, *us, ramps) {
+            for q in self.queue.iter() {
+                if !scan(q.start_ns, q.duration_us, &q.unit_ramps) {
+                    break;
+                }
             }
         }
         let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
-        let units = units as i64;
-        let ramp = units * 100_000;
-        if !held || units == 0 || ramp >= full_ns || units > u16::MAX as i64 {
+        let ramp = units as i64 * 100_000;
+        if !held || units == 0 || ramp >= full_ns {
             return (full_ns, 0);
         }
-        (ramp, units as u16)
+        (ramp, units)
     }
 
     /// The largest of the queued segments' own stop ramps, controlled and

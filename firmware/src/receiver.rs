@@ -314,8 +314,8 @@ impl Receiver {
                 // Then the drive's own stop ramps for it.
                 let m = Maxima::of(&seg);
                 m.check(cfg)
-                    .and_then(|()| m.ramps_and_at_unit_us(cfg))
-                    .map(|[full, at_unit]| (seg.ramps_us, seg.unit_ramps_us) = (full, at_unit))
+                    .and_then(|()| m.ramps_and_units(cfg))
+                    .map(|(full, units)| (seg.ramps_us, seg.unit_ramps) = (full, units))
                     .and_then(|()| within_limits(&seg, &m, cfg))
             }
         };

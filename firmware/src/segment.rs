@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use crate::f32_cast::to_f32;
 use triquint_shared::protocol::WireSegment;
 use triquint_shared::protocol::segment::{FLAG_FIRST, FLAG_LAST};
-use triquint_shared::protocol::segment_maxima::inv_h;
+use triquint_shared::protocol::segment_maxima::{PIECES, inv_h};
 use triquint_shared::quintic::{JointMotion, eval_poly};
 
 /// One queued segment.
@@ -14,7 +14,7 @@ pub struct Seg {
     pub seq: u16,
     /// Plan time at the segment start (ns).
     pub start_ns: i64,
-    /// Duration h (µs): 112 bytes a queue slot, not 128 with h in ns and
+    /// Duration h (µs): 120 bytes a queue slot, not 136 with h in ns and
     /// 1/h² and 1/h³ stored.
     pub duration_us: u32,
     /// 1/h (s⁻¹).
@@ -28,10 +28,16 @@ pub struct Seg {
     /// The drive's own stop ramps for it, controlled and quick (µs;
     /// `Maxima::ramps_us`, set on the receive side).
     pub ramps_us: (u32, u32),
-    /// Its own ramps for a stop from σ ≤ 1, controlled and quick (µs;
-    /// `Maxima::ramps_and_at_unit_us`): what a dated stop is held to.
-    pub unit_ramps_us: (u32, u32),
+    /// Each piece's own ramps for a stop from σ ≤ 1, controlled and quick
+    /// (100 µs units, rounded up; `Maxima::ramps_and_units`): what a stop
+    /// carrying a ramp for the path ahead is held to where it passes that
+    /// piece.
+    pub unit_ramps: UnitRamps,
 }
+
+/// Each piece's own ramps for a stop along the path from σ ≤ 1,
+/// controlled and quick (100 µs units), in plan order.
+pub type UnitRamps = [[u16; 2]; PIECES];
 
 impl Seg {
     pub fn from_wire(w: &WireSegment, start_ns: i64) -> Self {
@@ -45,7 +51,7 @@ impl Seg {
             last: w.flags & FLAG_LAST != 0,
             crc: w.body_crc(),
             ramps_us: (0, 0),
-            unit_ramps_us: (0, 0),
+            unit_ramps: [[0; 2]; PIECES],
         }
     }
 
@@ -112,7 +118,7 @@ pub fn scale(m: &JointMotion<f32>, sigma: f32, sigma_d: f32, sigma_dd: f32) -> J
 #[cfg(test)]
 mod tests {
     #[test]
-    fn a_queue_slot_is_112_bytes() {
-        assert_eq!(core::mem::size_of::<super::Seg>(), 112);
+    fn a_queue_slot_is_120_bytes() {
+        assert_eq!(core::mem::size_of::<super::Seg>(), 120);
     }
 }

@@ -107,7 +107,7 @@ impl<const Q: usize> Drive<Q> {
             match self.queue.front() {
                 Some(f) if sc.s_ns >= f.end_ns() => {
                     let r = f.ramps_us;
-                    let dropped = (f.start_ns, f.end_ns(), f.unit_ramps_us);
+                    let dropped = (f.start_ns, f.duration_us, f.unit_ramps);
                     self.queue.pop_front();
                     self.dropped = dropped;
                     // Only the largest leaving changes the largest.

@@ -351,7 +351,7 @@ mod tests {
     /// The ramp for the path ahead that stops carry (session/path_ramps.rs
     /// with its ±20 ms margin; here without): at each of 400 instants of
     /// the committed test plans, the largest of the drives' own
-    /// per-segment ramps for a stop from σ ≤ 1 over the segments a stop
+    /// per-piece ramps for a stop from σ ≤ 1 over the pieces a stop
     /// from there can pass through (those overlapping the next T_s/2 of
     /// plan time at σ = 1, which the Underrun rule makes every node hold), against the
     /// configured T_s; and how many segments end within 100 ms of plan
@@ -359,7 +359,7 @@ mod tests {
     /// dropped (printed with `--nocapture`; docs/protocol.md, "Stop ramp").
     #[test]
     fn stop_ramp_for_the_path_ahead() {
-        use triquint_shared::protocol::segment_maxima::wire_ramps_and_at_unit;
+        use triquint_shared::protocol::segment_maxima::{PIECES, wire_ramps_and_units};
         let s = DriveSettings::default();
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
             let plan = committed_plan(name);
@@ -367,21 +367,20 @@ mod tests {
             let (cap, ts) = (c.override_cap as f32, c.stop_time_s);
             let jl = plan.limits.jerk.min(s.ceilings.jerk) as f32;
             let ceiling = s.ceilings.jerk as f32;
-            // Each segment's plan-time span (s) and its own controlled ramp.
+            // Each piece's plan-time span (s) and its own controlled ramp.
             let mut start = 0.0;
-            let segs: Vec<(f64, f64, f64)> = plan
-                .wire_segments()
-                .unwrap()
-                .iter()
-                .map(|w| {
-                    let a = s.ceilings.acceleration as f32;
-                    let [_, (r, _)] = wire_ramps_and_at_unit(w, jl, ceiling, cap, a).unwrap();
-                    let end = start + w.duration_us as f64 * 1e-6;
-                    let row = (start, end, r as f64);
-                    start = end;
-                    row
-                })
-                .collect();
+            let wire = plan.wire_segments().unwrap();
+            let mut segs: Vec<(f64, f64, f64)> = Vec::new();
+            for w in &wire {
+                let a = s.ceilings.acceleration as f32;
+                let (_, units) = wire_ramps_and_units(w, jl, ceiling, cap, a).unwrap();
+                let piece = w.duration_us as f64 * 1e-6 / PIECES as f64;
+                let at = |k: usize| start + piece * k as f64;
+                for (k, (r, _)) in units.into_iter().enumerate() {
+                    segs.push((at(k), at(k + 1), r as f64));
+                }
+                start = at(PIECES);
+            }
             let total = start;
             let n = 400;
             let (mut sum, mut worst, mut best, mut shorter) = (0.0, 0.0f64, f64::MAX, 0);
@@ -392,8 +391,8 @@ mod tests {
                     .filter(|&&(a, b, _)| b > t && a < t + 0.5 * ts)
                     .map(|x| x.2)
                     .fold(0.0, f64::max);
-                // Never longer than the configured ramp (every segment's
-                // own is within it), never shorter than the segment it is in.
+                // Never longer than the configured ramp (every piece's
+                // own is within it), never shorter than the piece it is in.
                 let own = segs.iter().find(|&&(a, b, _)| a <= t && t < b).unwrap().2;
                 assert!(ahead <= ts * (1.0 + 1e-6) && ahead >= own, "{name} at {t}");
                 let r = ahead / ts;
@@ -402,18 +401,25 @@ mod tests {
                 best = best.min(r);
                 shorter += usize::from(r < 0.99);
             }
-            let late = segs
+            let ends: Vec<f64> = wire
                 .iter()
-                .map(|&(_, end, _)| {
-                    segs.iter()
-                        .filter(|&&(_, e, _)| e > end - 0.1 * cap as f64 && e <= end)
+                .scan(0.0, |t, w| {
+                    *t += w.duration_us as f64 * 1e-6;
+                    Some(*t)
+                })
+                .collect();
+            let late = ends
+                .iter()
+                .map(|&end| {
+                    ends.iter()
+                        .filter(|&&e| e > end - 0.1 * cap as f64 && e <= end)
                         .count()
                 })
                 .max()
                 .unwrap();
             eprintln!(
                 "{name}: T_s {ts:.3} s over {} segments; the path ahead's ramp / T_s at {n} instants: mean {:.3}, min {best:.3}, max {worst:.3}, below 0.99 at {shorter}; at most {late} segments end within 100 ms at the cap {cap:.3}",
-                segs.len(),
+                wire.len(),
                 sum / n as f64,
             );
         }

@@ -160,7 +160,7 @@ code_enum! {
 
 /// Protocol version carried in every heartbeat: a host refuses nodes of
 /// another version. What each version changed: the top of `docs/protocol.md`.
-pub const PROTOCOL_VERSION: u8 = 10;
+pub const PROTOCOL_VERSION: u8 = 11;
 
 /// Bits of HeartbeatExt `flags`.
 pub mod flags {
@@ -196,7 +196,8 @@ messages! {
         state: u8 @ 1 ["", 1.0, State],
         /// The ramp of the node's stop along the path (100 µs units), for
         /// peers to run the same one: the largest own ramp for a stop from
-        /// σ ≤ 1 of the segments it passes through; 0 = the full ramp.
+        /// σ ≤ 1 of the segments' pieces it passes through; 0 = the full
+        /// ramp.
         ramp_100us: u16 @ 2 ["s", 0.0001],
         /// Plan time at the fault.
         plan_time_us: u32 @ 4 ["us", 1.0],
@@ -217,7 +218,7 @@ messages! {
         token: u8 @ 1 ["", 1.0],
         /// Start: host time (µs); FeedHold, Resume, Stop, QuickStop, Override: host time (µs) all nodes apply it at, 0 = on receipt; ConfigCommit: CRC-32; UnlockCeilings: CRC-32 of the active configuration; otherwise 0.
         arg: u32 @ 2 ["", 1.0],
-        /// Override: σ in per mille (1000 = 100 %); Stop, QuickStop, FeedHold: the stop ramp for the path ahead of its instant in 100 µs, run if shorter than the full ramp and covering the own ramps of the queued segments the stop passes through; 0 = none carried: dated (`arg` ≠ 0), a Stop or FeedHold runs the ramp the drive sizes for its instant, on receipt the full ramp; otherwise 0.
+        /// Override: σ in per mille (1000 = 100 %); Stop, QuickStop, FeedHold: the stop ramp for the path ahead of its instant in 100 µs, run if shorter than the full ramp and covering the own ramps of the queued segments' pieces the stop passes through; 0 = none carried: dated (`arg` ≠ 0), a Stop or FeedHold runs the ramp the drive sizes for its instant, on receipt the full ramp; otherwise 0.
         arg2: u16 @ 6 ["", 1.0],
     }
     /// Acknowledgement of every segment, accepted or rejected.

@@ -5,7 +5,7 @@
 //! never shorter than a drive's.
 
 use super::WireSegment;
-use super::stop_ramp::{budgets, pieces_ramp_and_at_unit};
+use super::stop_ramp::{budgets, pieces_ramp_and_units};
 
 /// Bisection steps on u ∈ [0, 1]: f32's 24-bit mantissa.
 const BISECT_STEPS: usize = 24;
@@ -167,11 +167,34 @@ pub fn piece_ramps(
     piece_ramps_and_at_unit(pieces, jerk_limit, ceiling, cap, f32::INFINITY).map(|[full, _]| full)
 }
 
-/// [`piece_ramps`] and, from the same pass, the segment's own ramps for
-/// a stop along the path from σ ≤ 1 ([`pieces_ramp_and_at_unit`], its
-/// joint acceleration within `accel_ceiling`): what a stop carrying a
-/// ramp for the path ahead is held to. `[full, at_unit]`, each
-/// (controlled, quick).
+/// Each piece's own ramps (controlled, quick; s) for a stop along the
+/// path from σ ≤ 1, in plan order.
+pub type PieceUnitRamps = [(f32, f32); PIECES];
+
+/// [`piece_ramps`] and, from the same pass, each piece's own ramps for a
+/// stop along the path from σ ≤ 1 (over its three joints' maxima there,
+/// `stop_ramp::unit_ramp`, the joint acceleration within
+/// `accel_ceiling`): what a stop carrying a ramp for the path ahead is held
+/// to where it passes that piece. `(full, by piece)`, each (controlled,
+/// quick).
+pub fn piece_ramps_and_units(
+    pieces: &PieceMaxima,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+    accel_ceiling: f32,
+) -> Option<((f32, f32), PieceUnitRamps)> {
+    let j = overall(pieces)[2];
+    let b = budgets(j, jerk_limit, ceiling, cap);
+    let at = |p: usize| pieces.get(p).copied().unwrap_or_default();
+    let group = |p: usize| [at(p), at(PIECES + p), at(2 * PIECES + p)];
+    let ([s, q], units) = pieces_ramp_and_units::<PIECES>(pieces, group, b, cap, accel_ceiling)?;
+    Some(((s, q), units.map(|[s, q]| (s, q))))
+}
+
+/// [`piece_ramps_and_units`] with the segment's own ramps for a stop
+/// along the path from σ ≤ 1: the largest over its pieces. `[full,
+/// at_unit]`.
 pub fn piece_ramps_and_at_unit(
     pieces: &PieceMaxima,
     jerk_limit: f32,
@@ -179,10 +202,18 @@ pub fn piece_ramps_and_at_unit(
     cap: f32,
     accel_ceiling: f32,
 ) -> Option<[(f32, f32); 2]> {
-    let j = overall(pieces)[2];
-    let b = budgets(j, jerk_limit, ceiling, cap);
-    let r = pieces_ramp_and_at_unit(pieces, b, cap, accel_ceiling)?;
-    Some(r.map(|[s, q]| (s, q)))
+    let (full, units) = piece_ramps_and_units(pieces, jerk_limit, ceiling, cap, accel_ceiling)?;
+    Some([full, largest_unit(&units)])
+}
+
+/// The largest of `units` (controlled, quick).
+pub fn largest_unit(units: &[(f32, f32)]) -> (f32, f32) {
+    let mut m = (0.0f32, 0.0f32);
+    for &(s, q) in units {
+        raise(&mut m.0, s);
+        raise(&mut m.1, q);
+    }
+    m
 }
 
 /// The controlled and quick stop ramps (s) a drive sizes for the wire
@@ -206,6 +237,19 @@ pub fn wire_ramps_and_at_unit(
 ) -> Option<[(f32, f32); 2]> {
     let pieces = piece_maxima(&w.normalised_f32(), inv_h(w.duration_us));
     piece_ramps_and_at_unit(&pieces, jerk_limit, ceiling, cap, accel_ceiling)
+}
+
+/// [`piece_ramps_and_units`] of the wire segment `w`, as a drive computes
+/// them for it.
+pub fn wire_ramps_and_units(
+    w: &WireSegment,
+    jerk_limit: f32,
+    ceiling: f32,
+    cap: f32,
+    accel_ceiling: f32,
+) -> Option<((f32, f32), PieceUnitRamps)> {
+    let pieces = piece_maxima(&w.normalised_f32(), inv_h(w.duration_us));
+    piece_ramps_and_units(&pieces, jerk_limit, ceiling, cap, accel_ceiling)
 }
 
 /// The controlled and quick stop ramps (s) the drives need for the whole

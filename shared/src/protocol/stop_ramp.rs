@@ -410,34 +410,52 @@ pub fn pieces_ramp_and_at_unit(
     cap: f32,
     accel_ceiling: f32,
 ) -> Option<[[f32; 2]; 2]> {
-    if !(finite_and_positive(triples.as_flattened())
+    let (kept, n) = checked_frontier(triples, budgets, cap)?;
+    let kept = kept.get(..n).unwrap_or(&[]);
+    // Stops along the path from σ ≤ 1 (σ̈ bang-bang) first.
+    let at_unit = unit_ramp(kept, budgets, accel_ceiling)?;
+    Some([full_ramp(kept, budgets, cap)?, at_unit])
+}
+
+/// [`pieces_ramp`] with each group of `triples`' own ramps for a stop
+/// along the path from σ ≤ 1 ([`unit_ramp`]): `group(i)` lists the triples
+/// of group i (a piece of a segment: its three joints). `(full, by group)`.
+pub fn pieces_ramp_and_units<const N: usize>(
+    triples: &[[f32; 3]],
+    group: impl Fn(usize) -> [[f32; 3]; 3],
+    budgets: [f32; 2],
+    cap: f32,
+    accel_ceiling: f32,
+) -> Option<([f32; 2], [[f32; 2]; N])> {
+    let (kept, n) = checked_frontier(triples, budgets, cap)?;
+    let kept = kept.get(..n).unwrap_or(&[]);
+    let mut units = [[0.0f32; 2]; N];
+    for (i, u) in units.iter_mut().enumerate() {
+        *u = unit_ramp(&group(i), budgets, accel_ceiling)?;
+    }
+    Some((full_ramp(kept, budgets, cap)?, units))
+}
+
+/// The triples no other one dominates, if every input is a finite
+/// number ≥ 0 and the cap at least 1.
+fn checked_frontier(
+    triples: &[[f32; 3]],
+    budgets: [f32; 2],
+    cap: f32,
+) -> Option<([[f32; 3]; MAX_TRIPLES], usize)> {
+    (finite_and_positive(triples.as_flattened())
         && finite_and_positive(&budgets)
         && finite_and_positive(&[cap])
         && cap >= 1.0)
-    {
-        return None;
-    }
-    let (kept, n) = frontier(triples);
-    let kept = kept.get(..n).unwrap_or(&[]);
+        .then(|| frontier(triples))
+}
+
+/// The full ramps (controlled, quick) of the triples `kept`: every
+/// transition from a constant σ ≤ `cap` within `budgets`.
+fn full_ramp(kept: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<[f32; 2]> {
     let t0 = MIN_RAMP_S as f32;
     // Each ramp so far, with 1/T and 1/T².
     let mut t = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
-    // Stops along the path from σ ≤ 1 (σ̈ bang-bang) first, on their
-    // cells.
-    let mut unit = t;
-    for (tk, b) in unit.iter_mut().zip(budgets) {
-        for &triple in kept {
-            if jerk(&BANG_TOP, triple[2], triple[1] * tk[1], triple[0] * tk[2]) <= b {
-                continue;
-            }
-            for p in &BANG_NODES {
-                if jerk(p, triple[2], triple[1] * tk[1], triple[0] * tk[2]) > b {
-                    raise(p, &triple, b, tk)?;
-                }
-            }
-        }
-    }
-    let at_unit = unit.map(|tk| unit_within_acceleration(kept, accel_ceiling, tk[0]));
     let mut band = Band::default();
     // The full stops first: they need the longest ramps, so later bands
     // seldom raise it (a raise costs a division and a square root).
@@ -449,9 +467,32 @@ pub fn pieces_ramp_and_at_unit(
         }
     }
     let full = t.map(|tk| tk[0] * (1.0 + F32_SLACK));
-    full.iter()
-        .all(|x| *x <= MAX_RAMP_S)
-        .then_some([full, at_unit])
+    full.iter().all(|x| *x <= MAX_RAMP_S).then_some(full)
+}
+
+/// The ramps (controlled, quick: one for each of `budgets`) with which a
+/// stop along the path from a constant σ ≤ 1 keeps the joint jerk of
+/// every triple of `triples` within the budget and its joint acceleration
+/// within `accel_ceiling`: [`pieces_ramp_and_at_unit`]'s `at_unit` without
+/// the full ramp, for the triples of one piece of a segment. Inputs are
+/// taken as checked; `None` when a triple's own jerk leaves no room.
+#[inline(never)]
+pub fn unit_ramp(triples: &[[f32; 3]], budgets: [f32; 2], accel_ceiling: f32) -> Option<[f32; 2]> {
+    let t0 = MIN_RAMP_S as f32;
+    let mut unit = [[t0, 1.0 / t0, 1.0 / (t0 * t0)]; 2];
+    for (tk, b) in unit.iter_mut().zip(budgets) {
+        for &triple in triples {
+            if jerk(&BANG_TOP, triple[2], triple[1] * tk[1], triple[0] * tk[2]) <= b {
+                continue;
+            }
+            for p in &BANG_NODES {
+                if jerk(p, triple[2], triple[1] * tk[1], triple[0] * tk[2]) > b {
+                    raise(p, &triple, b, tk)?;
+                }
+            }
+        }
+    }
+    Some(unit.map(|tk| unit_within_acceleration(triples, accel_ceiling, tk[0])))
 }
 
 // The helpers below are out of line (`inline(never)`): unrolled, they

@@ -1,13 +1,13 @@
 //! The stop ramp a Stop, QuickStop or FeedHold carries for the path ahead
 //! of its instant (docs/protocol.md, "A ramp for the path ahead"): the
 //! largest of the drives' own ramps for a stop from σ ≤ 1 (the same f32
-//! rule on the same wire segments, `wire_ramps_and_at_unit`) over the
-//! segments a stop from there can pass through. The drives run it only at
-//! σ ≤ 1 and only if it covers those ramps of the segments they hold in
-//! that window, so a wrong estimate of where the plan is, or a σ above 1,
-//! costs the shorter stop, never a harder one.
+//! rule on the same wire segments, `wire_ramps_and_units`) over the
+//! pieces of segments a stop from there can pass through. The drives run
+//! it only at σ ≤ 1 and only if it covers those ramps of the pieces they
+//! hold in that window, so a wrong estimate of where the plan is, or a σ
+//! above 1, costs the shorter stop, never a harder one.
 
-use triquint_shared::protocol::segment_maxima::wire_ramps_and_at_unit;
+use triquint_shared::protocol::segment_maxima::{PIECES, wire_ramps_and_units};
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
 /// Room on each side of the host's estimate of the plan time (µs): its
@@ -20,8 +20,8 @@ const UNIT_US: u64 = 100;
 
 #[derive(Clone, Debug)]
 pub(crate) struct PathRamps {
-    /// Each segment's plan-time span (µs) and its own controlled and quick
-    /// ramps for a stop from σ ≤ 1 (µs).
+    /// Each piece's plan-time span (µs) and its own controlled and quick
+    /// ramps for a stop from σ ≤ 1 (µs), in plan order.
     segments: Vec<(f64, f64, [f64; 2])>,
     /// The ramps every transition runs with (µs): the configured ones.
     full_us: [f64; 2],
@@ -31,25 +31,29 @@ impl PathRamps {
     pub fn new(segments: &[WireSegment], c: &DriveConfig) -> Self {
         let mut start = 0.0;
         let mut full_us = [c.stop_time as f64 * 1e6, c.quick_stop_time as f64 * 1e6];
-        let rows = segments
-            .iter()
-            .map(|w| {
-                let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
-                let [ramps, at_unit] = wire_ramps_and_at_unit(
-                    w,
-                    c.max_jerk,
-                    c.ceiling_jerk,
-                    c.override_cap,
-                    c.ceiling_acceleration,
-                )
-                .map_or([[f64::INFINITY; 2]; 2], |r| r.map(us));
-                let end = start + w.duration_us as f64;
-                let row = (start, end, at_unit);
-                start = end;
-                full_us = [full_us[0].max(ramps[0]), full_us[1].max(ramps[1])];
-                row
-            })
-            .collect();
+        let mut rows = Vec::with_capacity(segments.len() * PIECES);
+        for w in segments {
+            let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
+            let (ramps, units) = wire_ramps_and_units(
+                w,
+                c.max_jerk,
+                c.ceiling_jerk,
+                c.override_cap,
+                c.ceiling_acceleration,
+            )
+            .map_or(
+                ([f64::INFINITY; 2], [[f64::INFINITY; 2]; PIECES]),
+                |(r, u)| (us(r), u.map(us)),
+            );
+            // The drives' pieces: equal, in whole ns (w.duration_us × 250).
+            let piece = w.duration_us as f64 / PIECES as f64;
+            let at = |k: usize| start + piece * k as f64;
+            for (k, u) in units.into_iter().enumerate() {
+                rows.push((at(k), at(k + 1), u));
+            }
+            start = at(PIECES);
+            full_us = [full_us[0].max(ramps[0]), full_us[1].max(ramps[1])];
+        }
         Self {
             segments: rows,
             full_us,
@@ -58,23 +62,34 @@ impl PathRamps {
 
     /// The command's ramp field (100 µs units, rounded up) for a stop
     /// (`quick`: the quick stop's) at estimated plan time `plan_us` and σ
-    /// ≤ 1: the largest own ramp for such a stop over the segments a stop
-    /// from within [`ESTIMATE_MARGIN_US`] of it can pass through; 0 (the
-    /// drives' full ramp) when that is not shorter.
+    /// ≤ 1: the largest own ramp for such a stop over the pieces a stop
+    /// from within [`ESTIMATE_MARGIN_US`] of it can pass through with that
+    /// ramp (a stop from σ ≤ 1 covers at most half its ramp of plan time:
+    /// the window grows with the ramp); 0 (the drives' full ramp) when that
+    /// is not shorter.
     pub fn dated(&self, plan_us: f64, quick: bool) -> u16 {
         let k = usize::from(quick);
         let full = self.full_us[k];
         let lo = plan_us - ESTIMATE_MARGIN_US;
-        // A stop from σ ≤ 1 covers at most half its ramp of plan time.
-        let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * full;
-        let ahead = self
-            .segments
-            .iter()
-            .filter(|&&(a, b, _)| b > lo && a < hi)
-            .map(|s| s.2[k])
-            .fold(0.0, f64::max);
         // 1 µs over: the drives round their own ramp from f32.
-        let units = ((ahead + 1.0) / UNIT_US as f64).ceil();
+        let units = |ahead: f64| ((ahead + 1.0) / UNIT_US as f64).ceil();
+        let mut ahead: f64 = 0.0;
+        loop {
+            let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * units(ahead) * UNIT_US as f64;
+            let next = self
+                .segments
+                .iter()
+                .filter(|&&(a, b, _)| b > lo && a < hi)
+                .map(|s| s.2[k])
+                .fold(ahead, f64::max);
+            // Past the full ramp the drives run that one anyway.
+            if next <= ahead || next >= full {
+                ahead = next;
+                break;
+            }
+            ahead = next;
+        }
+        let units = units(ahead);
         if ahead > 0.0 && units * (UNIT_US as f64) < full && units <= u16::MAX as f64 {
             units as u16
         } else {
@@ -133,6 +148,15 @@ mod tests {
         let w = p.wire_segments().unwrap();
         let r = PathRamps::new(&w, &c);
         (p, c, w, r)
+    }
+
+    /// Each wire segment's plan-time span (µs), in plan order.
+    fn segment_spans_us(w: &[WireSegment]) -> impl Iterator<Item = (f64, f64)> + '_ {
+        w.iter().scan(0.0, |start, s| {
+            let a = *start;
+            *start += s.duration_us as f64;
+            Some((a, *start))
+        })
     }
 
     /// The shortest time in which one joint at speed `v` and acceleration
@@ -240,11 +264,9 @@ mod tests {
             let c = &c;
             // Each segment's plan-time span (s, the ramps' own) and its
             // controlled stop budget.
-            let spans: Vec<(f64, f64, f64)> = r
-                .segments
-                .iter()
+            let spans: Vec<(f64, f64, f64)> = segment_spans_us(&w)
                 .zip(&w)
-                .map(|(&(a, e, _), s)| {
+                .map(|((a, e), s)| {
                     let [_, _, j] = maxima(&s.normalised_f32(), inv_h(s.duration_us));
                     let b = budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0];
                     (a * 1e-6, e * 1e-6, b as f64)
@@ -479,7 +501,7 @@ mod tests {
             ("bang-bang 0.3", Box::new(Bang(0.3))),
         ];
         for name in ["case1-spline", "case2-spline", "spiral-spline"] {
-            let (p, c, w, r) = committed_rig(name);
+            let (p, c, w, _) = committed_rig(name);
             let c = &c;
             let margin = ESTIMATE_MARGIN_US * 1e-6;
             let total = p.duration();
@@ -488,11 +510,9 @@ mod tests {
             for (label, shape) in &shapes {
                 // Each segment's span (s), budget and own stop ramp.
                 let mut full: f64 = 0.0;
-                let segs: Vec<(f64, f64, f64, f64)> = r
-                    .segments
-                    .iter()
+                let segs: Vec<(f64, f64, f64, f64)> = segment_spans_us(&w)
                     .zip(&w)
-                    .map(|(&(a, e, _), s)| {
+                    .map(|((a, e), s)| {
                         let pieces = piece_maxima(&s.normalised_f32(), inv_h(s.duration_us));
                         let [_, _, j] = overall(&pieces);
                         let b = budgets(j, c.max_jerk, c.ceiling_jerk, c.override_cap)[0] as f64;
