@@ -56,9 +56,17 @@ impl Maxima {
             cfg.ceiling_acceleration,
         )
         .ok_or(Reject::StopAboveCeiling)?;
+        let pieces = units.map(|(s, _)| ramp_units(s));
+        let quick = units
+            .iter()
+            .fold(0.0f32, |m, u| if u.1 > m { u.1 } else { m });
+        let controlled = pieces.iter().fold(0, |m, &u| if u > m { u } else { m });
         Ok((
             (ramp_us(full.0), ramp_us(full.1)),
-            units.map(|(s, q)| [ramp_units(s), ramp_units(q)]),
+            UnitRamps {
+                pieces,
+                largest: [controlled, ramp_units(quick)],
+            },
         ))
     }
 
@@ -114,7 +122,7 @@ mod tests {
             last: false,
             crc: 0,
             ramps_us: (0, 0),
-            unit_ramps: [[0; 2]; triquint_shared::protocol::segment_maxima::PIECES],
+            unit_ramps: UnitRamps::default(),
         }
     }
 
@@ -196,10 +204,10 @@ mod tests {
         }
     }
 
-    /// Each piece's own ramps for a stop from σ ≤ 1 are its three joints'
-    /// on that piece: the largest of each joint's triple there sized alone
-    /// (in 100 µs units, rounded up), and a segment's largest is the one
-    /// over all its triples at once.
+    /// Each piece's own ramp for a stop from σ ≤ 1 is its three joints' on
+    /// that piece: the largest of each joint's triple there sized alone (in
+    /// 100 µs units, rounded up); a segment's largest, controlled and
+    /// quick, is the one over all its triples at once.
     #[test]
     fn each_piece_is_held_to_its_own_joints_ramps() {
         use triquint_shared::protocol::segment_maxima::{PIECES, overall};
@@ -216,23 +224,23 @@ mod tests {
             let m = Maxima::of(&s);
             let (_, units) = m.ramps_and_units(&cfg).unwrap();
             let bs = budgets(overall(&m.pieces)[2], cfg.max_jerk, cfg.ceiling_jerk, 1.0);
-            let alone = |t: [f32; 3], k: usize| {
-                let [_, at_unit] = pieces_ramp_and_at_unit(&[t], bs, 1.0, 50.0).unwrap();
-                ramp_units(at_unit[k])
+            let ramps = |t: &[[f32; 3]]| {
+                let [_, at_unit] = pieces_ramp_and_at_unit(t, bs, 1.0, 50.0).unwrap();
+                at_unit.map(ramp_units)
             };
-            for (p, u) in units.iter().enumerate() {
-                for (k, got) in u.iter().enumerate() {
-                    let own = (0..3)
-                        .map(|j| alone(m.pieces[j * PIECES + p], k))
-                        .max()
-                        .unwrap();
-                    assert!(got.abs_diff(own) <= 1, "piece {p}: {got} against {own}");
-                }
+            for (p, got) in units.pieces.iter().enumerate() {
+                let own = (0..3)
+                    .map(|j| ramps(&[m.pieces[j * PIECES + p]])[0])
+                    .max()
+                    .unwrap();
+                assert!(got.abs_diff(own) <= 1, "piece {p}: {got} against {own}");
             }
-            let [_, at_unit] = pieces_ramp_and_at_unit(&m.pieces, bs, 1.0, 50.0).unwrap();
-            let largest = units.iter().map(|u| u[0]).max().unwrap();
-            assert!(largest.abs_diff(ramp_units(at_unit[0])) <= 1);
-            differ += usize::from(units.iter().any(|u| u[0] + 5 < largest));
+            let whole = ramps(&m.pieces);
+            for (got, want) in units.largest.iter().zip(whole) {
+                assert!(got.abs_diff(want) <= 1, "{got} against {want}");
+            }
+            let largest = units.largest[0];
+            differ += usize::from(units.pieces.iter().any(|&u| u + 5 < largest));
         }
         // The pieces differ: a stop that passes only some is held to less.
         assert!(differ > 100, "{differ}");

@@ -16,7 +16,9 @@ mod telemetry;
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
-use triquint_shared::protocol::contract::{PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US};
+use triquint_shared::protocol::contract::{
+    PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US, WINDOW_SEGMENTS_MAX,
+};
 use triquint_shared::protocol::{
     Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, Reject, State,
 };
@@ -51,12 +53,38 @@ pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 pub const OUTBOX: usize = 64;
 
 /// No segment dropped since the last flush: it ends before any plan time.
-const NONE_DROPPED: Dropped = (i64::MIN, 0, [[0; 2]; PIECES]);
+const NONE_DROPPED: Dropped = (
+    i64::MIN,
+    0,
+    UnitRamps {
+        pieces: [0; PIECES],
+        largest: [0; 2],
+    },
+);
 
 /// A piece of a segment of 1 µs lasts this many ns: 1 000 ns a µs divides
 /// by the pieces.
 const PIECE_NS_PER_US: i64 = 1000 / PIECES as i64;
 const _: () = assert!(1000 % PIECES == 0);
+
+/// The largest own controlled ramp for a stop from σ ≤ 1 (100 µs units)
+/// of the pieces of a segment from plan time `a` (ns) of `us` µs that
+/// overlap [`lo`, `hi`), which the segment overlaps (0 if no piece does).
+#[inline(always)]
+fn pieces_over(a: i64, us: u32, ramps: &UnitRamps, lo: i64, hi: i64) -> u16 {
+    let piece = us as i64 * PIECE_NS_PER_US;
+    let mut m = 0;
+    let mut p0 = a;
+    for &r in &ramps.pieces {
+        let p1 = p0 + piece;
+        // A plain comparison: `max` is a call out of the tick's memory.
+        if r > m && p1 > lo && p0 < hi {
+            m = r;
+        }
+        p0 = p1;
+    }
+    m
+}
 
 /// What a node keeps of the segment it last dropped: its start (plan ns),
 /// duration (µs) and its pieces' own ramps for stops from σ ≤ 1.
@@ -303,9 +331,10 @@ impl<const Q: usize> Drive<Q> {
     /// The ramp for a stop from host time `t` that the host dated
     /// (`dated_100us` × 100 µs, docs/protocol.md "A ramp for the path
     /// ahead"), if it is shorter than `full_ns` (the ramp every transition
-    /// runs with) and covers the own ramps of every queued segment the
-    /// stop passes through; else `full_ns`. Only from a constant σ: a
-    /// transition begun in another one is sized against `full_ns`.
+    /// runs with) and covers the own ramps of every queued piece the stop
+    /// passes through (the dropped segment's included); else `full_ns`.
+    /// Only from a constant σ: a transition begun in another one is sized
+    /// against `full_ns`. `u16::MAX` is no ramp (`f32_cast::ramp_units`).
     // Cold, out of line: only the tick that takes a dated stop runs it.
     #[cold]
     #[inline(never)]
@@ -313,6 +342,7 @@ impl<const Q: usize> Drive<Q> {
         let dated = dated_100us as i64 * 100_000;
         // Held to the pieces' ramps for stops from σ ≤ 1 only.
         if dated == 0
+            || dated_100us == u16::MAX
             || dated >= full_ns
             || self.scaling.in_transition()
             || self.scaling.target_q16() > UNIT_Q16
@@ -329,35 +359,36 @@ impl<const Q: usize> Drive<Q> {
         if *from > s && *from != i64::MIN {
             return full_ns;
         }
-        let k = quick as usize;
-        // Some(true): a piece in the window needs a longer ramp; Some(false):
-        // the segment reaches past the window's end.
-        let scan = |a: i64, us: u32, ramps: &UnitRamps| {
-            let piece = us as i64 * PIECE_NS_PER_US;
-            let mut p1 = a;
-            for r in ramps {
-                if p1 >= end {
-                    return Some(false);
-                }
-                p1 += piece;
-                if p1 > s && r[k] > dated_100us {
-                    return Some(true);
-                }
+        // The dropped segment, then the queue in plan order, up to the
+        // window's end; no more than `WINDOW_SEGMENTS_MAX` of them. Piece
+        // bounds only for a segment whose largest own ramp is too long (a
+        // quick stop is held to the whole segment's). Every queued segment
+        // ends after s (the current plan time is past s), so it overlaps
+        // the window if it begins before its end.
+        let refuses = |a: i64, us: u32, r: &UnitRamps| {
+            if quick {
+                r.largest[1] > dated_100us
+            } else {
+                r.largest[0] > dated_100us && pieces_over(a, us, r, s, end) > dated_100us
             }
-            None
         };
-        let mut verdict = scan(*from, *us, ramps);
+        let mut n = 0;
+        if *from + *us as i64 * 1000 > s {
+            if refuses(*from, *us, ramps) {
+                return full_ns;
+            }
+            n = 1;
+        }
         for q in self.queue.iter() {
-            if verdict.is_some() {
+            if q.start_ns >= end {
                 break;
             }
-            verdict = scan(q.start_ns, q.duration_us, &q.unit_ramps);
+            n += 1;
+            if n > WINDOW_SEGMENTS_MAX || refuses(q.start_ns, q.duration_us, &q.unit_ramps) {
+                return full_ns;
+            }
         }
-        if verdict == Some(true) {
-            full_ns
-        } else {
-            dated
-        }
+        dated
     }
 
     /// The ramp (ns) this node vouches for, for a controlled stop for its
@@ -387,33 +418,52 @@ impl<const Q: usize> Drive<Q> {
         }
         let mut units = 0u16;
         let mut reach = s + MARGIN_NS;
-        // In plan order, piece by piece; the window grows with the ramp.
-        // False once a segment begins past the window.
-        let mut scan = |a: i64, us: u32, ramps: &UnitRamps| {
+        // In plan order; the window grows with the ramp, so a segment is
+        // looked at again when one of its pieces raised it. No more than
+        // `WINDOW_SEGMENTS_MAX` segments: the tick checks each one. Piece
+        // bounds only for a segment whose largest own ramp is longer than
+        // the ramp so far; a queued one ends after s.
+        let raise = |a: i64, us: u32, ramps: &UnitRamps, units: &mut u16, reach: &mut i64| {
+            if ramps.largest[0] <= *units {
+                return;
+            }
             let piece = us as i64 * PIECE_NS_PER_US;
             let mut p0 = a;
-            for r in ramps {
-                if p0 >= reach {
-                    return false;
-                }
-                p0 += piece;
-                if p0 > lo && r[0] > units {
-                    units = r[0];
-                    reach = s + MARGIN_NS + units as i64 * 50_000;
-                }
-            }
-            true
-        };
-        if scan(*from, *us, ramps) {
-            for q in self.queue.iter() {
-                if !scan(q.start_ns, q.duration_us, &q.unit_ramps) {
+            for &r in &ramps.pieces {
+                if p0 >= *reach {
                     break;
                 }
+                p0 += piece;
+                if p0 > lo && r > *units {
+                    *units = r;
+                    *reach = s + MARGIN_NS + r as i64 * 50_000;
+                }
             }
+        };
+        let mut n = 0;
+        if *from + *us as i64 * 1000 > lo {
+            n = 1;
+            raise(*from, *us, ramps, &mut units, &mut reach);
+        }
+        for q in self.queue.iter() {
+            if q.start_ns >= reach {
+                break;
+            }
+            n += 1;
+            if n > WINDOW_SEGMENTS_MAX {
+                return (full_ns, 0);
+            }
+            raise(
+                q.start_ns,
+                q.duration_us,
+                &q.unit_ramps,
+                &mut units,
+                &mut reach,
+            );
         }
         let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
         let ramp = units as i64 * 100_000;
-        if !held || units == 0 || ramp >= full_ns {
+        if !held || units == 0 || units == u16::MAX || ramp >= full_ns {
             return (full_ns, 0);
         }
         (ramp, units)

@@ -46,8 +46,9 @@ pub fn ramp_us(s: f32) -> u32 {
     to_i64(s * 1e6).clamp(0, u32::MAX as i64) as u32
 }
 
-/// [`ramp_us`] in the 100 µs units a stop's ramp travels in, rounded up
-/// (saturating: an infinite ramp is never shorter than a full one).
+/// [`ramp_us`] in the 100 µs units a stop's ramp travels in, rounded up;
+/// `u16::MAX` (6.5535 s or more, an infinite ramp among them) stands for
+/// no ramp at all, which no stop is run with.
 pub fn ramp_units(s: f32) -> u16 {
     ramp_us(s).div_ceil(100).min(u16::MAX as u32) as u16
 }

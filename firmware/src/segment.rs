@@ -28,16 +28,22 @@ pub struct Seg {
     /// The drive's own stop ramps for it, controlled and quick (µs;
     /// `Maxima::ramps_us`, set on the receive side).
     pub ramps_us: (u32, u32),
-    /// Each piece's own ramps for a stop from σ ≤ 1, controlled and quick
-    /// (100 µs units, rounded up; `Maxima::ramps_and_units`): what a stop
-    /// carrying a ramp for the path ahead is held to where it passes that
-    /// piece.
+    /// Its own ramps for a stop from σ ≤ 1 (`Maxima::ramps_and_units`):
+    /// what a stop carrying a ramp for the path ahead is held to where it
+    /// passes each piece.
     pub unit_ramps: UnitRamps,
 }
 
-/// Each piece's own ramps for a stop along the path from σ ≤ 1,
-/// controlled and quick (100 µs units), in plan order.
-pub type UnitRamps = [[u16; 2]; PIECES];
+/// A segment's own ramps for a stop along the path from σ ≤ 1 (100 µs
+/// units, rounded up; `u16::MAX`: none keeps it within the ceilings).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct UnitRamps {
+    /// Each piece's, controlled, in plan order.
+    pub pieces: [u16; PIECES],
+    /// The largest over its pieces: controlled, quick (a quick stop is held
+    /// to the whole segment's).
+    pub largest: [u16; 2],
+}
 
 impl Seg {
     pub fn from_wire(w: &WireSegment, start_ns: i64) -> Self {
@@ -51,7 +57,7 @@ impl Seg {
             last: w.flags & FLAG_LAST != 0,
             crc: w.body_crc(),
             ramps_us: (0, 0),
-            unit_ramps: [[0; 2]; PIECES],
+            unit_ramps: UnitRamps::default(),
         }
     }
 

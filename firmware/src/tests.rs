@@ -736,7 +736,7 @@ fn own_ramps_us(cfg: &DriveConfig, segs: &[WireSegment]) -> (u32, u32) {
         let (full, units) = Maxima::of(&Seg::from_wire(w, 0))
             .ramps_and_units(cfg)
             .unwrap();
-        let unit = units.iter().map(|u| u[0] as u32 * 100).max().unwrap_or(0);
+        let unit = units.largest[0] as u32 * 100;
         (full_us.max(full.0), unit_us.max(unit))
     })
 }
@@ -846,7 +846,7 @@ fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
         let (_, units) = Maxima::of(&crate::segment::Seg::from_wire(w, 0))
             .ramps_and_units(&rig().cfg)
             .unwrap();
-        ms_of(units[k][0] as i64 * 100_000)
+        ms_of(units.pieces[k] as i64 * 100_000)
     };
     let cases = [
         (1_000, piece_ms(&segs[1], 0), ms_of(gentle)),
@@ -881,6 +881,47 @@ fn a_dated_stop_without_a_ramp_runs_the_one_the_node_vouches_for() {
         "two segments back: {ms} ms against {}",
         full_ms - 12
     );
+}
+
+/// A piece whose stop along the path no ramp keeps within the
+/// acceleration ceiling has no ramp of its own (`u16::MAX`): a stop that
+/// passes it runs the full ramp, even one longer than the units reach
+/// (6.5535 s), whether the node sizes the ramp or a stop carries that
+/// value.
+#[test]
+fn a_piece_without_a_ramp_gets_the_full_one_however_long() {
+    use crate::ceilings::Maxima;
+    use crate::segment::Seg;
+    let segs = segments_of(&[0.8; 4]);
+    let rig = || {
+        let mut r = Rig::with_stop_time(7.0);
+        (r.cfg.max_jerk, r.cfg.ceiling_jerk) = (5.0, 8.0);
+        // The ceiling at the plan's own peak acceleration: no room for a
+        // stop along the path where it peaks.
+        let peak = segs
+            .iter()
+            .map(|w| Maxima::of(&Seg::from_wire(w, 0)).a)
+            .fold(0.0, f32::max);
+        (r.cfg.max_acceleration, r.cfg.ceiling_acceleration) = (peak, peak);
+        r
+    };
+    let (_, units) = Maxima::of(&Seg::from_wire(&segs[1], 0))
+        .ramps_and_units(&rig().cfg)
+        .unwrap();
+    assert!(units.pieces.contains(&u16::MAX), "{units:?}");
+    for dated_100us in [0, u16::MAX] {
+        let mut r = Rig::loaded_with(rig(), &segs);
+        // The configured ramp, above what the segments need.
+        let full_ms = (r.cfg.stop_time * 1000.0) as i64;
+        assert!(full_ms >= 7_000 && r.node.drive.queue_ramps_ns().0 < 1_000_000_000);
+        r.start();
+        r.run(150);
+        let ms = r.stop_ms(CommandCode::Stop, (r.t - 1_000) as u32, dated_100us);
+        assert!(
+            ms >= full_ms - 3,
+            "carried {dated_100us}: {ms} ms against {full_ms}"
+        );
+    }
 }
 
 /// With an override cap above 1, a dated stop from σ = 1 is held to the

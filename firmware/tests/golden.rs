@@ -32,7 +32,7 @@ use triquint_firmware::inbox::Inbox;
 use triquint_firmware::scaling::Phase;
 use triquint_firmware::{Drive, Encoder, MotorOutput, QUEUE_CAPACITY, Receiver, RxFrame};
 use triquint_shared::dynamics;
-use triquint_shared::plan::Plan;
+use triquint_shared::plan::{Plan, Segment};
 use triquint_shared::protocol::compact::Chain;
 use triquint_shared::protocol::config::{DriveConfig, DriveSettings};
 use triquint_shared::protocol::{
@@ -351,6 +351,19 @@ impl Recorder {
         }
     }
 
+    /// Parks the axis at `start`'s first pose, unconfigured (motor off),
+    /// for `idle_us`, then writes and commits `cfg`.
+    fn park_and_configure(&mut self, start: &WireSegment, cfg: &DriveConfig, idle_us: u64) {
+        self.node.stats.reference.q = Seg::from_wire(start, 0).start_q();
+        self.run_us(idle_us);
+        for (k, v) in cfg.to_values().iter().enumerate() {
+            self.rx(config_write_frame(NODE, k as u8, *v));
+        }
+        self.command(CommandCode::ConfigCommit, cfg.crc());
+        self.tick();
+        assert_eq!(self.node.config_crc(), cfg.crc(), "configuration committed");
+    }
+
     fn run_us(&mut self, us: u64) {
         for _ in 0..us / TICK_US {
             self.tick();
@@ -389,16 +402,8 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
     };
     r.out.u8(b'N');
     r.out.u8(NODE);
-    // Park the axis at the plan's start, unconfigured (motor off).
     let segs = wire_segments(&plan);
-    r.node.stats.reference.q = Seg::from_wire(&segs[0], 0).start_q();
-    r.run_us(60_000);
-    for (k, v) in cfg.to_values().iter().enumerate() {
-        r.rx(config_write_frame(NODE, k as u8, *v));
-    }
-    r.command(CommandCode::ConfigCommit, cfg.crc());
-    r.tick();
-    assert_eq!(r.node.config_crc(), cfg.crc(), "configuration committed");
+    r.park_and_configure(&segs[0], &cfg, 60_000);
     r.run_us(20_000);
     let mut next = 0;
     for (i, w) in segs.iter().enumerate().take(3) {
@@ -477,12 +482,116 @@ fn golden_frames(out: Out) -> (Out, Vec<State>, u64) {
         "the ramp it vouched for: {:?}",
         r.emergency_ramps
     );
-    r.out.u8(b'Z');
     // Every segment after the first went compact, and the node took them all.
     assert_eq!(r.compact + 1, next, "segments sent compact");
     assert_eq!(r.node.stats.rejects, 0, "segments or parts rejected");
+    short_queue(&mut r, &plan);
+    r.out.u8(b'Z');
     let ticks = r.ticks;
     (r.out, r.states, ticks)
+}
+
+/// `plan`'s segments cut into pieces of at most `h` (s), exactly (each
+/// piece the same quintic from its own start), up to `until` (s).
+fn cut(plan: &Plan, h: f64, until: f64) -> Plan {
+    let shifted = |c: &[f64; 6], t0: f64| {
+        let mut out = [0.0f64; 6];
+        for (k, o) in out.iter_mut().enumerate() {
+            let mut binom = 1.0;
+            for (m, cm) in c.iter().enumerate().skip(k) {
+                *o += cm * binom * t0.powi((m - k) as i32);
+                binom = binom * (m + 1) as f64 / (m + 1 - k) as f64;
+            }
+        }
+        out
+    };
+    let mut p = plan.clone();
+    p.segments.clear();
+    for q in &plan.segments {
+        if q.t0_s >= until {
+            break;
+        }
+        // Whole microseconds, as the wire carries them.
+        let us = (q.duration_s * 1e6).round() as u64;
+        let n = (q.duration_s / h).ceil() as u64;
+        for i in 0..n {
+            let (a, b) = (us * i / n, us * (i + 1) / n);
+            let t0 = a as f64 * 1e-6;
+            p.segments.push(Segment {
+                t0_s: q.t0_s + t0,
+                duration_s: (b - a) as f64 * 1e-6,
+                coeffs: q.coeffs.map(|c| shifted(&c, t0)),
+            });
+        }
+    }
+    p
+}
+
+/// A fresh node with a full queue of short segments (Case I cut into 60 ms
+/// pieces) and holds dated with ramps for the path ahead: one whose window
+/// overlaps more segments than the drives check (`WINDOW_SEGMENTS_MAX`),
+/// which runs the full ramp, and one that overlaps as many as they check,
+/// which runs its own. Their ticks make the longest scans a dated stop
+/// makes.
+fn short_queue(r: &mut Recorder, plan: &Plan) {
+    let short = cut(plan, 0.06, 3.5);
+    let segs = wire_segments(&short);
+    let settings = DriveSettings {
+        control_rate: 1e6 / TICK_US as f64,
+        underrun_margin: 0.005,
+        ..DriveSettings::default()
+    };
+    let cfg = DriveConfig::new(&plan.robot, &Limits::default(), 1, &settings, 0.5, 0.25);
+    r.node = Drive::new(NODE);
+    r.receiver = Receiver::new(NODE);
+    r.inbox = Inbox::new();
+    r.chain = Chain::default();
+    r.motor = Motor::default();
+    r.out.u8(b'N');
+    r.out.u8(NODE);
+    // Time syncs every 20 ms, as before: the node needs a few to arm.
+    r.park_and_configure(&segs[0], &cfg, 100_000);
+    let mut next = 0;
+    while next < QUEUE_CAPACITY {
+        let out = r.chain.next(&segs[next], segs.get(next + 1));
+        for f in out.frames(true) {
+            r.rx(f);
+        }
+        next += 1;
+        r.tick();
+    }
+    assert_eq!(r.node.queue_depth(), QUEUE_CAPACITY, "the queue is full");
+    assert_eq!(r.node.queue_ramps_ns().0.max(500_000_000), 500_000_000);
+    r.command(CommandCode::Arm, 0);
+    r.tick();
+    let host_now = (r.now + 3_000_000) as u32;
+    r.command(CommandCode::Start, host_now + 5_000);
+    let rejects = r.node.stats.rejects;
+    // 0.49 s: its window (0.245 s) overlaps at least 5 of the 60 ms
+    // segments, more than the drives check: the full ramp (0.5 s). 0.33 s
+    // (above every piece's own, 0.325 s at most): 0.165 s, at most 4
+    // segments: its own.
+    for (ramp_100us, run_us, shorter) in [(4_900, 300_000, false), (3_300, 600_000, true)] {
+        for _ in 0..run_us / TICK_US {
+            r.top_up(&segs, &mut next);
+            r.tick();
+        }
+        assert_eq!(r.node.state(), State::Running, "running on short segments");
+        r.command2(CommandCode::FeedHold, 0, ramp_100us);
+        let mut held_us = 0;
+        while r.node.scaling_phase() != Phase::Rest && held_us < 1_000_000 {
+            r.top_up(&segs, &mut next);
+            r.tick();
+            held_us += TICK_US;
+        }
+        eprintln!(
+            "golden frames: a hold carrying {ramp_100us} × 100 µs over 60 ms segments at rest in {held_us} µs"
+        );
+        let own = held_us <= ramp_100us as u64 * 100 + 200;
+        assert_eq!(own, shorter, "{ramp_100us}: {held_us} µs");
+        r.command(CommandCode::Resume, 0);
+    }
+    assert_eq!(r.node.stats.rejects, rejects, "short segments rejected");
 }
 
 #[test]

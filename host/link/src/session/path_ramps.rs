@@ -7,6 +7,7 @@
 //! hold in that window, so a wrong estimate of where the plan is, or a σ
 //! above 1, costs the shorter stop, never a harder one.
 
+use triquint_shared::protocol::contract::WINDOW_SEGMENTS_MAX;
 use triquint_shared::protocol::segment_maxima::{PIECES, wire_ramps_and_units};
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
@@ -20,9 +21,13 @@ const UNIT_US: u64 = 100;
 
 #[derive(Clone, Debug)]
 pub(crate) struct PathRamps {
-    /// Each piece's plan-time span (µs) and its own controlled and quick
-    /// ramps for a stop from σ ≤ 1 (µs), in plan order.
-    segments: Vec<(f64, f64, [f64; 2])>,
+    /// Each piece's plan-time span (µs) and its own ramps for a stop from
+    /// σ ≤ 1 (µs): controlled, and quick (its segment's: the drives hold a
+    /// quick stop to the whole segment's), in plan order.
+    pieces: Vec<(f64, f64, [f64; 2])>,
+    /// Each segment's plan-time span (µs): the drives check no more than
+    /// `WINDOW_SEGMENTS_MAX` of them for a stop.
+    segments: Vec<(f64, f64)>,
     /// The ramps every transition runs with (µs): the configured ones.
     full_us: [f64; 2],
 }
@@ -32,6 +37,7 @@ impl PathRamps {
         let mut start = 0.0;
         let mut full_us = [c.stop_time as f64 * 1e6, c.quick_stop_time as f64 * 1e6];
         let mut rows = Vec::with_capacity(segments.len() * PIECES);
+        let mut spans = Vec::with_capacity(segments.len());
         for w in segments {
             let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
             let (ramps, units) = wire_ramps_and_units(
@@ -48,14 +54,17 @@ impl PathRamps {
             // The drives' pieces: equal, in whole ns (w.duration_us × 250).
             let piece = w.duration_us as f64 / PIECES as f64;
             let at = |k: usize| start + piece * k as f64;
+            let quick = units.iter().map(|u| u[1]).fold(0.0, f64::max);
             for (k, u) in units.into_iter().enumerate() {
-                rows.push((at(k), at(k + 1), u));
+                rows.push((at(k), at(k + 1), [u[0], quick]));
             }
+            spans.push((start, at(PIECES)));
             start = at(PIECES);
             full_us = [full_us[0].max(ramps[0]), full_us[1].max(ramps[1])];
         }
         Self {
-            segments: rows,
+            pieces: rows,
+            segments: spans,
             full_us,
         }
     }
@@ -66,7 +75,8 @@ impl PathRamps {
     /// from within [`ESTIMATE_MARGIN_US`] of it can pass through with that
     /// ramp (a stop from σ ≤ 1 covers at most half its ramp of plan time:
     /// the window grows with the ramp); 0 (the drives' full ramp) when that
-    /// is not shorter.
+    /// is not shorter, or when the window overlaps more segments than the
+    /// drives check.
     pub fn dated(&self, plan_us: f64, quick: bool) -> u16 {
         let k = usize::from(quick);
         let full = self.full_us[k];
@@ -77,7 +87,7 @@ impl PathRamps {
         loop {
             let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * units(ahead) * UNIT_US as f64;
             let next = self
-                .segments
+                .pieces
                 .iter()
                 .filter(|&&(a, b, _)| b > lo && a < hi)
                 .map(|s| s.2[k])
@@ -89,8 +99,19 @@ impl PathRamps {
             }
             ahead = next;
         }
+        let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * units(ahead) * UNIT_US as f64;
+        let overlapped = self
+            .segments
+            .iter()
+            .filter(|&&(a, b)| b > lo && a < hi)
+            .count();
         let units = units(ahead);
-        if ahead > 0.0 && units * (UNIT_US as f64) < full && units <= u16::MAX as f64 {
+        // u16::MAX is no ramp to the drives.
+        if ahead > 0.0
+            && units * (UNIT_US as f64) < full
+            && units < u16::MAX as f64
+            && overlapped <= WINDOW_SEGMENTS_MAX
+        {
             units as u16
         } else {
             0
@@ -110,7 +131,7 @@ mod tests {
         let configs = DriveConfigs::for_plan(&p, &DriveSettings::default()).unwrap();
         let w = p.wire_segments().unwrap();
         let r = PathRamps::new(&w, &configs.nodes[0]);
-        let total = r.segments.last().unwrap().1;
+        let total = r.pieces.last().unwrap().1;
         let mut shorter = 0;
         for i in 0..=100 {
             let t = total * i as f64 / 100.0;
@@ -122,7 +143,7 @@ mod tests {
                 }
                 shorter += 1;
                 assert!(d < r.full_us[k], "{t}: {d}");
-                for &(a, b, ramps) in &r.segments {
+                for &(a, b, ramps) in &r.pieces {
                     if b > t - ESTIMATE_MARGIN_US && a < t + ESTIMATE_MARGIN_US + 0.5 * d {
                         assert!(ramps[k] <= d, "{t}: segment's {} > {d}", ramps[k]);
                     }
