@@ -16,9 +16,7 @@ mod telemetry;
 use heapless::Deque;
 use nalgebra::Vector3;
 use triquint_shared::Model;
-use triquint_shared::protocol::contract::{
-    PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US, WINDOW_SEGMENTS_MAX,
-};
+use triquint_shared::protocol::contract::{PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US};
 use triquint_shared::protocol::{
     Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, Reject, State,
 };
@@ -360,31 +358,26 @@ impl<const Q: usize> Drive<Q> {
             return full_ns;
         }
         // The dropped segment, then the queue in plan order, up to the
-        // window's end; no more than `WINDOW_SEGMENTS_MAX` of them. Piece
-        // bounds only for a segment whose largest own ramp is too long (a
-        // quick stop is held to the whole segment's). Every queued segment
-        // ends after s (the current plan time is past s), so it overlaps
-        // the window if it begins before its end.
+        // window's end. Piece bounds only for a segment whose largest own
+        // ramp is too long (a quick stop is held to the whole segment's);
+        // a piece that ended by s counts for nothing.
         let refuses = |a: i64, us: u32, r: &UnitRamps| {
             if quick {
-                r.largest[1] > dated_100us
+                // The front may have ended by s: the tick takes a stop
+                // before it advances the queue.
+                r.largest[1] > dated_100us && a + us as i64 * 1000 > s
             } else {
                 r.largest[0] > dated_100us && pieces_over(a, us, r, s, end) > dated_100us
             }
         };
-        let mut n = 0;
-        if *from + *us as i64 * 1000 > s {
-            if refuses(*from, *us, ramps) {
-                return full_ns;
-            }
-            n = 1;
+        if *from + *us as i64 * 1000 > s && refuses(*from, *us, ramps) {
+            return full_ns;
         }
         for q in self.queue.iter() {
             if q.start_ns >= end {
                 break;
             }
-            n += 1;
-            if n > WINDOW_SEGMENTS_MAX || refuses(q.start_ns, q.duration_us, &q.unit_ramps) {
+            if refuses(q.start_ns, q.duration_us, &q.unit_ramps) {
                 return full_ns;
             }
         }
@@ -418,11 +411,10 @@ impl<const Q: usize> Drive<Q> {
         }
         let mut units = 0u16;
         let mut reach = s + MARGIN_NS;
-        // In plan order; the window grows with the ramp, so a segment is
-        // looked at again when one of its pieces raised it. No more than
-        // `WINDOW_SEGMENTS_MAX` segments: the tick checks each one. Piece
+        // In plan order; the window grows as pieces raise the ramp (a piece
+        // past it ends the scan: every later one begins later). Piece
         // bounds only for a segment whose largest own ramp is longer than
-        // the ramp so far; a queued one ends after s.
+        // the ramp so far.
         let raise = |a: i64, us: u32, ramps: &UnitRamps, units: &mut u16, reach: &mut i64| {
             if ramps.largest[0] <= *units {
                 return;
@@ -440,18 +432,12 @@ impl<const Q: usize> Drive<Q> {
                 }
             }
         };
-        let mut n = 0;
         if *from + *us as i64 * 1000 > lo {
-            n = 1;
             raise(*from, *us, ramps, &mut units, &mut reach);
         }
         for q in self.queue.iter() {
             if q.start_ns >= reach {
                 break;
-            }
-            n += 1;
-            if n > WINDOW_SEGMENTS_MAX {
-                return (full_ns, 0);
             }
             raise(
                 q.start_ns,

@@ -43,10 +43,6 @@ pub const PEER_SKEW_MARGIN_US: u64 = 20_000;
 /// (µs): a peer that takes the Emergency within this of the fault checks
 /// a window inside the sender's, so an honest ramp is never refused.
 pub const PEER_RAMP_MARGIN_US: i64 = 10_000;
-/// A stop along the path whose window overlaps more segments than this
-/// (the dropped one included) runs the full ramp: the tick checks each
-/// one's pieces, and a window over many short segments would overrun it.
-pub const WINDOW_SEGMENTS_MAX: usize = 4;
 /// A peer dates the stop an Emergency causes to its sender's instant when
 /// that is within this of the receipt (µs): a frame's way on a busy bus
 /// and a tick. Further back, the ramp would begin part-way with a step in
@@ -102,14 +98,6 @@ pub const BOUNDS: &[Bound] = &[
         unit: "µm",
         doc: spec_text!(
             "Largest jump between a segment's start and the previous end, every axis (`Discontinuous` beyond)."
-        ),
-    },
-    Bound {
-        name: "stop window",
-        value: WINDOW_SEGMENTS_MAX as f64,
-        unit: "segments (max)",
-        doc: spec_text!(
-            "A stop along the path whose window (the plan time it passes through, and a fault's margin) overlaps more segments runs the full ramp."
         ),
     },
     Bound {

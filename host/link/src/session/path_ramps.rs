@@ -7,7 +7,6 @@
 //! hold in that window, so a wrong estimate of where the plan is, or a σ
 //! above 1, costs the shorter stop, never a harder one.
 
-use triquint_shared::protocol::contract::WINDOW_SEGMENTS_MAX;
 use triquint_shared::protocol::segment_maxima::{PIECES, wire_ramps_and_units};
 use triquint_shared::protocol::{DriveConfig, WireSegment};
 
@@ -25,9 +24,6 @@ pub(crate) struct PathRamps {
     /// σ ≤ 1 (µs): controlled, and quick (its segment's: the drives hold a
     /// quick stop to the whole segment's), in plan order.
     pieces: Vec<(f64, f64, [f64; 2])>,
-    /// Each segment's plan-time span (µs): the drives check no more than
-    /// `WINDOW_SEGMENTS_MAX` of them for a stop.
-    segments: Vec<(f64, f64)>,
     /// The ramps every transition runs with (µs): the configured ones.
     full_us: [f64; 2],
 }
@@ -37,7 +33,6 @@ impl PathRamps {
         let mut start = 0.0;
         let mut full_us = [c.stop_time as f64 * 1e6, c.quick_stop_time as f64 * 1e6];
         let mut rows = Vec::with_capacity(segments.len() * PIECES);
-        let mut spans = Vec::with_capacity(segments.len());
         for w in segments {
             let us = |(s, q): (f32, f32)| [s as f64 * 1e6, q as f64 * 1e6];
             let (ramps, units) = wire_ramps_and_units(
@@ -58,13 +53,11 @@ impl PathRamps {
             for (k, u) in units.into_iter().enumerate() {
                 rows.push((at(k), at(k + 1), [u[0], quick]));
             }
-            spans.push((start, at(PIECES)));
             start = at(PIECES);
             full_us = [full_us[0].max(ramps[0]), full_us[1].max(ramps[1])];
         }
         Self {
             pieces: rows,
-            segments: spans,
             full_us,
         }
     }
@@ -74,9 +67,9 @@ impl PathRamps {
     /// ≤ 1: the largest own ramp for such a stop over the pieces a stop
     /// from within [`ESTIMATE_MARGIN_US`] of it can pass through with that
     /// ramp (a stop from σ ≤ 1 covers at most half its ramp of plan time:
-    /// the window grows with the ramp); 0 (the drives' full ramp) when that
-    /// is not shorter, or when the window overlaps more segments than the
-    /// drives check.
+    /// the window grows with the ramp); 0 when that is not shorter (the
+    /// drives then size their own for a dated Stop or FeedHold, and run
+    /// the full ramp otherwise).
     pub fn dated(&self, plan_us: f64, quick: bool) -> u16 {
         let k = usize::from(quick);
         let full = self.full_us[k];
@@ -99,19 +92,9 @@ impl PathRamps {
             }
             ahead = next;
         }
-        let hi = plan_us + ESTIMATE_MARGIN_US + 0.5 * units(ahead) * UNIT_US as f64;
-        let overlapped = self
-            .segments
-            .iter()
-            .filter(|&&(a, b)| b > lo && a < hi)
-            .count();
         let units = units(ahead);
         // u16::MAX is no ramp to the drives.
-        if ahead > 0.0
-            && units * (UNIT_US as f64) < full
-            && units < u16::MAX as f64
-            && overlapped <= WINDOW_SEGMENTS_MAX
-        {
+        if ahead > 0.0 && units * (UNIT_US as f64) < full && units < u16::MAX as f64 {
             units as u16
         } else {
             0
