@@ -354,7 +354,7 @@ impl<const Q: usize> Drive<Q> {
         // order, piece by piece up to the window's end; a stop that begins
         // before the dropped segment gets the full ramp.
         let (from, us, ramps) = &self.dropped;
-        if *from > s && *from != i64::MIN {
+        if *from > s {
             return full_ns;
         }
         // The dropped segment, then the queue in plan order, up to the
@@ -406,7 +406,7 @@ impl<const Q: usize> Drive<Q> {
         let lo = s - 1_000;
         // The segment before the front, if the stop begins in it.
         let (from, us, ramps) = &self.dropped;
-        if *from > lo && *from != i64::MIN {
+        if *from > lo {
             return (full_ns, 0);
         }
         let mut units = 0u16;
