@@ -27,7 +27,7 @@ pub struct SyncEstimator {
 /// ±1000 ppm drift at most 100 µs per 100 ms sync period.
 pub const OUTLIER_US: i64 = 500;
 /// Consecutive outliers after which an idle node takes a new host time base.
-pub const REBASE_AFTER: u32 = 3;
+pub const REBASE_AFTER: u32 = triquint_shared::protocol::SYNC_REBASE_AFTER;
 
 impl SyncEstimator {
     pub fn reset(&mut self) {

@@ -9,6 +9,8 @@ pub mod fault_run;
 mod fault_stop_tests;
 #[cfg(test)]
 mod feed_tests;
+#[cfg(test)]
+mod host_epoch_tests;
 mod measure;
 pub mod simulate;
 #[cfg(test)]

@@ -41,6 +41,14 @@ pub const MAX_PAYLOAD: usize = 64;
 /// The default node ids of the drives of axes 1–3 (any distinct ids
 /// 1–15 may be configured).
 pub const NODES: [u8; 3] = [1, 2, 3];
+/// Consecutive outlying TimeSync samples after which an Idle (or faulted)
+/// node takes a new host time base (docs/protocol.md, "Time base").
+pub const SYNC_REBASE_AFTER: u32 = 3;
+/// The syncs of a session after which every node's sync status is of its
+/// time base: the first pairs with none, [`SYNC_REBASE_AFTER`] outliers
+/// rebase, one more synchronises, and one more covers a heartbeat composed
+/// before that one arrived.
+pub const SYNCS_TO_FOLLOW: u32 = SYNC_REBASE_AFTER + 3;
 
 /// One CAN frame with an 11-bit identifier.
 #[derive(Clone, Copy, PartialEq, Eq)]

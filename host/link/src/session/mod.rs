@@ -373,6 +373,17 @@ impl Session {
 
     /// `Err(Timeout)` naming `node` once the phase has lasted longer than
     /// `response_timeout_us`.
+    /// Every node reports a valid sync in a heartbeat received after
+    /// `since` and after the session's syncs could have moved its time
+    /// base (`TimeSyncMaster::of_this_session`).
+    fn synced_to_this_session(&self, since: u64) -> bool {
+        self.nodes.all(|v| {
+            v.sync_ok
+                && v.sync_seen_at
+                    .is_some_and(|t| t > since && self.sync.of_this_session(t))
+        })
+    }
+
     fn timeout(&self, now: u64, what: &'static str, node: Drive) -> Result<(), UploadError> {
         if now.saturating_sub(self.phase_since) > self.opts.response_timeout_us {
             return Err(UploadError::Timeout { node, what });
@@ -393,7 +404,7 @@ impl Session {
             self.handle(&rx)?;
         }
         // Time sync, fast until every node is synced.
-        let synced = self.nodes.all(|v| v.sync_ok);
+        let synced = self.synced_to_this_session(0);
         self.sync.poll(now, synced, &self.opts, &mut self.out);
         // A stop while the plan runs carries the ramp for the path ahead
         // of the clock's estimate (the clock as of the last poll: the
@@ -440,10 +451,7 @@ impl Session {
             }
             Phase::Sync => {
                 let since = self.phase_since;
-                if self
-                    .nodes
-                    .all(|v| v.sync_ok && v.sync_seen_at.is_some_and(|t| t > since))
-                {
+                if self.synced_to_this_session(since) {
                     self.set_phase(Phase::Fill, now);
                 } else {
                     let node = self.nodes.first(|v| !v.sync_ok);
