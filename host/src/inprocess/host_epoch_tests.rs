@@ -6,8 +6,8 @@
 
 use triquint_link::{CanPort, DriveConfigs, PortError, Received, Session, SessionOptions};
 use triquint_shared::Robot;
-use triquint_shared::protocol::Frame;
 use triquint_shared::protocol::config::DriveSettings;
+use triquint_shared::protocol::{Frame, State};
 use triquint_sim::host_port::SimPort;
 use triquint_sim::{Sim, SimConfig, testplan};
 
@@ -63,8 +63,9 @@ fn run_session(sim: &mut Sim, session: &mut Session, what: &str) -> (bool, Strin
 fn back_to_back_sessions_on_new_host_clocks_start_whatever_the_gap() {
     let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
     let q0 = plan.segments[0].quintic().eval(0.0).q;
-    let settings = DriveSettings::default();
-    let configs = DriveConfigs::for_plan(&plan, &settings).unwrap().nodes;
+    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default())
+        .unwrap()
+        .nodes;
     // Gaps within the drives' sync timeout (0.25 s), where the old time
     // base is still valid when the next session begins, in steps finer
     // than the heartbeats' period: some put a heartbeat of the old base
@@ -89,6 +90,42 @@ fn back_to_back_sessions_on_new_host_clocks_start_whatever_the_gap() {
         sim.run_until(t).unwrap();
         let mut upload = Session::new(&plan, configs, SessionOptions::default()).unwrap();
         let what = format!("upload after {gap_ms} ms");
+        let (done, faults) = run_session(&mut sim, &mut upload, &what);
+        assert!(done, "{faults}");
+    }
+}
+
+#[test]
+fn a_session_after_one_that_left_the_drives_loaded_starts() {
+    let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
+    let q0 = plan.segments[0].quintic().eval(0.0).q;
+    let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default())
+        .unwrap()
+        .nodes;
+    for gap_ms in (0..240).step_by(5) {
+        let mut sim = Sim::new(&Robot::default(), q0, SimConfig::default());
+        // A host that loaded the drives and went before Arm: they keep
+        // its time base until Reset.
+        let mut first = Session::new(&plan, configs, SessionOptions::default()).unwrap();
+        while sim.host_receive().is_some() {}
+        let epoch_us = sim.now_ns() / 1000;
+        while !sim.nodes.iter().all(|n| n.node.state() == State::Loaded) {
+            let mut port = EpochPort {
+                inner: SimPort {
+                    sim: &mut sim,
+                    tx_queue: 32,
+                },
+                epoch_us,
+            };
+            assert!(first.poll(&mut port).unwrap().is_none());
+            let t = sim.now_ns() + 1_000_000;
+            assert!(t < 10_000_000_000, "never loaded");
+            sim.run_until(t).unwrap();
+        }
+        let t = sim.now_ns() + gap_ms * 1_000_000;
+        sim.run_until(t).unwrap();
+        let mut upload = Session::new(&plan, configs, SessionOptions::default()).unwrap();
+        let what = format!("upload {gap_ms} ms after a session left them loaded");
         let (done, faults) = run_session(&mut sim, &mut upload, &what);
         assert!(done, "{faults}");
     }

@@ -607,6 +607,7 @@ impl Session {
             });
         }
         self.out.command(0, CommandCode::Reset, 0);
+        self.sync.follow_from_now();
         if self.opts.configure {
             let unlock = self.opts.unlock_ceilings;
             self.config.start(now, &self.nodes, unlock, &mut self.out);

@@ -2,7 +2,7 @@
 //! (every `fast_sync_period_us` until every node reports a valid sync),
 //! each carrying the transmit time of the previous one as the kernel (or
 //! the bus) confirmed it. A node's sync status counts only from a heartbeat
-//! after the session's first [`SYNCS_TO_FOLLOW`] syncs went out: before,
+//! after [`SYNCS_TO_FOLLOW`] syncs went out since the session's Reset: before,
 //! it may be of the time base of an earlier session (another process,
 //! another clock), which an idle node follows only after outliers.
 
@@ -36,6 +36,14 @@ impl TimeSyncMaster {
                 }
             }
         }
+    }
+
+    /// Counts the syncs to follow again: a node with motion loaded (by a
+    /// session that ended before Arm) keeps its time base until the Reset
+    /// this session sends it.
+    pub fn follow_from_now(&mut self) {
+        self.confirmed = 0;
+        self.followable_from_us = None;
     }
 
     /// Whether a heartbeat received at host time `t_us` reports a node's
