@@ -5,6 +5,11 @@
 //! a start far from the optimum (the rest ends want intervals several
 //! times the others') costs dozens of trust-region steps at the full size,
 //! while the coarse path's steps cost a quarter as much.
+//!
+//! A long path its coarser path does not trace (a random walk, which turns
+//! between every few via-points) is started from overlapping windows of
+//! itself instead ([`window_start`]): each window's near-optimum, its
+//! middle kept, every window time-scaled to one max jerk.
 
 use crate::problem::{Problem, Solution};
 use crate::spline::Knots;
@@ -18,8 +23,8 @@ const STRIDE: usize = 4;
 const SAMPLES: usize = 256;
 /// The coarse path stands for the fine one when the fine path is at most
 /// this much longer (in joint space): its corners are resolved. A path
-/// that turns between every few via-points (a random walk) is searched
-/// from the usual starts.
+/// that turns between every few via-points (a random walk) is started
+/// from its windows ([`window_start`]).
 const RESOLVED_LENGTH: f64 = 1.05;
 /// Starts closer than this (relative, in every interval) are one.
 const SAME_START: f64 = 1e-6;
@@ -158,6 +163,109 @@ fn time_at(arc: &[f64], s: f64) -> f64 {
     let (a0, a1) = (arc[l - 1], arc[l]);
     let frac = if a1 > a0 { (s - a0) / (a1 - a0) } else { 0.0 };
     ((l - 1) as f64 + frac.clamp(0.0, 1.0)) / n as f64
+}
+
+/// Segments of a window of a long path its coarser path does not resolve.
+const WINDOW_SEGMENTS: usize = 48;
+/// Segments at each end of a window that only shield its middle from its
+/// artificial rest ends.
+const WINDOW_MARGIN: usize = 8;
+
+/// A start for the jerk-only problem `p` (a long path that its coarser
+/// path does not resolve) from overlapping windows of it: each window's
+/// near-optimum (`search_all` gives them, in the windows' order), the
+/// middle of each kept, every window time-scaled so that all reach one
+/// max jerk and together the total time. None for a path of at most
+/// [`COARSE_ABOVE_KNOTS`] knots or when a window's search fails.
+pub(crate) fn window_start(
+    p: &Problem,
+    search_all: impl FnOnce(&[Problem]) -> Vec<Option<Solution>>,
+) -> Option<(Vec<Vec<f64>>, u64)> {
+    let nseg = p.knots.segments();
+    if p.knots.len() <= COARSE_ABOVE_KNOTS || nseg < WINDOW_SEGMENTS {
+        return None;
+    }
+    let stride = WINDOW_SEGMENTS - 2 * WINDOW_MARGIN;
+    let mut firsts: Vec<usize> = (0..)
+        .map(|i| i * stride)
+        .take_while(|&a| a + WINDOW_SEGMENTS < nseg)
+        .collect();
+    firsts.push(nseg - WINDOW_SEGMENTS);
+    firsts.dedup();
+    let windows: Vec<Problem> = firsts
+        .iter()
+        .map(|&a| Problem {
+            knots: Knots {
+                q: p.knots.q[a..=a + WINDOW_SEGMENTS].to_vec(),
+            },
+            total_time: p.total_time * WINDOW_SEGMENTS as f64 / nseg as f64,
+            h_max: f64::INFINITY,
+            shown_jerk: None,
+            ..p.relaxed()
+        })
+        .collect();
+    let solved = search_all(&windows);
+    if solved.len() != windows.len() {
+        return None;
+    }
+    let solved: Vec<Solution> = solved.into_iter().collect::<Option<_>>()?;
+    let solves = solved.iter().map(|s| s.lp_solves).sum();
+    // Each window keeps its segments up to the middle of its overlap with the next.
+    let mut parts: Vec<(Vec<f64>, f64)> = Vec::with_capacity(windows.len());
+    for (i, (&a, s)) in firsts.iter().zip(&solved).enumerate() {
+        let lo = if i == 0 {
+            0
+        } else {
+            (firsts[i - 1] + WINDOW_SEGMENTS + a) / 2
+        };
+        let hi = firsts
+            .get(i + 1)
+            .map_or(nseg, |&b| (a + WINDOW_SEGMENTS + b) / 2);
+        let w = &windows[i];
+        let jerk = (lo..hi)
+            .map(|k| {
+                let l = k - a;
+                (0..3)
+                    .map(|j| segment_jerk(&w.knots.coefficients(&s.x[j], j, l, s.h[l]), s.h[l]))
+                    .fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max);
+        parts.push((s.h[lo - a..hi - a].to_vec(), jerk));
+    }
+    // One max jerk J for all: a window's time law scaled by c stays its
+    // shape, its jerk divided by c³.
+    let cbrt_j: f64 = parts
+        .iter()
+        .map(|(h, j)| h.iter().sum::<f64>() * j.cbrt())
+        .sum::<f64>()
+        / p.total_time;
+    if !(cbrt_j > 0.0 && cbrt_j.is_finite()) {
+        return None;
+    }
+    let mut h: Vec<f64> = parts
+        .iter()
+        .flat_map(|(h, j)| {
+            let c = (j.cbrt() / cbrt_j).max(1e-3);
+            h.iter().map(move |x| x * c)
+        })
+        .collect();
+    let sum: f64 = h.iter().sum();
+    h.iter_mut().for_each(|x| *x *= p.total_time / sum);
+    within_bounds(&mut h, p.h_min, p.h_max);
+    (h.len() == nseg).then_some((vec![h], solves))
+}
+
+/// Max |jerk| over [0, h] of the quintic with power coefficients `c`.
+fn segment_jerk(c: &[f64; 6], h: f64) -> f64 {
+    let jerk = |t: f64| 6.0 * c[3] + 24.0 * c[4] * t + 60.0 * c[5] * t * t;
+    let mut m = jerk(0.0).abs().max(jerk(h).abs());
+    if c[5] != 0.0 {
+        let t = -24.0 * c[4] / (120.0 * c[5]);
+        if t > 0.0 && t < h {
+            m = m.max(jerk(t).abs());
+        }
+    }
+    m
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use std::cell::Cell;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::coarse_start::coarse_starts;
+use crate::coarse_start::{coarse_starts, window_start};
 use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
 use crate::problem::{Problem, Solution};
@@ -285,7 +285,8 @@ fn time_scaled(p: &Problem, target: &Problem, r: SearchResult) -> Option<SearchR
 
 /// The jerk-only problem `p`'s multistart search: a long path from its
 /// coarser path's optima ([`coarse_starts`], whose own search ends at the
-/// first refined agreement), else from [`start_points`]; run until
+/// first refined agreement), or where that path does not trace it from
+/// its windows' ([`window_start`]), else from [`start_points`]; run until
 /// `refined_agreement` of the best coarse point lets a refined agreement end it.
 fn searched<'a>(
     p: &'a Problem,
@@ -295,11 +296,29 @@ fn searched<'a>(
     let (starts, coarse_solves) = coarse_starts(p, |c| {
         relaxed_search(c, opts, Reach::Shapes).map(|r| (r.shapes, r.lp_solves))
     })
+    .or_else(|| {
+        window_start(p, |windows| {
+            parallel(windows, opts.threads, |w| window_optimum(w, opts))
+        })
+    })
     .unwrap_or_else(|| (start_points(p, opts.starts, opts.seed), 0));
     let mut search = Multistart::new(p, starts, opts);
     search.extra_solves = coarse_solves;
     search.run(refined_agreement);
     search
+}
+
+/// Trust-region steps of a window's search, and the relative gain below
+/// which it stops: the window's optimum only places the long path's start.
+const WINDOW_STEPS: usize = 16;
+const WINDOW_TOL: f64 = 1e-3;
+
+/// A window's near-optimum for [`window_start`]: one search from the
+/// travel-proportional start, a few steps long.
+fn window_optimum(w: &Problem, opts: &Options) -> Option<Solution> {
+    let h = start_points(w, 2, opts.seed).pop()?;
+    let first = w.inner(&h, &w.zero_x(), Method::Direct, ROUNDS)?;
+    Some(w.local_search(&first, WINDOW_STEPS, WINDOW_TOL))
 }
 
 fn multistart(p: &Problem, starts: &[Vec<f64>], opts: &Options) -> Option<SearchResult> {
@@ -527,10 +546,16 @@ impl<'a> Multistart<'a> {
         // shapes' knot derivatives are re-solved by the interior-point method,
         // whose non-binding joints sit central (their velocities and
         // accelerations decide what the full problem and min-time make of them).
+        // Each shape's re-solve is independent of the others': they run
+        // side by side.
         let refined: Vec<Solution> = if p.jerk_only {
+            let resolved = parallel(&refined, self.opts.threads, |s| {
+                p.inner(&s.h, &s.x, Method::CuttingPlanes, 1)
+            });
             refined
                 .into_iter()
-                .map(|s| match p.inner(&s.h, &s.x, Method::CuttingPlanes, 1) {
+                .zip(resolved)
+                .map(|(s, c)| match c {
                     Some(c) => {
                         self.resolves += c.lp_solves;
                         Solution {

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use crate::bounds::MAX_SEGMENT_S;
-use crate::coarse_start::{COARSE_ABOVE_KNOTS, coarse_starts};
+use crate::coarse_start::{COARSE_ABOVE_KNOTS, coarse_starts, window_start};
 use crate::evolution::{EvolutionOptions, differential_evolution};
 use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
@@ -419,6 +419,51 @@ fn a_long_path_started_from_its_coarser_one_keeps_the_optimum() {
         usual.best.jerk
     );
     assert!(coarse.lp_solves < usual.lp_solves);
+}
+
+#[test]
+fn a_long_walk_started_from_its_windows_keeps_the_optimum() {
+    // The relaxation of the scaling benchmark's random walk of 200
+    // via-points at its reference time: searched as `global` searches it
+    // (from its windows' optima: its every fourth via-point does not trace
+    // it) and from the usual starts alone.
+    let n = 200;
+    let job = Job::builder()
+        .points_mm(random_walk::random_walk_mm(n))
+        .total_time(0.5 * (n - 1) as f64)
+        .build()
+        .unwrap();
+    let p = job_problem(&job).unwrap().relaxed();
+    let o = Options::default();
+    let (starts, solves) = window_start(&p, |windows| {
+        windows
+            .iter()
+            .map(|w| {
+                assert!(w.knots.len() < p.knots.len());
+                let h = start_points(w, 1, o.seed).pop()?;
+                w.inner(&h, &w.zero_x(), Method::Direct, ROUNDS)
+            })
+            .collect()
+    })
+    .expect("the walk's windows");
+    assert_eq!(starts.len(), 1);
+    assert_eq!(starts[0].len(), p.knots.segments());
+    assert!(solves > 0);
+    let total: f64 = starts[0].iter().sum();
+    assert!((total - p.total_time).abs() <= 1e-9 * p.total_time);
+    assert!(starts[0].iter().all(|&h| h >= p.h_min && h <= p.h_max));
+    let windowed = relaxed_global(&p, &o).unwrap();
+    let usual = multistart_with(&p, &start_points(&p, o.starts, o.seed), &o, true).unwrap();
+    eprintln!(
+        "from the windows: {} LPs, max jerk {:.12}; from the usual starts: {} LPs, {:.12}",
+        windowed.lp_solves, windowed.best.jerk, usual.lp_solves, usual.best.jerk
+    );
+    assert!(
+        windowed.best.merit(p.weight) <= usual.best.merit(p.weight) * (1.0 + 1e-5),
+        "{} > {}",
+        windowed.best.jerk,
+        usual.best.jerk
+    );
 }
 
 #[test]
