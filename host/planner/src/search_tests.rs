@@ -17,8 +17,8 @@ use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
 use crate::run_state::RunState;
 use crate::search::{
-    Multistart, REFERENCE_S_PER_SEGMENT, global, multistart_with, relaxed_global, relaxed_shapes,
-    start_points,
+    Multistart, REFERENCE_S_PER_SEGMENT, SearchResult, global, multistart_with, relaxed_global,
+    relaxed_shapes, start_points,
 };
 use crate::{Job, Options, Plan, check, plan};
 
@@ -407,18 +407,30 @@ fn a_long_path_started_from_its_coarser_one_keeps_the_optimum() {
     let p = job_problem(&job).unwrap().relaxed();
     let o = Options::default();
     let coarse = relaxed_global(&p, &o).unwrap();
-    let usual = multistart_with(&p, &start_points(&p, o.starts, o.seed), &o, true).unwrap();
+    let usual = no_worse_than_the_usual_starts(&p, &o, &coarse, "the coarser path");
+    assert!(coarse.lp_solves < usual.lp_solves);
+}
+
+/// The usual starts' search of `p`, which `found` (searched from
+/// `from`) must be no worse than, to the search's precision.
+fn no_worse_than_the_usual_starts(
+    p: &Problem,
+    o: &Options,
+    found: &SearchResult,
+    from: &str,
+) -> SearchResult {
+    let usual = multistart_with(p, &start_points(p, o.starts, o.seed), o, true).unwrap();
     eprintln!(
-        "from the coarser path: {} LPs, max jerk {:.12}; from the usual starts: {} LPs, {:.12}",
-        coarse.lp_solves, coarse.best.jerk, usual.lp_solves, usual.best.jerk
+        "from {from}: {} LPs, max jerk {:.12}; from the usual starts: {} LPs, {:.12}",
+        found.lp_solves, found.best.jerk, usual.lp_solves, usual.best.jerk
     );
     assert!(
-        coarse.best.merit(p.weight) <= usual.best.merit(p.weight) * (1.0 + 1e-5),
+        found.best.merit(p.weight) <= usual.best.merit(p.weight) * (1.0 + 1e-5),
         "{} > {}",
-        coarse.best.jerk,
+        found.best.jerk,
         usual.best.jerk
     );
-    assert!(coarse.lp_solves < usual.lp_solves);
+    usual
 }
 
 #[test]
@@ -453,17 +465,7 @@ fn a_long_walk_started_from_its_windows_keeps_the_optimum() {
     assert!((total - p.total_time).abs() <= 1e-9 * p.total_time);
     assert!(starts[0].iter().all(|&h| h >= p.h_min && h <= p.h_max));
     let windowed = relaxed_global(&p, &o).unwrap();
-    let usual = multistart_with(&p, &start_points(&p, o.starts, o.seed), &o, true).unwrap();
-    eprintln!(
-        "from the windows: {} LPs, max jerk {:.12}; from the usual starts: {} LPs, {:.12}",
-        windowed.lp_solves, windowed.best.jerk, usual.lp_solves, usual.best.jerk
-    );
-    assert!(
-        windowed.best.merit(p.weight) <= usual.best.merit(p.weight) * (1.0 + 1e-5),
-        "{} > {}",
-        windowed.best.jerk,
-        usual.best.jerk
-    );
+    no_worse_than_the_usual_starts(&p, &o, &windowed, "the windows");
 }
 
 #[test]
