@@ -67,18 +67,18 @@ fn run_session(
     None
 }
 
-/// For gaps within the drives' sync timeout (0.25 s), where the old time
-/// base is still valid when the next session begins, in steps finer than
-/// the heartbeats' period (some put a heartbeat of the old base just
-/// before the next session's Sync phase): `first` on a fresh machine, the
-/// gap, then an upload, which must complete.
+/// For gaps up to 4 × the drives' sync timeout (1 s), within which a
+/// drive that hears syncs reports itself synced on the old time base, in
+/// steps finer than the heartbeats' period (some put a heartbeat of the
+/// old base just before the next session's Sync phase): `first` on a
+/// fresh machine, the gap, then an upload, which must complete.
 fn upload_after(what: &str, first: impl Fn(&mut Sim, &Plan, [DriveConfig; 3])) {
     let plan = testplan::point_to_point(15, 0.9, 0.03).unwrap();
     let q0 = plan.segments[0].quintic().eval(0.0).q;
     let configs = DriveConfigs::for_plan(&plan, &DriveSettings::default())
         .unwrap()
         .nodes;
-    for gap_ms in (0..240).step_by(5) {
+    for gap_ms in (0..1000).step_by(5) {
         let mut sim = Sim::new(&Robot::default(), q0, SimConfig::default());
         first(&mut sim, &plan, configs);
         let t = sim.now_ns() + gap_ms * 1_000_000;
