@@ -11,6 +11,7 @@
 //! itself instead ([`window_start`]): each window's near-optimum, its
 //! middle kept, every window time-scaled to one max jerk.
 
+use crate::extrema::max_abs_on_interval;
 use crate::problem::{Problem, Solution};
 use crate::spline::Knots;
 use crate::time_scaling::within_bounds;
@@ -257,15 +258,7 @@ pub(crate) fn window_start(
 
 /// Max |jerk| over [0, h] of the quintic with power coefficients `c`.
 fn segment_jerk(c: &[f64; 6], h: f64) -> f64 {
-    let jerk = |t: f64| 6.0 * c[3] + 24.0 * c[4] * t + 60.0 * c[5] * t * t;
-    let mut m = jerk(0.0).abs().max(jerk(h).abs());
-    if c[5] != 0.0 {
-        let t = -24.0 * c[4] / (120.0 * c[5]);
-        if t > 0.0 && t < h {
-            m = m.max(jerk(t).abs());
-        }
-    }
-    m
+    max_abs_on_interval(&[6.0 * c[3], 24.0 * c[4], 60.0 * c[5]], 0.0, h)
 }
 
 #[cfg(test)]

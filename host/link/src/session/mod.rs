@@ -371,8 +371,6 @@ impl Session {
         Ok(())
     }
 
-    /// `Err(Timeout)` naming `node` once the phase has lasted longer than
-    /// `response_timeout_us`.
     /// Every node reports a valid sync in a heartbeat received after
     /// `since` and after the session's syncs could have moved its time
     /// base (`TimeSyncMaster::of_this_session`).
@@ -384,6 +382,8 @@ impl Session {
         })
     }
 
+    /// `Err(Timeout)` naming `node` once the phase has lasted longer than
+    /// `response_timeout_us`.
     fn timeout(&self, now: u64, what: &'static str, node: Drive) -> Result<(), UploadError> {
         if now.saturating_sub(self.phase_since) > self.opts.response_timeout_us {
             return Err(UploadError::Timeout { node, what });
