@@ -191,6 +191,17 @@ impl TimeScaling {
         self.constant_at(dt)
     }
 
+    /// [`TimeScaling::at`] where it changes nothing: `None` when a
+    /// transition ends by `t_ns` (so a look-ahead need not copy the scaling).
+    pub fn peek(&self, t_ns: i64) -> Option<Scaled> {
+        let dt = t_ns - self.t0_ns;
+        if self.in_transition() {
+            let ramp = self.ramp_ns.max(1);
+            return (dt < ramp).then(|| self.transition(dt.max(0), ramp));
+        }
+        Some(self.constant_at(dt))
+    }
+
     /// Plan time (ns) at host time `t_ns`, for a constant phase only (not
     /// advanced past a transition's end: the caller knows there is none).
     pub fn constant_plan_time_ns(&self, t_ns: i64) -> i64 {

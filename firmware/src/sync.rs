@@ -13,6 +13,10 @@ pub struct SyncEstimator {
     a: Option<(i64, u64)>,
     /// Rate correction: host advances (1 + ppb·1e-9) µs per local µs.
     ppb: i64,
+    /// The same as a fraction of 2^32 (ppb·2^32/1e9, rounded): the tick
+    /// corrects by a multiplication, not a 64-bit division, which is a
+    /// long soft routine on the target.
+    rate_q32: i32,
     samples: u32,
     /// Local receive time (µs) of the sync that produced the latest accepted sample.
     good_us: Option<u64>,
@@ -20,6 +24,12 @@ pub struct SyncEstimator {
     rx_us: Option<u64>,
     /// Samples discarded as outliers since the last accepted one.
     pub outliers: u32,
+}
+
+/// `ppb` (|ppb| ≤ 2·10⁶) as a fraction of 2^32, rounded.
+fn rate_q32(ppb: i64) -> i32 {
+    let q = ((ppb << 32) + ppb.signum() * 500_000_000) / 1_000_000_000;
+    q as i32
 }
 
 /// A sample whose host time differs from the prediction by more than this (µs)
@@ -80,6 +90,7 @@ impl SyncEstimator {
                         } else {
                             ppb
                         };
+                        self.rate_q32 = rate_q32(self.ppb);
                     }
                 }
             }
@@ -108,9 +119,14 @@ impl SyncEstimator {
         Some(ha + dl + c_us)
     }
 
-    /// The rate correction (ns) over `dl_ns` of local time.
+    /// The rate correction (ns) over `dl_ns` of local time:
+    /// floor(dl_ns · rate_q32 / 2^32), exactly, from the high and low words
+    /// of `dl_ns` (neither product can overflow).
     fn correction_ns(&self, dl_ns: i64) -> i64 {
-        dl_ns.saturating_mul(self.ppb) / 1_000_000_000
+        let m = self.rate_q32 as i64;
+        let hi = (dl_ns >> 32) * m;
+        let lo = ((dl_ns as u32) as i64 * m) >> 32;
+        hi + lo
     }
 
     /// Host time (ns) a hold, resume, stop or override with argument `arg`
@@ -219,14 +235,43 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for _ in 0..50_000 {
             let la: u64 = rng.random_range(0..1u64 << 40);
+            let ppb = rng.random_range(-2_000_000..2_000_000);
             let s = SyncEstimator {
                 a: Some((rng.random_range(-(1i64 << 40)..1i64 << 40), la)),
-                ppb: rng.random_range(-2_000_000..2_000_000),
+                ppb,
+                rate_q32: rate_q32(ppb),
                 ..SyncEstimator::default()
             };
             let local = la.saturating_add_signed(rng.random_range(-(1i64 << 36)..1i64 << 36));
             let ns = s.host_ns(local).unwrap();
             assert_eq!(s.host_us(local), Some(ns.div_euclid(1000)), "{s:?} {local}");
+        }
+    }
+
+    /// The correction is the exact rate's within a nanosecond (the floor)
+    /// and 1.2e-10 of the span (the rate rounded to 2^-32), over a second
+    /// and over hours.
+    #[test]
+    fn the_rate_correction_is_the_exact_rates() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..50_000 {
+            let ppb: i64 = rng.random_range(-2_000_000..=2_000_000);
+            let s = SyncEstimator {
+                ppb,
+                rate_q32: rate_q32(ppb),
+                ..SyncEstimator::default()
+            };
+            let short: i64 = rng.random_range(-1_000_000_000..1_000_000_000);
+            let exact = |dl: i64| (dl as i128 * ppb as i128) as f64 / 1e9;
+            let long: i64 = rng.random_range(-(1i64 << 46)..1i64 << 46);
+            for dl in [short, long] {
+                let d = (s.correction_ns(dl) as f64 - exact(dl)).abs();
+                assert!(
+                    d <= 1.0 + 1.2e-10 * dl.abs() as f64,
+                    "{ppb} ppb over {dl} ns: {d} ns off"
+                );
+            }
         }
     }
 

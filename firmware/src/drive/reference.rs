@@ -74,11 +74,15 @@ impl<const Q: usize> Drive<Q> {
 
     /// The path motion at host time `host_ns` without changing any state.
     pub(super) fn lookahead(&self, host_ns: i64) -> Option<JointMotion<f32>> {
-        let mut sc = self.scaling;
-        let sc = sc.at(host_ns);
-        let seg = self
-            .queue
+        // A copy of the scaling only when a transition ends in between.
+        let sc = self.scaling.peek(host_ns).unwrap_or_else(|| {
+            let mut sc = self.scaling;
+            sc.at(host_ns)
+        });
+        let (head, tail) = self.queue.as_slices();
+        let seg = head
             .iter()
+            .chain(tail)
             .find(|g| sc.s_ns < g.end_ns())
             .or_else(|| self.queue.back())?;
         Some(scale(&seg.eval(sc.s_ns), sc.sigma, sc.sigma_d, sc.sigma_dd))
