@@ -2,12 +2,14 @@
 //! tick, fed with finished items by the receive side (through the hand-off
 //! types of the `inbox` module). Here: the drive's state, filing items,
 //! stopping, and the tick that runs the parts in order; the parts are in
-//! `drive/`: `segments` (filing a segment), `commands`, `supervision`
+//! `drive/`: `segments` (filing a segment), `queue_ramps` (the queued
+//! segments' largest own ramps, by block), `commands`, `supervision`
 //! (what else stops the drive), `reference` (start trigger and reference),
 //! `telemetry` (periodic frames); the control law is the `law` module.
 
 mod commands;
 mod homing;
+mod queue_ramps;
 mod reference;
 mod segments;
 mod supervision;
@@ -34,6 +36,7 @@ use crate::reaction::{self, Reaction};
 use crate::scaling::{Phase, Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::{Seg, UnitRamps};
 use crate::sync::SyncEstimator;
+use queue_ramps::queued;
 use triquint_shared::protocol::segment_maxima::PIECES;
 
 /// The feedforward is evaluated this many control periods ahead on the
@@ -139,6 +142,8 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     /// The largest of the queued segments' own stop ramps, controlled and
     /// quick (µs): the drive's floor under the configured ones.
     queue_ramps_us: (u32, u32),
+    /// The largest per block of queue slots (`drive/queue_ramps.rs`).
+    block_ramps: [queue_ramps::BlockRamps; queue_ramps::MAX_BLOCKS],
     /// The last segment the queue dropped (the one before its front):
     /// its span and its pieces' own ramps for stops from σ ≤ 1. A dated
     /// stop applies up to `APPLY_LATE_MAX_US` late, by when
@@ -245,6 +250,7 @@ impl<const Q: usize> Drive<Q> {
             next_seq: 0,
             queued_end_ns: 0,
             queue_ramps_us: (0, 0),
+            block_ramps: [queue_ramps::BlockRamps::default(); queue_ramps::MAX_BLOCKS],
             dropped: NONE_DROPPED,
             prev_end: None,
             prev_crc: 0,
@@ -373,13 +379,22 @@ impl<const Q: usize> Drive<Q> {
         if *from + *us as i64 * 1000 > s && refuses(*from, *us, ramps) {
             return full_ns;
         }
-        for q in self.queue.iter() {
+        let halves = self.queue.as_slices();
+        let mut i = 0;
+        while let Some(q) = queued(halves, i) {
             if q.start_ns >= end {
                 break;
+            }
+            // A block none of whose segments has a longer own ramp refuses
+            // nothing: skipped whole.
+            if let Some(n) = self.block_at_most(q.seq, quick as usize, dated_100us) {
+                i += n;
+                continue;
             }
             if refuses(q.start_ns, q.duration_us, &q.unit_ramps) {
                 return full_ns;
             }
+            i += 1;
         }
         dated
     }
@@ -419,6 +434,13 @@ impl<const Q: usize> Drive<Q> {
             if ramps.largest[0] <= *units {
                 return;
             }
+            // A segment inside the window so far: every piece counts (the
+            // window only grows), so its largest, with no piece bounds.
+            if a >= lo && a + us as i64 * 1000 <= *reach {
+                *units = ramps.largest[0];
+                *reach = s + MARGIN_NS + *units as i64 * 50_000;
+                return;
+            }
             let piece = us as i64 * PIECE_NS_PER_US;
             let mut p0 = a;
             for &r in &ramps.pieces {
@@ -435,17 +457,20 @@ impl<const Q: usize> Drive<Q> {
         if *from + *us as i64 * 1000 > lo {
             raise(*from, *us, ramps, &mut units, &mut reach);
         }
-        for q in self.queue.iter() {
-            if q.start_ns >= reach {
-                break;
+        let (head, tail) = self.queue.as_slices();
+        'scan: for half in [head, tail] {
+            for q in half {
+                if q.start_ns >= reach {
+                    break 'scan;
+                }
+                raise(
+                    q.start_ns,
+                    q.duration_us,
+                    &q.unit_ramps,
+                    &mut units,
+                    &mut reach,
+                );
             }
-            raise(
-                q.start_ns,
-                q.duration_us,
-                &q.unit_ramps,
-                &mut units,
-                &mut reach,
-            );
         }
         let held = self.queued_end_ns >= reach || self.queue.back().is_some_and(|b| b.last);
         let ramp = units as i64 * 100_000;
@@ -462,16 +487,6 @@ impl<const Q: usize> Drive<Q> {
         (s as i64 * 1000, q as i64 * 1000)
     }
 
-    /// The largest of the queued segments' own ramps, again (after the
-    /// front left the queue).
-    // Cold, out of line: once a segment, and not the tick's own code.
-    #[cold]
-    #[inline(never)]
-    fn recompute_queue_ramps(&mut self) {
-        self.queue_ramps_us = self.queue.iter().fold((0, 0), |m, s| {
-            (m.0.max(s.ramps_us.0), m.1.max(s.ramps_us.1))
-        });
-    }
     /// Is the axis position absolute?
     pub fn is_homed(&self) -> bool {
         self.homed
@@ -643,7 +658,7 @@ impl<const Q: usize> Drive<Q> {
         self.flushes = self.flushes.wrapping_add(1);
         self.next_seq = 0;
         self.queued_end_ns = 0;
-        self.queue_ramps_us = (0, 0);
+        self.ramps_cleared();
         self.dropped = NONE_DROPPED;
         self.prev_end = None;
         self.start_ns = None;

@@ -527,12 +527,13 @@ fn cut(plan: &Plan, h: f64, until: f64) -> Plan {
     p
 }
 
-/// A fresh node with a full queue of short segments (Case I cut into 60 ms
-/// pieces) and holds dated with ramps for the path ahead whose windows
-/// overlap 5 or more of them and 4 or fewer: the tick that takes each
-/// checks every segment the window overlaps.
+/// A fresh node with a full queue of short segments (Case I cut into 20 ms
+/// pieces: 16 of them hold 0.32 s of plan, about as little as the look-ahead
+/// for the configured 0.5 s stop allows) and holds dated with ramps for the
+/// path ahead whose windows overlap 13–14 and 9–10 of them: the tick that takes
+/// each checks the queue up to the window's end.
 fn short_queue(r: &mut Recorder, plan: &Plan) {
-    let short = cut(plan, 0.06, 3.5);
+    let short = cut(plan, 0.02, 3.5);
     let segs = wire_segments(&short);
     let settings = DriveSettings {
         control_rate: 1e6 / TICK_US as f64,
@@ -565,9 +566,9 @@ fn short_queue(r: &mut Recorder, plan: &Plan) {
     let host_now = (r.now + 3_000_000) as u32;
     r.command(CommandCode::Start, host_now + 5_000);
     let rejects = r.node.stats.rejects;
-    // 0.49 s: its window (0.245 s) overlaps at least 5 of the 60 ms
-    // segments; 0.33 s (above every piece's own, 0.325 s at most): 0.165 s,
-    // at most 4. Both run their own.
+    // 0.49 s: its window (0.245 s) overlaps 13–14 of the 20 ms segments;
+    // 0.33 s (above every piece's own, 0.325 s at most): 0.165 s, 9–10. Both
+    // run their own.
     for (ramp_100us, run_us) in [(4_900, 300_000), (3_300, 600_000)] {
         for _ in 0..run_us / TICK_US {
             r.top_up(&segs, &mut next);
@@ -582,7 +583,7 @@ fn short_queue(r: &mut Recorder, plan: &Plan) {
             held_us += TICK_US;
         }
         eprintln!(
-            "golden frames: a hold carrying {ramp_100us} × 100 µs over 60 ms segments at rest in {held_us} µs"
+            "golden frames: a hold carrying {ramp_100us} × 100 µs over 20 ms segments at rest in {held_us} µs"
         );
         assert!(
             held_us <= ramp_100us as u64 * 100 + 200,
@@ -591,6 +592,30 @@ fn short_queue(r: &mut Recorder, plan: &Plan) {
         r.command(CommandCode::Resume, 0);
     }
     assert_eq!(r.node.stats.rejects, rejects, "short segments rejected");
+    // The host goes silent with the queue full of short segments: the node
+    // faults with Underrun, and the tick that takes the fault scans the
+    // queue for the ramp it vouches for over a window of about 12 of them.
+    for _ in 0..600_000 / TICK_US {
+        r.top_up(&segs, &mut next);
+        r.tick();
+    }
+    assert_eq!(r.node.scaling_phase(), Phase::Nominal, "back at σ = 1");
+    let before = r.emergency_ramps.len();
+    let mut waited_us = 0;
+    while r.node.state() != State::Fault && waited_us < 2_000_000 {
+        r.tick();
+        waited_us += TICK_US;
+    }
+    assert_eq!(r.node.state(), State::Fault, "no underrun");
+    assert_eq!(r.node.fault(), FaultCode::Underrun);
+    let vouched = &r.emergency_ramps[before..];
+    eprintln!(
+        "golden frames: an underrun over 20 ms segments vouches for {vouched:?} × 100 µs, in Fault at rest after {waited_us} µs"
+    );
+    assert!(
+        matches!(vouched, [x] if *x > 0 && *x < 5_000),
+        "the ramp it vouched for: {vouched:?}"
+    );
 }
 
 #[test]

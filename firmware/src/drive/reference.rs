@@ -96,6 +96,7 @@ impl<const Q: usize> Drive<Q> {
         self.state = State::Fault;
         self.fault = code;
         self.queue.clear();
+        self.ramps_cleared();
         self.react_at_rest(code);
     }
 
@@ -110,14 +111,11 @@ impl<const Q: usize> Drive<Q> {
         while self.queue.len() > 1 {
             match self.queue.front() {
                 Some(f) if sc.s_ns >= f.end_ns() => {
-                    let r = f.ramps_us;
+                    let (seq, r) = (f.seq, f.ramps_us);
                     let dropped = (f.start_ns, f.duration_us, f.unit_ramps);
                     self.queue.pop_front();
                     self.dropped = dropped;
-                    // Only the largest leaving changes the largest.
-                    if r.0 >= self.queue_ramps_us.0 || r.1 >= self.queue_ramps_us.1 {
-                        self.recompute_queue_ramps();
-                    }
+                    self.ramps_left(seq, r, dropped.2.largest);
                 }
                 _ => break,
             }

@@ -111,8 +111,7 @@ impl<const Q: usize> Drive<Q> {
             s.start_ns = start_ns;
             self.queued_end_ns = s.end_ns();
         }
-        let (rs, rq) = self.queue_ramps_us;
-        self.queue_ramps_us = (rs.max(seg.ramps_us.0), rq.max(seg.ramps_us.1));
+        self.ramps_joined(seg);
         self.prev_end = Some(c.end);
         self.prev_crc = seg.crc;
         self.next_seq = self.next_seq.wrapping_add(1);

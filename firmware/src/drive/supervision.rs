@@ -159,6 +159,7 @@ impl<const Q: usize> Drive<Q> {
         let moving = matches!(self.state, State::Running | State::Stopping);
         if moving && reaction::reaction(code, true, self.reaction_axis()) == Reaction::TorqueOff {
             self.queue.clear();
+            self.ramps_cleared();
             self.stop_reason = None;
             self.fault_now(code);
             self.torque_off = true;
