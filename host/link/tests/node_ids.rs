@@ -2,11 +2,13 @@
 //! (4, 5, 6 and 2, 1, 3), through the `CanPort` seam: scripted drives
 //! take the configuration, and one of them ends up with another CRC than
 //! the plan's; the read-back must name that drive, compare its values with
-//! its own plan configuration, and never panic.
+//! its own plan configuration, and never panic. A drive whose sync report
+//! stops at its commit is the one a Sync timeout names.
 
 use std::collections::VecDeque;
 
 use triquint_link::{CanPort, PortError, Received, Session, SessionOptions, UploadError};
+use triquint_shared::plan::Plan;
 use triquint_shared::protocol::{
     CommandAck, CommandCode, DriveConfig, Frame, Heartbeat, HeartbeatExt, Msg, PARAM_COUNT,
     PROTOCOL_VERSION, State, config_value_frame, decode, flags,
@@ -27,6 +29,10 @@ struct Bus {
     rx: VecDeque<Received>,
     bad: u8,
     bad_crc: u32,
+    /// A drive whose extended heartbeats (its sync status) stop once a
+    /// configuration is committed.
+    mute: u8,
+    committed: bool,
 }
 
 impl Bus {
@@ -53,6 +59,9 @@ impl CanPort for Bus {
                     ..Heartbeat::default()
                 };
                 self.push(h.to_frame(id));
+                if self.committed && id == self.mute {
+                    continue;
+                }
                 let e = HeartbeatExt {
                     flags: flags::SYNCED | flags::HOMED,
                     ..HeartbeatExt::default()
@@ -67,12 +76,23 @@ impl CanPort for Bus {
         let Ok((msg, node)) = decode(frame) else {
             return Ok(true);
         };
+        // Its own syncs come back, as SocketCAN's loopback gives them: the
+        // session dates each sync by its echo.
+        if matches!(msg, Msg::TimeSync(_)) {
+            self.rx.push_back(Received {
+                frame: *frame,
+                t_us: self.now,
+                own: true,
+            });
+        }
         let (bad, bad_crc) = (self.bad, self.bad_crc);
+        let mut committed = self.committed;
         let mut out = Vec::new();
         for d in self.drives.iter_mut().filter(|d| node == 0 || node == d.id) {
             match msg {
                 Msg::ConfigWrite { index, value } => d.written[index as usize] = value,
                 Msg::Command(c) if c.command == CommandCode::ConfigCommit as u8 => {
+                    committed = true;
                     d.crc = if d.id == bad { bad_crc } else { c.arg };
                     let a = CommandAck {
                         command: c.command,
@@ -101,6 +121,7 @@ impl CanPort for Bus {
                 _ => {}
             }
         }
+        self.committed = committed;
         for f in out {
             self.push(f);
         }
@@ -124,9 +145,10 @@ fn configs(ids: [u8; 3]) -> [DriveConfig; 3] {
     })
 }
 
-/// Configures drives `ids` where `bad` keeps another CRC: the error.
-fn configure(ids: [u8; 3], bad: u8) -> UploadError {
-    let mut bus = Bus {
+/// Drives `ids` on a bus where `bad` keeps another CRC and `mute` stops
+/// reporting its sync at the commit.
+fn bus(ids: [u8; 3], bad: u8, mute: u8) -> Bus {
+    Bus {
         now: 0,
         drives: ids
             .iter()
@@ -139,16 +161,31 @@ fn configure(ids: [u8; 3], bad: u8) -> UploadError {
         rx: VecDeque::new(),
         bad,
         bad_crc: 0x0BAD_C0DE,
-    };
-    let mut s = Session::configure(configs(ids), SessionOptions::default());
+        mute,
+        committed: false,
+    }
+}
+
+/// Polls `s` on `bus` until it fails: the error.
+fn error_of(mut s: Session, mut bus: Bus, what: &str) -> UploadError {
     for _ in 0..20_000 {
         match s.poll(&mut bus) {
             Ok(None) => {}
-            Ok(Some(_)) => panic!("ids {ids:?}: configured although node {bad} differs"),
+            Ok(Some(_)) => panic!("{what}: no error"),
             Err(e) => return e,
         }
     }
-    panic!("ids {ids:?}: no verdict");
+    panic!("{what}: no verdict");
+}
+
+/// Configures drives `ids` where `bad` keeps another CRC: the error.
+fn configure(ids: [u8; 3], bad: u8) -> UploadError {
+    let s = Session::configure(configs(ids), SessionOptions::default());
+    error_of(
+        s,
+        bus(ids, bad, 0),
+        &format!("ids {ids:?}, node {bad} differs"),
+    )
 }
 
 #[test]
@@ -172,6 +209,42 @@ fn a_differing_crc_is_read_back_from_the_right_node() {
                 assert_eq!(plan_crc, configs(ids)[i].crc());
             }
             e => panic!("ids {ids:?}, node {bad}: {e}"),
+        }
+    }
+}
+
+/// The plan the HIL suite runs.
+fn plan() -> Plan {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../testdata/hil/paper-case1.json"
+    );
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A drive that reported itself synced before its commit and nothing of
+/// its sync since cannot be synced to this session's time base: the Sync
+/// phase's timeout names it, not the first drive.
+#[test]
+fn a_sync_timeout_names_the_drive_whose_report_predates_the_session() {
+    for (ids, mute) in [
+        ([4, 5, 6], 5),
+        ([4, 5, 6], 6),
+        ([2, 1, 3], 1),
+        ([2, 1, 3], 3),
+    ] {
+        let i = ids.iter().position(|&id| id == mute).unwrap();
+        let s = Session::new(&plan(), configs(ids), SessionOptions::default()).unwrap();
+        match error_of(
+            s,
+            bus(ids, 0, mute),
+            &format!("ids {ids:?}, node {mute} mute"),
+        ) {
+            UploadError::Timeout { node, what } => {
+                assert_eq!(what, "synchronising its clock", "ids {ids:?}");
+                assert_eq!(node, triquint_link::Drive::of(ids, i), "ids {ids:?}");
+            }
+            e => panic!("ids {ids:?}, node {mute}: {e}"),
         }
     }
 }

@@ -371,15 +371,19 @@ impl Session {
         Ok(())
     }
 
-    /// Every node reports a valid sync in a heartbeat received after
-    /// `since` and after the session's syncs could have moved its time
-    /// base (`TimeSyncMaster::of_this_session`).
+    /// Every node is [`Session::node_synced_to_this_session`].
     fn synced_to_this_session(&self, since: u64) -> bool {
-        self.nodes.all(|v| {
-            v.sync_ok
-                && v.sync_seen_at
-                    .is_some_and(|t| t > since && self.sync.of_this_session(t))
-        })
+        self.nodes
+            .all(|v| self.node_synced_to_this_session(v, since))
+    }
+
+    /// Node `v` reports a valid sync in a heartbeat received after `since`
+    /// and after the session's syncs could have moved its time base
+    /// (`TimeSyncMaster::of_this_session`).
+    fn node_synced_to_this_session(&self, v: &NodeView, since: u64) -> bool {
+        v.sync_ok
+            && v.sync_seen_at
+                .is_some_and(|t| t > since && self.sync.of_this_session(t))
     }
 
     /// `Err(Timeout)` naming `node` once the phase has lasted longer than
@@ -454,7 +458,11 @@ impl Session {
                 if self.synced_to_this_session(since) {
                     self.set_phase(Phase::Fill, now);
                 } else {
-                    let node = self.nodes.first(|v| !v.sync_ok);
+                    // The first node not yet synced on this session's base
+                    // (one synced on an old base is named too).
+                    let node = self
+                        .nodes
+                        .first(|v| !self.node_synced_to_this_session(v, since));
                     self.timeout(now, "synchronising its clock", node)?;
                 }
             }
