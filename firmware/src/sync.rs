@@ -26,7 +26,8 @@ pub struct SyncEstimator {
     pub outliers: u32,
 }
 
-/// `ppb` (|ppb| ≤ 2·10⁶) as a fraction of 2^32, rounded.
+/// `ppb` as a fraction of 2^32, rounded half away from zero (the
+/// estimator takes |ppb| ≤ 10⁶; up to 2·10⁶ fits with room).
 fn rate_q32(ppb: i64) -> i32 {
     let q = ((ppb << 32) + ppb.signum() * 500_000_000) / 1_000_000_000;
     q as i32

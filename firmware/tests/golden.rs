@@ -594,7 +594,7 @@ fn short_queue(r: &mut Recorder, plan: &Plan) {
     assert_eq!(r.node.stats.rejects, rejects, "short segments rejected");
     // The host goes silent with the queue full of short segments: the node
     // faults with Underrun, and the tick that takes the fault scans the
-    // queue for the ramp it vouches for over a window of about 12 of them.
+    // queue for the ramp it vouches for over a window of about 8 of them.
     for _ in 0..600_000 / TICK_US {
         r.top_up(&segs, &mut next);
         r.tick();

@@ -4,8 +4,8 @@
 //! capacity), the slots form blocks of [`BLOCK`], and the drive keeps each
 //! block's largest and the largest of the blocks. A segment leaving
 //! re-reads its own block's segments and the blocks, never the whole queue.
-//! A scan of the queue for ramps above a floor (a dated stop's check, the
-//! ramp a fault stop vouches for) skips a block whose largest is not.
+//! A dated stop's check of the queue skips a block none of whose segments
+//! has an own ramp above the one carried.
 
 use super::Drive;
 use crate::segment::Seg;
