@@ -14,7 +14,8 @@ use crate::options::Options;
 use crate::planning::job_problem;
 use crate::problem::Problem;
 use crate::run_state::RunState;
-use crate::search::{SplitMix, global, parallel};
+use crate::search::{SplitMix, global};
+use crate::workers::parallel;
 
 /// Size and seed of a run.
 #[derive(Clone, Debug)]

@@ -83,6 +83,7 @@ mod streaming;
 mod sturm;
 mod time_descent;
 mod time_scaling;
+mod workers;
 
 #[cfg(test)]
 mod scale_tests;

@@ -1,11 +1,40 @@
 //! The search's side of observation: counters the observer reads, and the
 //! cancel flag every linear program checks before it runs.
 
+use std::cell::{Cell, RefCell};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::error::CancelReason;
 use crate::options::{Progress, Stage};
+
+thread_local! {
+    /// Solves on this thread held back from the run's count ([`held_solves`]).
+    static HELD: Cell<Option<u64>> = const { Cell::new(None) };
+    /// Set once this thread's work is no longer wanted ([`abandonable`]).
+    static ABANDONED: RefCell<Option<Arc<AtomicBool>>> = const { RefCell::new(None) };
+}
+
+/// Runs `f` on this thread refusing every program once `abandoned` is
+/// set (as a cancelled run does), for work whose result may not be wanted.
+pub(crate) fn abandonable<R>(abandoned: Arc<AtomicBool>, f: impl FnOnce() -> R) -> R {
+    let before = ABANDONED.with(|a| a.replace(Some(abandoned)));
+    let r = f();
+    ABANDONED.with(|a| a.replace(before));
+    r
+}
+
+/// Runs `f` with the solves it makes on this thread held back from the
+/// run's count, and returns them: work that may be thrown away (a trial
+/// solved ahead) is counted only once it is used
+/// ([`RunState::count_solves`]), so the plan's count is the search's own.
+pub(crate) fn held_solves<R>(f: impl FnOnce() -> R) -> (R, u64) {
+    let before = HELD.with(|held| held.replace(Some(0)));
+    let r = f();
+    let n = HELD.with(|held| held.replace(before)).unwrap_or(0);
+    (r, n)
+}
 
 #[derive(Debug)]
 pub(crate) struct RunState {
@@ -42,7 +71,12 @@ impl RunState {
 
     /// Called before every linear program: false once cancelled.
     pub(crate) fn proceed(&self) -> bool {
-        if self.cancelled.load(Ordering::Relaxed) {
+        let abandoned = ABANDONED.with(|a| {
+            a.borrow()
+                .as_ref()
+                .is_some_and(|f| f.load(Ordering::Relaxed))
+        });
+        if abandoned || self.cancelled.load(Ordering::Relaxed) {
             return false;
         }
         if self.deadline.is_some_and(|d| Instant::now() >= d) {
@@ -50,8 +84,15 @@ impl RunState {
             self.cancel();
             return false;
         }
-        self.lp_solves.fetch_add(1, Ordering::Relaxed);
+        if !HELD.with(|held| held.get().map(|n| held.set(Some(n + 1))).is_some()) {
+            self.lp_solves.fetch_add(1, Ordering::Relaxed);
+        }
         true
+    }
+
+    /// Counts `n` solves held back by [`held_solves`].
+    pub(crate) fn count_solves(&self, n: u64) {
+        self.lp_solves.fetch_add(n, Ordering::Relaxed);
     }
 
     pub(crate) fn cancel(&self) {

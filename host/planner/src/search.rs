@@ -6,14 +6,13 @@
 #![allow(clippy::needless_range_loop)]
 
 use std::cell::Cell;
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::coarse_start::{coarse_starts, window_start};
 use crate::inner::{Method, ROUNDS};
 use crate::options::{Options, Stage};
 use crate::problem::{Problem, Solution};
 use crate::time_scaling::{scaled_shape, within_bounds};
+use crate::workers::parallel;
 
 /// The best solution and how it was found.
 #[derive(Clone, Debug)]
@@ -78,34 +77,6 @@ pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
         within_bounds(h, p.h_min, p.h_max);
     }
     out
-}
-
-/// Runs `f` on every item with `threads` workers; results keep the items' order.
-pub(crate) fn parallel<T: Sync, R: Send>(
-    items: &[T],
-    threads: usize,
-    f: impl Fn(&T) -> R + Sync,
-) -> Vec<R> {
-    let next = AtomicUsize::new(0);
-    let slots: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
-    std::thread::scope(|s| {
-        for _ in 0..threads.max(1).min(items.len().max(1)) {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(item) = items.get(i) else { break };
-                    let r = f(item);
-                    if let Ok(mut slot) = slots[i].lock() {
-                        *slot = Some(r);
-                    }
-                }
-            });
-        }
-    });
-    slots
-        .into_iter()
-        .filter_map(|m| m.into_inner().ok().flatten())
-        .collect()
 }
 
 /// Refined starts: the best few coarse results are driven to convergence.

@@ -8,6 +8,8 @@ use crate::inner::Method;
 use crate::lp::{Lp, LpFailure};
 use crate::problem::{Cut, Evaluation, Problem, Solution};
 use crate::program::add_new_cuts;
+use crate::run_state::held_solves;
+use crate::workers::{Beside, on_spare_core};
 
 /// Cutting-plane rounds of a trust-region step's program, and when judging
 /// the step (its figures are exact whatever the count; more rounds only
@@ -32,6 +34,12 @@ struct StepRounds {
     solves: u64,
     /// The failure that ended the rounds, if one did.
     failed: Option<LpFailure>,
+}
+
+/// A trust-region trial ([`Problem::trial`]).
+struct Trial {
+    rounds: StepRounds,
+    cand: Option<Solution>,
 }
 
 /// A solved step program: its solution, its intervals, its knot
@@ -74,24 +82,33 @@ impl Problem {
         // fall with the region (see below), and the last rejected promise.
         let mut at_floor = 0;
         let mut last_rejected_gain = f64::INFINITY;
+        // A trial at the current point with the region a rejection leaves,
+        // started beside the last one on a spare core: the same trial the
+        // loop would solve next, so the search is the same either way (it
+        // is abandoned when the last one is accepted).
+        let mut ahead: Option<(f64, Beside<(Trial, u64)>)> = None;
         for _ in 0..max_iter {
             if done(&cur) {
                 break;
             }
-            // Where a limit other than jerk binds, a step with only the cuts
-            // at the current point's extrema promises what holds only there:
-            // steps are rejected, the region collapses and the search crawls
-            // (docs/planner-speed.md), so the step program has its own rounds.
-            let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
-            let rounds = self.step_rounds(&cur, delta, &mut cuts, STEP_ROUNDS, |_| {});
-            solves += rounds.solves;
-            let Some(StepPoint {
-                sol,
-                h: h_new,
-                x: x_new,
-                ..
-            }) = rounds.last
-            else {
+            let trial = match ahead.take() {
+                Some((d, beside)) if d == delta => match beside.wait() {
+                    Some((t, held)) => {
+                        self.run.count_solves(held);
+                        t
+                    }
+                    None => self.trial(&cur, delta),
+                },
+                _ => {
+                    let smaller = delta * 0.25;
+                    let (p, at) = (self.clone(), cur.clone());
+                    ahead = on_spare_core(move || held_solves(|| p.trial(&at, smaller)))
+                        .map(|beside| (smaller, beside));
+                    self.trial(&cur, delta)
+                }
+            };
+            solves += trial.rounds.solves;
+            let Some(StepPoint { sol, .. }) = trial.rounds.last else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -105,10 +122,7 @@ impl Problem {
             if gain <= 1e-9 * merit {
                 break;
             }
-            // The step is judged on the exact inner optimum at the new
-            // intervals: x re-optimised, not the LP's x projected back onto C3
-            // (that evaluation understates the gain and keeps steps tiny).
-            let Some(cand) = self.inner(&h_new, &x_new, Method::ViaRelaxation, STEP_ROUNDS) else {
+            let Some(cand) = trial.cand else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -126,6 +140,7 @@ impl Problem {
                     0
                 };
                 cur = cand;
+                ahead = None;
                 at_floor = 0;
                 last_rejected_gain = f64::INFINITY;
                 if rho > 0.5 && at_edge {
@@ -153,6 +168,29 @@ impl Problem {
         }
         cur.lp_solves = start.lp_solves + solves;
         cur
+    }
+
+    /// One trust-region trial from `cur` with region `delta`: the step
+    /// program's rounds and, unless the predicted gain is noise, the exact
+    /// inner optimum at its point (the step is judged on it, not on the
+    /// LP's x projected back onto C3: that evaluation understates the gain
+    /// and keeps steps tiny). Depends on `cur` and `delta` alone.
+    fn trial(&self, cur: &Solution, delta: f64) -> Trial {
+        // Where a limit other than jerk binds, a step with only the cuts
+        // at the current point's extrema promises what holds only there:
+        // steps are rejected, the region collapses and the search crawls
+        // (docs/planner-speed.md), so the step program has its own rounds.
+        let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
+        let rounds = self.step_rounds(cur, delta, &mut cuts, STEP_ROUNDS, |_| {});
+        let cand = rounds.last.as_ref().and_then(|last| {
+            let nd = 3 * self.nv() + self.nseg();
+            let merit = cur.merit(self.weight);
+            let gain = merit - (last.sol[nd] + self.weight * last.sol[nd + 1]);
+            (gain > 1e-9 * merit)
+                .then(|| self.inner(&last.h, &last.x, Method::ViaRelaxation, STEP_ROUNDS))
+                .flatten()
+        });
+        Trial { rounds, cand }
     }
 
     /// The step program at `cur` (h moving by at most Δ·h_k), shaped by
@@ -269,8 +307,12 @@ impl Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Arc;
+
     use crate::inner::ROUNDS;
+    use crate::run_state::RunState;
     use crate::search_tests::{example_problem, uneven_intervals};
+    use crate::workers::parallel;
 
     #[test]
     fn the_search_never_worsens_and_keeps_the_budget() {
@@ -290,6 +332,31 @@ mod tests {
             let again = p.evaluate(&end.h, &end.x);
             assert_eq!((again.jerk, again.violation), (end.jerk, end.violation));
         }
+    }
+
+    #[test]
+    fn a_trial_solved_ahead_changes_neither_the_search_nor_its_count() {
+        let p = example_problem("paper-case1.toml").relaxed();
+        let h = uneven_intervals(&p);
+        let start = p.inner(&h, &p.zero_x(), Method::Direct, ROUNDS).unwrap();
+        // Alone on two threads the search has a spare core; on one it has none.
+        let search = |threads: usize| {
+            let q = Problem {
+                run: Arc::new(RunState::new(None)),
+                ..p.clone()
+            };
+            let end = parallel(&[()], threads, |_| q.local_search(&start, 30, 1e-6));
+            (end[0].clone(), q.run.progress().lp_solves)
+        };
+        let (alone, counted_alone) = search(1);
+        let (beside, counted_beside) = search(2);
+        assert_eq!(
+            (&alone.h, &alone.x, alone.lp_solves),
+            (&beside.h, &beside.x, beside.lp_solves)
+        );
+        // The run counts the solves the search used, not those thrown away.
+        assert_eq!(counted_alone, alone.lp_solves - start.lp_solves);
+        assert_eq!(counted_beside, counted_alone);
     }
 
     #[test]

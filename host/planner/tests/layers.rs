@@ -19,6 +19,7 @@ const LAYERS: &[&str] = &[
     "error",        // PlanError
     "options",      // how hard to search; the observer's side
     "run_state",    // cancellation and progress shared with the observer
+    "workers",      // worker threads and spare cores
     "extrema",      // polynomial extrema (the search's)
     "sturm",        // polynomial extrema by Sturm sequences (the check's)
     "banded",       // banded least-change projection
