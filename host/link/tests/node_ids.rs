@@ -188,15 +188,22 @@ fn configure(ids: [u8; 3], bad: u8) -> UploadError {
     )
 }
 
-#[test]
-fn a_differing_crc_is_read_back_from_the_right_node() {
-    for (ids, bad) in [
+/// Node ids out of order, each with the drive a test singles out and its
+/// index.
+fn cases() -> impl Iterator<Item = ([u8; 3], u8, usize)> {
+    [
         ([4, 5, 6], 5),
         ([4, 5, 6], 6),
         ([2, 1, 3], 2),
         ([2, 1, 3], 1),
-    ] {
-        let i = ids.iter().position(|&id| id == bad).unwrap();
+    ]
+    .into_iter()
+    .map(|(ids, id)| (ids, id, ids.iter().position(|&x| x == id).unwrap()))
+}
+
+#[test]
+fn a_differing_crc_is_read_back_from_the_right_node() {
+    for (ids, bad, i) in cases() {
         match configure(ids, bad) {
             // Its values are its plan's: it did not commit them.
             UploadError::ConfigCrc {
@@ -227,13 +234,7 @@ fn plan() -> Plan {
 /// phase's timeout names it, not the first drive.
 #[test]
 fn a_sync_timeout_names_the_drive_whose_report_predates_the_session() {
-    for (ids, mute) in [
-        ([4, 5, 6], 5),
-        ([4, 5, 6], 6),
-        ([2, 1, 3], 1),
-        ([2, 1, 3], 3),
-    ] {
-        let i = ids.iter().position(|&id| id == mute).unwrap();
+    for (ids, mute, i) in cases() {
         let s = Session::new(&plan(), configs(ids), SessionOptions::default()).unwrap();
         match error_of(
             s,
