@@ -425,7 +425,9 @@ impl<const Q: usize> Drive<Q> {
             return (full_ns, 0);
         }
         let mut units = 0u16;
-        let mut reach = s + MARGIN_NS;
+        // The window's reach for a ramp of `units`.
+        let reach_of = |units: u16| s + MARGIN_NS + units as i64 * 50_000;
+        let mut reach = reach_of(0);
         // In plan order; the window grows as pieces raise the ramp (a piece
         // past it ends the scan: every later one begins later). Piece
         // bounds only for a segment whose largest own ramp is longer than
@@ -438,7 +440,7 @@ impl<const Q: usize> Drive<Q> {
             // window only grows), so its largest, with no piece bounds.
             if a >= lo && a + us as i64 * 1000 <= *reach {
                 *units = ramps.largest[0];
-                *reach = s + MARGIN_NS + *units as i64 * 50_000;
+                *reach = reach_of(*units);
                 return;
             }
             let piece = us as i64 * PIECE_NS_PER_US;
@@ -450,7 +452,7 @@ impl<const Q: usize> Drive<Q> {
                 p0 += piece;
                 if p0 > lo && r > *units {
                     *units = r;
-                    *reach = s + MARGIN_NS + r as i64 * 50_000;
+                    *reach = reach_of(r);
                 }
             }
         };
