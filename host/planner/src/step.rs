@@ -39,8 +39,13 @@ struct StepRounds {
 /// A trust-region trial ([`Problem::trial`]).
 struct Trial {
     rounds: StepRounds,
+    /// The merit its step program promises to gain (with a point).
+    gain: Option<f64>,
     cand: Option<Solution>,
 }
+
+/// A promised gain below this share of the merit is the step LP's noise.
+const NOISE_GAIN: f64 = 1e-9;
 
 /// A solved step program: its solution, its intervals, its knot
 /// derivatives on C3 there, and their evaluation.
@@ -72,7 +77,6 @@ impl Problem {
     ) -> Solution {
         let nv = self.nv();
         let nseg = self.nseg();
-        let nd = 3 * nv + nseg;
         let mut cur = start.clone();
         let mut delta = 0.25;
         let mut solves = 0;
@@ -108,7 +112,7 @@ impl Problem {
                 }
             };
             solves += trial.rounds.solves;
-            let Some(StepPoint { sol, .. }) = trial.rounds.last else {
+            let (Some(StepPoint { sol, .. }), Some(gain)) = (trial.rounds.last, trial.gain) else {
                 delta *= 0.25;
                 if delta < 1e-7 {
                     break;
@@ -116,10 +120,8 @@ impl Problem {
                 continue;
             };
             let merit = cur.merit(self.weight);
-            let predicted = sol[nd] + self.weight * sol[nd + 1];
-            let gain = merit - predicted;
             // Below the step LP's accuracy a predicted gain is noise.
-            if gain <= 1e-9 * merit {
+            if gain <= NOISE_GAIN * merit {
                 break;
             }
             let Some(cand) = trial.cand else {
@@ -182,15 +184,18 @@ impl Problem {
         // (docs/planner-speed.md), so the step program has its own rounds.
         let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
         let rounds = self.step_rounds(cur, delta, &mut cuts, STEP_ROUNDS, |_| {});
-        let cand = rounds.last.as_ref().and_then(|last| {
-            let nd = 3 * self.nv() + self.nseg();
-            let merit = cur.merit(self.weight);
-            let gain = merit - (last.sol[nd] + self.weight * last.sol[nd + 1]);
-            (gain > 1e-9 * merit)
-                .then(|| self.inner(&last.h, &last.x, Method::ViaRelaxation, STEP_ROUNDS))
-                .flatten()
-        });
-        Trial { rounds, cand }
+        let nd = 3 * self.nv() + self.nseg();
+        let merit = cur.merit(self.weight);
+        let gain = rounds
+            .last
+            .as_ref()
+            .map(|last| merit - (last.sol[nd] + self.weight * last.sol[nd + 1]));
+        let cand = rounds
+            .last
+            .as_ref()
+            .filter(|_| gain.is_some_and(|g| g > NOISE_GAIN * merit))
+            .and_then(|last| self.inner(&last.h, &last.x, Method::ViaRelaxation, STEP_ROUNDS));
+        Trial { rounds, gain, cand }
     }
 
     /// The step program at `cur` (h moving by at most Δ·h_k), shaped by
