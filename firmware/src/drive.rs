@@ -20,7 +20,7 @@ use nalgebra::Vector3;
 use triquint_shared::Model;
 use triquint_shared::protocol::contract::{PEER_RAMP_MARGIN_US, UNCONFIGURED_SYNC_TIMEOUT_US};
 use triquint_shared::protocol::{
-    Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, Reject, State,
+    Command, CommandAck, DriveConfig, Emergency, FaultCode, Frame, PARAM_COUNT, Reject, State,
 };
 use triquint_shared::quintic::JointMotion;
 
@@ -51,7 +51,7 @@ pub const UNCONFIGURED_M_PER_COUNT: f32 = 1e-9;
 /// the planner and `check` hold plans to it (`protocol::streaming`).
 pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 /// Frames waiting for the CAN controller.
-pub const OUTBOX: usize = 64;
+pub const OUTBOX: usize = 16;
 
 /// No segment dropped since the last flush: it ends before any plan time.
 const NONE_DROPPED: Dropped = (
@@ -191,6 +191,9 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     errors: (u8, u8),
     outbox: Deque<Frame, OUTBOX>,
     dropped_tx: u32,
+    /// A ReadConfig's values and the index of the next one to send: sent
+    /// over as many ticks as the outbox needs (`config_readout`).
+    readout: Option<([f32; PARAM_COUNT], u8)>,
     /// The last command executed and its answer: a CAN frame can arrive twice
     /// (a transmitter that missed the ACK resends it), so a repeat of the
     /// same command, token and argument within the repeat window
@@ -279,6 +282,7 @@ impl<const Q: usize> Drive<Q> {
             errors: (0, 0),
             outbox: Deque::new(),
             dropped_tx: 0,
+            readout: None,
             peer_seen_us: [None; 3],
             homed,
             home_offset: 0,
@@ -592,10 +596,15 @@ impl<const Q: usize> Drive<Q> {
         }
     }
 
+    /// Ahead of everything waiting; with the outbox full (a bus that
+    /// takes nothing: babble, bus-off), the newest waiting frame gives way,
+    /// so an Emergency is never lost to routine traffic queued before it.
     fn send_priority(&mut self, f: Frame) {
-        if self.outbox.push_front(f).is_err() {
+        if self.outbox.is_full() {
+            self.outbox.pop_back();
             self.dropped_tx = self.dropped_tx.saturating_add(1);
         }
+        let _ = self.outbox.push_front(f);
     }
 
     /// Takes up to [`TAKE_PER_TICK`] items from the queue from the receive
@@ -979,5 +988,33 @@ impl<const Q: usize> Drive<Q> {
     /// Buffered plan time ahead of the current plan time (ns), for tests and monitors.
     pub fn buffered_end_ns(&self) -> i64 {
         self.queued_end_ns
+    }
+}
+
+#[cfg(test)]
+mod outbox_tests {
+    extern crate std;
+    use super::*;
+
+    /// A bus that takes nothing fills the outbox with routine frames; an
+    /// Emergency still goes to its front, and the newest routine frame is
+    /// the one counted dropped.
+    #[test]
+    fn an_emergency_finds_room_in_a_full_outbox() {
+        let mut d: Drive = Drive::new(1);
+        let routine = |k: u8| Frame::with_payload(0x701, &[k], false);
+        for k in 0..OUTBOX as u8 + 2 {
+            d.send(routine(k));
+        }
+        assert_eq!((d.outbox.len(), d.dropped_tx()), (OUTBOX, 2));
+        d.emergency_at(FaultCode::FollowingError, 0, 0);
+        assert_eq!(d.dropped_tx(), 3);
+        let first = d.pop_tx().expect("a frame");
+        assert_eq!(first.id, 0x010 + 1, "the Emergency first");
+        let rest: std::vec::Vec<u8> = core::iter::from_fn(|| d.pop_tx())
+            .map(|f| f.data[0])
+            .collect();
+        let kept: std::vec::Vec<u8> = (0..OUTBOX as u8 - 1).collect();
+        assert_eq!(rest, kept, "the oldest routine frames kept, in order");
     }
 }

@@ -104,15 +104,15 @@ impl HandOff {
         let Some(k) = self.held.iter().position(|i| !stops(i)) else {
             return false;
         };
-        let mut kept: Deque<Item, HELD_ITEMS> = Deque::new();
-        let mut n = 0;
-        while let Some(i) = self.held.pop_front() {
-            if n != k {
-                let _ = kept.push_back(i);
-            }
-            n += 1;
+        // In place, the others keeping their order (a second queue would be
+        // a few hundred bytes of stack an item): the front comes off and each
+        // item before the k-th moves one place back, the k-th falling out.
+        let Some(mut carried) = self.held.pop_front() else {
+            return false;
+        };
+        for slot in self.held.iter_mut().take(k) {
+            carried = core::mem::replace(slot, carried);
         }
-        self.held = kept;
         true
     }
 

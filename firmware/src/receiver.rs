@@ -240,7 +240,7 @@ impl Receiver {
         let cfg = DriveConfig::from_values(&self.written);
         let active = self.config_of(active_crc);
         let widens = match active {
-            Some(a) => first_widening(&a, &cfg),
+            Some(a) => first_widening(a, &cfg),
             // Nothing held yet: the first configuration sets the bounds.
             None if active_crc == 0 => None,
             // Running one this side no longer holds: judged as widening.
@@ -252,8 +252,14 @@ impl Receiver {
             // The new one, and the one running: a refused commit never
             // takes the running configuration's place.
             if self.configs[0].map(|(c, _)| c) != Some(crc) {
-                let keep = active.map(|a| (active_crc, a)).or(self.configs[0]);
-                self.configs = [Some((crc, cfg)), keep];
+                // Element by element: a new pair of configurations would be
+                // built on the stack first.
+                if let Some(a) = active {
+                    self.configs[1] = Some((active_crc, *a));
+                } else {
+                    self.configs[1] = self.configs[0];
+                }
+                self.configs[0] = Some((crc, cfg));
             }
             Ok(Prepared {
                 cfg,
@@ -270,14 +276,17 @@ impl Receiver {
     }
 
     /// The prepared configuration of CRC `crc`, if this side holds it.
-    fn config_of(&self, crc: u32) -> Option<DriveConfig> {
+    fn config_of(&self, crc: u32) -> Option<&DriveConfig> {
         self.configs
             .iter()
             .flatten()
             .find(|(c, _)| *c == crc && crc != 0)
-            .map(|(_, cfg)| *cfg)
+            .map(|(_, cfg)| cfg)
     }
 
+    // Out of line: reassembling and checking a segment takes the deepest
+    // stack of the receive side, which the other frames' paths (a commit's
+    // `prepare` among them) then do not add to.
     fn part(&mut self, msg: Msg, payload: &[u8], active_crc: u32) -> Option<Item> {
         match self.segments.push(msg.kind(), payload)? {
             SegmentEvent::Pending => None,

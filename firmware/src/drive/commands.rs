@@ -7,11 +7,16 @@ use triquint_shared::protocol::{
     Command, CommandAck, CommandCode, FaultCode, State, config_value_frame,
 };
 
-use super::{Drive, StopReason};
+use super::{Drive, OUTBOX, StopReason};
 use crate::inbox::{CommandData, LockCheck, Prepared};
 use crate::scaling::q16_from_permille;
 #[cfg(doc)]
 use crate::sync::SyncEstimator;
+
+/// A ReadConfig answer goes out while fewer frames than this wait, so the
+/// rest of the outbox stays free for acknowledgements, emergencies and the
+/// periodic frames.
+const READOUT_BELOW: usize = OUTBOX / 2;
 
 impl<const Q: usize> Drive<Q> {
     pub(super) fn command_ack(&mut self, c: &Command, result: FaultCode, value: u32) {
@@ -202,15 +207,32 @@ impl<const Q: usize> Drive<Q> {
             CommandCode::Home => self.home(local_us),
             CommandCode::ReadConfig => {
                 if let CommandData::Values(values) = data {
-                    for (i, v) in values.iter().enumerate() {
-                        let f = config_value_frame(self.node_id, i as u8, *v);
-                        self.send(f);
-                    }
+                    self.readout = Some((*values, 0));
                 }
                 FaultCode::None
             }
         };
         self.command_ack(c, r, 0);
+    }
+
+    /// Sends the next values of a ReadConfig answer while fewer than
+    /// [`READOUT_BELOW`] frames wait: a whole answer at once would need an
+    /// outbox of [`PARAM_COUNT`] frames and more instructions than a tick has.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn config_readout(&mut self) {
+        let Some((values, next)) = &mut self.readout else {
+            return;
+        };
+        while self.outbox.len() < READOUT_BELOW {
+            let Some(v) = values.get(*next as usize) else {
+                self.readout = None;
+                return;
+            };
+            let f = config_value_frame(self.node_id, *next, *v);
+            *next += 1;
+            let _ = self.outbox.push_back(f);
+        }
     }
 
     /// Host time (ns) a feed command applies at: as the receive side

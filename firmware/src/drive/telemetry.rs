@@ -24,6 +24,9 @@ impl<const Q: usize> Drive<Q> {
     }
 
     pub(super) fn periodic(&mut self, now_us: u64) {
+        if self.readout.is_some() {
+            self.config_readout();
+        }
         let (hb_us, tel_us) = match &self.active {
             Some(a) => (a.heartbeat_us.max(MIN_HEARTBEAT_US), a.telemetry_us),
             None => (UNCONFIGURED_HEARTBEAT_US, 0),

@@ -221,3 +221,30 @@ fn refused_commits_never_push_the_running_configuration_out_of_the_receive_side(
         Some(triquint_shared::protocol::Reject::Accepted)
     );
 }
+
+/// ReadConfig answers with every written value, in order, over as many
+/// ticks as the outbox needs, and a command sent meanwhile is answered.
+#[test]
+fn a_read_config_answer_goes_out_whole_over_ticks() {
+    use triquint_shared::protocol::{Msg, PARAM_COUNT, decode};
+    let mut r = configured();
+    let n = r.sent.len();
+    assert_eq!(ack(&mut r, CommandCode::ReadConfig, 0).0, 0);
+    r.run(2);
+    // A command in the middle of the answer still gets its own.
+    assert_eq!(ack(&mut r, CommandCode::Reset, 0).0, 0);
+    r.run(20);
+    let values: std::vec::Vec<(u8, f32)> = r.sent[n..]
+        .iter()
+        .filter_map(|f| match decode(f) {
+            Ok((Msg::ConfigValue { index, value }, 2)) => Some((index, value)),
+            _ => None,
+        })
+        .collect();
+    let want = r.cfg.to_values();
+    assert_eq!(values.len(), PARAM_COUNT, "one frame a parameter");
+    for (k, (index, value)) in values.iter().enumerate() {
+        assert_eq!((*index as usize, value.to_bits()), (k, want[k].to_bits()));
+    }
+    assert_eq!(r.node.drive.dropped_tx(), 0);
+}

@@ -2,8 +2,9 @@
 //!
 //! Interrupts, highest first: the current loop (end of the ADC conversions
 //! that TIM1 starts at the PWM centre, 20 kHz), the
-//! control tick (TIM6 update, 10 kHz, owns the node), then the embassy
-//! executor in thread mode (CAN receive / transmit, limit switch, flash). All motion
+//! control tick (TIM6 update, 10 kHz, owns the node), embassy's own handlers
+//! (CAN controller, limit switch, time driver), then the embassy executor
+//! in thread mode (CAN receive / transmit, limit switch, flash). All motion
 //! logic is the target-independent core (`triquint-firmware`).
 #![no_std]
 #![no_main]
@@ -183,6 +184,19 @@ async fn main(spawner: Spawner) {
     tim6.enable_update_interrupt(true);
     interrupt::ADC1_2.set_priority(Priority::P0);
     interrupt::TIM6_DAC.set_priority(Priority::P1);
+    // embassy leaves its own handlers at P0, the reset value: the CAN
+    // controller, the limit switch's EXTI and the time driver's timer
+    // (TIM15) would then hold off the current loop and preempt the tick.
+    // The CAN frames keep their hardware timestamps, and the time driver
+    // only needs its handler within half its counter's period.
+    for irq in [
+        interrupt::FDCAN1_IT0,
+        interrupt::FDCAN1_IT1,
+        interrupt::EXTI9_5,
+        interrupt::TIM1_BRK_TIM15,
+    ] {
+        irq.set_priority(Priority::P2);
+    }
     // SAFETY: both handlers own their state (moved in above) and share only atomics.
     unsafe {
         interrupt::ADC1_2.enable();
