@@ -53,6 +53,34 @@ pub use triquint_shared::protocol::streaming::QUEUE_CAPACITY;
 /// Frames waiting for the CAN controller.
 pub const OUTBOX: usize = 16;
 
+/// A frame waiting in the outbox: every message a node sends fits a
+/// classic frame's 8 bytes, so the outbox does not keep 64 for each.
+#[derive(Clone, Copy, Debug)]
+struct Outgoing {
+    id: u16,
+    len: u8,
+    fd: bool,
+    data: [u8; 8],
+}
+
+impl Outgoing {
+    /// `None` for a payload over 8 bytes (no message of a node has one).
+    fn of(f: &Frame) -> Option<Self> {
+        let mut data = [0; 8];
+        data.get_mut(..f.len as usize)?.copy_from_slice(f.payload());
+        Some(Self {
+            id: f.id,
+            len: f.len,
+            fd: f.fd,
+            data,
+        })
+    }
+
+    fn frame(&self) -> Frame {
+        Frame::with_payload(self.id, &self.data[..(self.len as usize).min(8)], self.fd)
+    }
+}
+
 /// No segment dropped since the last flush: it ends before any plan time.
 const NONE_DROPPED: Dropped = (
     i64::MIN,
@@ -189,7 +217,7 @@ pub struct Drive<const Q: usize = QUEUE_CAPACITY> {
     next_telemetry_us: u64,
     last_local_us: u64,
     errors: (u8, u8),
-    outbox: Deque<Frame, OUTBOX>,
+    outbox: Deque<Outgoing, OUTBOX>,
     dropped_tx: u32,
     /// A ReadConfig's values and the index of the next one to send: sent
     /// over as many ticks as the outbox needs (`config_readout`).
@@ -584,14 +612,17 @@ impl<const Q: usize> Drive<Q> {
 
     /// Next frame to transmit.
     pub fn peek_tx(&self) -> Option<Frame> {
-        self.outbox.front().copied()
+        self.outbox.front().map(Outgoing::frame)
     }
     pub fn pop_tx(&mut self) -> Option<Frame> {
-        self.outbox.pop_front()
+        self.outbox.pop_front().as_ref().map(Outgoing::frame)
     }
 
     fn send(&mut self, f: Frame) {
-        if self.outbox.push_back(f).is_err() {
+        if Outgoing::of(&f)
+            .and_then(|o| self.outbox.push_back(o).ok())
+            .is_none()
+        {
             self.dropped_tx = self.dropped_tx.saturating_add(1);
         }
     }
@@ -600,11 +631,15 @@ impl<const Q: usize> Drive<Q> {
     /// takes nothing: babble, bus-off), the newest waiting frame gives way,
     /// so an Emergency is never lost to routine traffic queued before it.
     fn send_priority(&mut self, f: Frame) {
+        let Some(o) = Outgoing::of(&f) else {
+            self.dropped_tx = self.dropped_tx.saturating_add(1);
+            return;
+        };
         if self.outbox.is_full() {
             self.outbox.pop_back();
             self.dropped_tx = self.dropped_tx.saturating_add(1);
         }
-        let _ = self.outbox.push_front(f);
+        let _ = self.outbox.push_front(o);
     }
 
     /// Takes up to [`TAKE_PER_TICK`] items from the queue from the receive
@@ -995,6 +1030,24 @@ impl<const Q: usize> Drive<Q> {
 mod outbox_tests {
     extern crate std;
     use super::*;
+
+    /// Every message a node sends fits the outbox's 8 bytes a frame.
+    #[test]
+    fn a_nodes_messages_fit_the_outbox() {
+        use triquint_shared::protocol::all_messages;
+        let sent: std::vec::Vec<_> = all_messages()
+            .into_iter()
+            .filter(|m| m.sender == "node")
+            .collect();
+        assert!(sent.len() >= 7, "{}", sent.len());
+        for m in sent {
+            assert!(m.len <= 8 && !m.fd, "{} is {} bytes", m.name, m.len);
+        }
+        let long = Frame::with_payload(0x181, &[0; 12], true);
+        let mut d: Drive = Drive::new(1);
+        d.send(long);
+        assert_eq!((d.outbox.len(), d.dropped_tx()), (0, 1));
+    }
 
     /// A bus that takes nothing fills the outbox with routine frames; an
     /// Emergency still goes to its front, and the newest routine frame is

@@ -5,13 +5,11 @@
 //! neither depends on the other. The tick only files items, so a frame costs
 //! it a short, bounded step.
 
-use triquint_shared::Model;
 use triquint_shared::protocol::{
     Command, CommandCode, DriveConfig, FaultCode, Heartbeat, PARAM_COUNT, Reject,
 };
 use triquint_shared::quintic::JointMotion;
 
-use crate::derived_config::DerivedConfig;
 use crate::scaling::{Retarget, TimeScaling, UNIT_Q16};
 use crate::segment::Seg;
 use crate::sync::SyncEstimator;
@@ -172,12 +170,12 @@ pub struct CheckedSegment {
     pub pred_crc: Option<u32>,
 }
 
-/// A configuration ready to run: values checked, robot model built, periods derived.
+/// A configuration ready to run, its values checked. The tick builds the
+/// robot model and derives the periods as it commits (a few hundred
+/// instructions): carried here, they would make every inbox slot larger.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prepared {
     pub cfg: DriveConfig,
-    pub model: Model<f32>,
-    pub active: DerivedConfig,
     /// The receive side's verdict for the ceiling lock.
     pub lock: LockCheck,
 }

@@ -1,7 +1,7 @@
 //! The CAN receive side of a node, run in the CAN task (below the control
 //! tick): decodes every frame, reassembles segments, checks their CRC, limits
-//! and soft limits, keeps the written configuration and prepares a committed
-//! one (robot model included). What is left for the tick is a finished
+//! and soft limits, keeps the written configuration and checks a committed
+//! one (the tick builds its robot model). What is left for the tick is a finished
 //! [`Item`] (the hand-off types are in the `inbox` module).
 
 use triquint_shared::protocol::{
@@ -16,7 +16,6 @@ use triquint_shared::protocol::contract::{
 
 use crate::ceiling_lock::first_widening;
 use crate::ceilings::Maxima;
-use crate::derived_config::DerivedConfig;
 use crate::hal::RxFrame;
 use crate::inbox::{CheckedSegment, CommandData, Item, LockCheck, Prepared, TickSnapshot};
 use crate::scaling::{Retarget, q16_from_permille};
@@ -228,7 +227,7 @@ impl Receiver {
     }
 
     /// A commit of the written values if their CRC is `want`: every parameter
-    /// written, valid, and the robot model built; with what it widens of
+    /// written and valid; with what it widens of
     /// the active configuration's (CRC `active_crc`) locked bounds.
     // Cold, out of line: a commit is rare, and every other frame's
     // receive path stays as short as without it.
@@ -263,8 +262,6 @@ impl Receiver {
             }
             Ok(Prepared {
                 cfg,
-                model: cfg.robot().native_model(),
-                active: DerivedConfig::new(&cfg, crc),
                 lock: LockCheck {
                     kept,
                     widens,

@@ -8,6 +8,7 @@ use triquint_shared::protocol::{
 };
 
 use super::{Drive, OUTBOX, StopReason};
+use crate::derived_config::DerivedConfig;
 use crate::inbox::{CommandData, LockCheck, Prepared};
 use crate::scaling::q16_from_permille;
 #[cfg(doc)]
@@ -174,7 +175,7 @@ impl<const Q: usize> Drive<Q> {
                     CommandData::Commit { crc, config } => {
                         match config.as_ref().map(|p| self.lock(&p.lock, local_us)) {
                             Ok(Err((r, index))) => (r, index),
-                            _ => (self.commit(config), *crc),
+                            _ => (self.commit(config, *crc), *crc),
                         }
                     }
                     _ => (FaultCode::ConfigMismatch, 0),
@@ -221,17 +222,17 @@ impl<const Q: usize> Drive<Q> {
     #[cold]
     #[inline(never)]
     pub(super) fn config_readout(&mut self) {
-        let Some((values, next)) = &mut self.readout else {
-            return;
-        };
         while self.outbox.len() < READOUT_BELOW {
-            let Some(v) = values.get(*next as usize) else {
+            let Some((values, next)) = &mut self.readout else {
+                return;
+            };
+            let Some(&v) = values.get(*next as usize) else {
                 self.readout = None;
                 return;
             };
-            let f = config_value_frame(self.node_id, *next, *v);
+            let f = config_value_frame(self.node_id, *next, v);
             *next += 1;
-            let _ = self.outbox.push_back(f);
+            self.send(f);
         }
     }
 
@@ -271,7 +272,7 @@ impl<const Q: usize> Drive<Q> {
     }
 
     /// Runs a configuration the receive side prepared (Idle only).
-    pub(super) fn commit(&mut self, config: &Result<Prepared, FaultCode>) -> FaultCode {
+    pub(super) fn commit(&mut self, config: &Result<Prepared, FaultCode>, crc: u32) -> FaultCode {
         if self.state != State::Idle {
             return FaultCode::WrongState;
         }
@@ -280,8 +281,8 @@ impl<const Q: usize> Drive<Q> {
             Err(code) => return *code,
         };
         self.cfg = p.cfg;
-        self.model = p.model;
-        self.active = Some(p.active);
+        self.model = p.cfg.robot().native_model();
+        self.active = Some(DerivedConfig::new(&p.cfg, crc));
         self.maintenance.close();
         // The override persists, within the new configuration's cap.
         let cap = q16_from_permille(self.override_cap_permille());

@@ -49,7 +49,9 @@ bind_interrupts!(struct Irqs {
 });
 
 static INBOX: StaticCell<Queue<Item, INBOX_SLOTS>> = StaticCell::new();
-static TX_QUEUE: StaticCell<Queue<Frame, 16>> = StaticCell::new();
+/// Three frames a tick to the transmit task, more than the bus carries in
+/// 100 µs; what waits longer waits in the drive's own outbox.
+static TX_QUEUE: StaticCell<Queue<Frame, 4>> = StaticCell::new();
 static TICK_STATE: StaticCell<control::Tick> = StaticCell::new();
 static CURRENT_STATE: StaticCell<current::Current> = StaticCell::new();
 static OPAMP1: StaticCell<OpAmp<'static, peripherals::OPAMP1>> = StaticCell::new();

@@ -138,7 +138,7 @@ pub struct Figures {
     pub rx_segment_max: u32,
     /// Per frame, other than a segment's last part or a configuration commit.
     pub rx_other_max: u32,
-    /// The configuration commit (robot model built in the receive context).
+    /// The configuration commit (its checks, in the receive context).
     pub rx_commit_max: u32,
     /// Every tick includes its hand-off (items taken from the inbox).
     pub worst_tick: u32,

@@ -110,7 +110,7 @@ fn main() -> ! {
                 f.rx_segment_max
             );
             hprintln!(
-                "  configuration commit (robot model)                max {:5}",
+                "  configuration commit (checks)                     max {:5}",
                 f.rx_commit_max
             );
             hprintln!(
