@@ -49,7 +49,22 @@ cargo clippy --locked --release -- -D warnings
 cargo build --locked --release
 
 step "QEMU mps2-an386: golden replay and tick budget (exit status from the image)"
-cargo run --locked --release
+cargo run --locked --release | tee "$CARGO_TARGET_DIR/replay.log"
+
+step "stack_check.py's bound holds on the replay: the two entry points' deepest use, measured"
+# The image paints its stack and reads back the deepest word the replay
+# wrote below its calls into the entry points; the static bound must not
+# be below it (the same script bounds the ESC1 image's stack, below).
+measured=$(sed -n 's/^stack: the entry points used at most \([0-9]*\) B.*/\1/p' "$CARGO_TARGET_DIR/replay.log")
+bound=$(python3 "$root/scripts/stack_check.py" --memory-x memory.x \
+    --reentry 'scaling::TimeScaling::(at|retarget_shaped)$' \
+    --thread triquint_can_rx --thread triquint_control_tick "$objdump" "$elf" |
+    sed -n 's/^stack: worst \([0-9]*\) B.*/\1/p')
+echo "measured $measured B, static bound $bound B"
+if [ -z "$measured" ] || [ -z "$bound" ] || [ "$measured" -gt "$bound" ]; then
+    echo "FAIL: the measured stack ($measured B) exceeds the static bound ($bound B), or one is missing" >&2
+    exit 1
+fi
 
 step "QEMU mps2-an386: watchdog test (the tick stops; the watchdog's NMI must end the run)"
 cargo build --locked --release --features watchdog-test 2>&1 | tail -1

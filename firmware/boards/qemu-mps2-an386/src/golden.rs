@@ -107,6 +107,8 @@ fn drain(node: &mut Drive) -> (u8, u32) {
 /// Instruction figures gathered during the replay.
 #[derive(Default, Debug)]
 pub struct Figures {
+    /// The highest stack pointer at a call into an entry point.
+    pub call_sp: usize,
     pub evals: u32,
     pub quintic_max: u32,
     pub quintic_sum: u64,
@@ -246,6 +248,8 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                     timestamp_us: ts,
                 };
                 let snapshot = n.snapshot();
+                // Outside the counted call: the closure's few bytes count as used.
+                fig.call_sp = fig.call_sp.max(crate::stack::here());
                 let (item, k) = cnt.instructions(|| triquint_can_rx(rcv, &rx, snapshot));
                 fig.rx_frames += 1;
                 fig.rx_sum += k as u64;
@@ -277,6 +281,7 @@ pub fn replay(data: &[u8], cnt: &Counter) -> Result<Figures, Failure> {
                         .take(2)
                         .any(|i| matches!(i, Item::Command { .. }));
                 let seq = n.next_seq();
+                fig.call_sp = fig.call_sp.max(crate::stack::here());
                 let ((), k) = cnt.instructions(|| {
                     triquint_control_tick(n, inbox, now, &mut Counts(counts), &mut motor)
                 });

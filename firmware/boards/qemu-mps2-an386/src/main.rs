@@ -9,6 +9,7 @@
 
 mod count;
 mod golden;
+mod stack;
 mod tick;
 mod watchdog;
 
@@ -30,7 +31,11 @@ const ICOUNT_PER_K: u32 = 26_214;
 fn main() -> ! {
     let p = cortex_m::Peripherals::take().expect("peripherals");
     let cnt = count::Counter::new(p.SYST);
-    let pass = match golden::replay(GOLDEN, &cnt) {
+    let sp = stack::here();
+    stack::paint(sp);
+    let replayed = golden::replay(GOLDEN, &cnt);
+    let lowest = stack::lowest_written(sp);
+    let pass = match replayed {
         Ok(f) => {
             hprintln!(
                 "golden: {} plan evaluations and {} ticks, {} frames: every f32 bit equal",
@@ -95,6 +100,10 @@ fn main() -> ! {
             hprintln!(
                 "  worst tick (every tick includes its hand-off)      {:5}",
                 f.worst_tick
+            );
+            hprintln!(
+                "stack: the entry points used at most {} B below their calls",
+                f.call_sp.saturating_sub(lowest)
             );
             hprintln!(
                 "CAN receive side, per frame (CAN task, below the tick; {} frames)",
