@@ -57,7 +57,6 @@ step "stack_check.py's bound holds on the replay: the two entry points' deepest 
 # be below it (the same script bounds the ESC1 image's stack, below).
 measured=$(sed -n 's/^stack: the entry points used at most \([0-9]*\) B.*/\1/p' "$CARGO_TARGET_DIR/replay.log")
 bound=$(python3 "$root/scripts/stack_check.py" --memory-x memory.x \
-    --reentry 'scaling::TimeScaling::(at|retarget_shaped)$' \
     --thread triquint_can_rx --thread triquint_control_tick "$objdump" "$elf" |
     sed -n 's/^stack: worst \([0-9]*\) B.*/\1/p')
 echo "measured $measured B, static bound $bound B"
@@ -114,14 +113,12 @@ python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Recei
 # current loop P0, the tick P1, embassy's CAN, EXTI and time-driver handlers
 # P2), with 256 B to spare (docs/safety.md). The indirect calls are the
 # executor's task polls and the waker vtables (every function whose address
-# the image takes), and sequential-storage's `dyn Value`; TimeScaling::at
-# re-enters itself once through retarget_shaped, which calls it at rest.
+# the image takes), and sequential-storage's `dyn Value`.
 python3 "$root/scripts/stack_check.py" --self-test
 python3 "$root/scripts/stack_check.py" --memory-x memory.x --margin 256 \
     --indirect 'Executor::run$=TaskStorage<F>::poll$|embassy_executor::raw::poll_exited$' \
     --indirect '^(EXTI9_5|FDCAN1_IT0|TIM1_BRK_TIM15|TIM6_DAC|_embassy_time_schedule_wake)$|TaskStorage<F>::poll$|CanRx::read_fd::|RxMode::on_interrupt$|Info::adjust_reference_counter$|channel::SendFuture<=embassy_executor::raw::waker::|FnOnce::call_once$|Interrupt::pend$' \
     --indirect 'map::store_item_inner::=sequential_storage::map::Value>::serialize_into$' \
-    --reentry 'scaling::TimeScaling::(at|retarget_shaped)$' \
     --thread Reset --level ADC1_2 --level TIM6_DAC --level FDCAN1_IT0,FDCAN1_IT1,EXTI9_5,TIM1_BRK_TIM15 \
     "$objdump" target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1
 "$size" -A target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1 | grep -E "^(section|\.vector_table|\.text|\.rodata|\.ccmram_text|\.data|\.bss) "

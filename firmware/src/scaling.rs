@@ -166,6 +166,14 @@ impl TimeScaling {
 
     /// Evaluates at host time `t_ns`, advancing a transition that ended.
     pub fn at(&mut self, t_ns: i64) -> Scaled {
+        self.advance::<true>(t_ns)
+    }
+
+    /// [`TimeScaling::at`]; a change deferred to the end of a transition
+    /// that ended is made only with `PENDING` (which makes it, then
+    /// evaluates without): no call cycle, so the ELF's stack bound holds.
+    #[inline(always)]
+    fn advance<const PENDING: bool>(&mut self, t_ns: i64) -> Scaled {
         let dt = t_ns - self.t0_ns;
         if self.in_transition() {
             let ramp = self.ramp_ns.max(1);
@@ -181,14 +189,24 @@ impl TimeScaling {
             } else {
                 Phase::Nominal
             };
-            if let Some((k, full)) = self.pending.take() {
-                let t0 = self.t0_ns;
-                self.retarget(t0, k, full);
-                return self.at(t_ns);
+            if PENDING && let Some((k, full)) = self.pending.take() {
+                return self.deferred(t_ns, k, full);
             }
             return self.constant_at(t_ns - self.t0_ns);
         }
         self.constant_at(dt)
+    }
+
+    /// The change deferred to the end of the transition that just ended,
+    /// begun from the constant state there, evaluated at `t_ns`: from a
+    /// constant state a change is never deferred again.
+    #[cold]
+    #[inline(never)]
+    fn deferred(&mut self, t_ns: i64, k: u32, full_ns: i64) -> Scaled {
+        let t0 = self.t0_ns;
+        let now = self.constant_at(0);
+        self.retarget_from(now, t0, k, full_ns, false);
+        self.advance::<false>(t_ns)
     }
 
     /// [`TimeScaling::at`] where it changes nothing: `None` when a
@@ -317,6 +335,12 @@ impl TimeScaling {
     fn retarget_shaped(&mut self, t_ns: i64, target_q16: u32, full_ns: i64, bang: bool) {
         let t_ns = t_ns.max(self.t0_ns);
         let now = self.at(t_ns);
+        self.retarget_from(now, t_ns, target_q16, full_ns, bang);
+    }
+
+    /// [`TimeScaling::retarget_shaped`] from `now`, the scaling at `t_ns`
+    /// (at or after the start of its current phase).
+    fn retarget_from(&mut self, now: Scaled, t_ns: i64, target_q16: u32, full_ns: i64, bang: bool) {
         self.pending = None;
         let full_ns = full_ns.max(1);
         if target_q16 == self.target_q16 && !(self.in_transition() && full_ns < self.full_ns) {
