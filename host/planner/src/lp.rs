@@ -11,7 +11,7 @@ use clarabel::solver::{
 };
 
 /// minimise costᵀx subject to equality rows (Σ a x = b) and inequality rows (Σ a x ≤ b).
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct Lp {
     pub vars: usize,
     pub cost: Vec<f64>,
@@ -25,7 +25,7 @@ pub struct Lp {
     pub refine: bool,
 }
 
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 struct Rows {
     row: Vec<usize>,
     col: Vec<usize>,
@@ -86,27 +86,29 @@ impl Lp {
         self.eq.rhs.len() + self.ineq.rhs.len() + self.soc.rhs.len()
     }
 
-    /// Triplets of the constraint matrix in the solver's row order.
-    fn triplets(&self) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+    /// The constraint matrix in the solver's row order (equalities,
+    /// inequalities, cones) in compressed columns, from each block's
+    /// triplets without gathering them first.
+    fn matrix(&self) -> CscMatrix<f64> {
         let neq = self.eq.rhs.len();
         let nineq = self.ineq.rhs.len();
-        let rows = self
-            .eq
-            .row
-            .iter()
-            .copied()
-            .chain(self.ineq.row.iter().map(|r| r + neq))
-            .chain(self.soc.row.iter().map(|r| r + neq + nineq))
-            .collect();
-        let cols = [&self.eq, &self.ineq, &self.soc]
-            .iter()
-            .flat_map(|r| r.col.iter().copied())
-            .collect();
-        let vals = [&self.eq, &self.ineq, &self.soc]
-            .iter()
-            .flat_map(|r| r.val.iter().copied())
-            .collect();
-        (rows, cols, vals)
+        fn block(r: &Rows, offset: usize) -> Triplets<'_> {
+            Triplets {
+                rows: &r.row,
+                offset,
+                cols: &r.col,
+                vals: &r.val,
+            }
+        }
+        compressed(
+            self.rows(),
+            self.vars,
+            &[
+                block(&self.eq, 0),
+                block(&self.ineq, neq),
+                block(&self.soc, neq + nineq),
+            ],
+        )
     }
 
     /// Solves; returns the primal solution.
@@ -120,8 +122,7 @@ impl Lp {
         let neq = self.eq.rhs.len();
         let nineq = self.ineq.rhs.len();
         let m = self.rows();
-        let (rows, cols, vals) = self.triplets();
-        let a = csc(m, self.vars, rows, cols, vals);
+        let a = self.matrix();
         let b: Vec<f64> = [&self.eq, &self.ineq, &self.soc]
             .iter()
             .flat_map(|r| r.rhs.iter().copied())
@@ -261,29 +262,55 @@ fn reload(
     Some(())
 }
 
-/// The constraint matrix in compressed columns, in linear time: the
-/// triplets come in ascending rows, so one counting pass by column keeps
-/// each column's rows ascending (Clarabel's constructor sorts them, a
-/// tenth of a small program's solve); repeated entries are summed in
-/// order, as it does.
+/// Triplets in compressed columns as Clarabel's constructor makes them
+/// ([`compressed`] when their rows ascend).
+#[cfg(test)]
 fn csc(m: usize, n: usize, rows: Vec<usize>, cols: Vec<usize>, vals: Vec<f64>) -> CscMatrix<f64> {
     if !rows.windows(2).all(|w| w[0] <= w[1]) {
         return CscMatrix::new_from_triplets(m, n, rows, cols, vals);
     }
+    let all = Triplets {
+        rows: &rows,
+        offset: 0,
+        cols: &cols,
+        vals: &vals,
+    };
+    compressed(m, n, &[all])
+}
+
+/// Triplets (row + `offset`, column, value) in ascending rows.
+struct Triplets<'a> {
+    rows: &'a [usize],
+    offset: usize,
+    cols: &'a [usize],
+    vals: &'a [f64],
+}
+
+/// A matrix in compressed columns from its triplets, in linear time: the
+/// triplets come in blocks, each block's rows ascending and above the last
+/// block's, so one counting pass by column keeps each column's rows
+/// ascending (Clarabel's constructor sorts them, a tenth of a small
+/// program's solve); repeated entries are summed in order, as it does.
+fn compressed(m: usize, n: usize, blocks: &[Triplets]) -> CscMatrix<f64> {
+    let nnz: usize = blocks.iter().map(|b| b.vals.len()).sum();
     let mut start = vec![0usize; n + 1];
-    for &c in &cols {
-        start[c + 1] += 1;
+    for b in blocks {
+        for &c in b.cols {
+            start[c + 1] += 1;
+        }
     }
     for c in 0..n {
         start[c + 1] += start[c];
     }
     let mut next = start.clone();
-    let mut rowval = vec![0; vals.len()];
-    let mut nzval = vec![0.0; vals.len()];
-    for ((&r, &c), &v) in rows.iter().zip(&cols).zip(&vals) {
-        rowval[next[c]] = r;
-        nzval[next[c]] = v;
-        next[c] += 1;
+    let mut rowval = vec![0; nnz];
+    let mut nzval = vec![0.0; nnz];
+    for b in blocks {
+        for ((&r, &c), &v) in b.rows.iter().zip(b.cols).zip(b.vals) {
+            rowval[next[c]] = r + b.offset;
+            nzval[next[c]] = v;
+            next[c] += 1;
+        }
     }
     let mut colptr = vec![0usize; n + 1];
     let mut w = 0;
@@ -321,6 +348,32 @@ mod tests {
         assert_eq!(ours.rowval, theirs.rowval);
         assert_eq!(ours.nzval, theirs.nzval);
         assert_eq!(ours.nzval, vec![2.0, 12.0, 4.0, 4.0, 8.0, 6.0]);
+    }
+
+    /// The program's matrix is its rows' triplets in the solver's row
+    /// order, as Clarabel's constructor compresses them.
+    #[test]
+    fn a_programs_matrix_is_its_rows_in_order() {
+        let mut lp = Lp::new(4);
+        lp.at_most(&[(2, 1.0), (0, -2.0), (2, 0.5)], 1.0);
+        lp.equal(&[(3, 4.0), (1, 0.0), (0, 1.5)], 0.0);
+        lp.second_order_cone([(&[(1, 1.0)], 1.0), (&[(0, 2.0), (3, 1.0)], 0.0), (&[], 0.5)]);
+        lp.at_most(&[(1, -1.0)], 0.0);
+        lp.equal(&[(0, 1.0), (0, 2.0)], 3.0);
+        let (mut rows, mut cols, mut vals): (Vec<usize>, Vec<usize>, Vec<f64>) =
+            (vec![], vec![], vec![]);
+        let mut first = 0;
+        for block in [&lp.eq, &lp.ineq, &lp.soc] {
+            rows.extend(block.row.iter().map(|r| r + first));
+            cols.extend(&block.col);
+            vals.extend(&block.val);
+            first += block.rhs.len();
+        }
+        let ours = lp.matrix();
+        let theirs = CscMatrix::new_from_triplets(lp.rows(), 4, rows, cols, vals);
+        assert_eq!(ours.colptr, theirs.colptr);
+        assert_eq!(ours.rowval, theirs.rowval);
+        assert_eq!(ours.nzval, theirs.nzval);
     }
 
     /// A program of one shape solved by a kept solver is solved bit for bit

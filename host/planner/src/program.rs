@@ -84,6 +84,23 @@ impl Problem {
         trust: Option<f64>,
         jerk: f64,
     ) -> Lp {
+        let mut program = self.program_at(h, x, trust, jerk);
+        program.add_cuts(self, cuts);
+        program.finish(self)
+    }
+
+    /// The program at (h, x) without its cuts ([`Problem::build`]), to
+    /// which cuts are added ([`Program::add_cuts`]) before it is finished
+    /// ([`Program::finish`]): the rows of a point's program in the order
+    /// [`Problem::build`] gives them, so that programs at one point that
+    /// differ only by cuts added last share the rest of the work.
+    pub(crate) fn program_at<'a>(
+        &self,
+        h: &'a [f64],
+        x: &'a [Vec<f64>; 3],
+        trust: Option<f64>,
+        jerk: f64,
+    ) -> Program<'a> {
         let k_j = if jerk < SMALL_JERK {
             1.0 / jerk.max(1e-12)
         } else {
@@ -151,12 +168,53 @@ impl Problem {
             }
         }
 
+        Program {
+            lp,
+            h,
+            x,
+            trust,
+            k_j,
+            cuts: 0,
+        }
+    }
+}
+
+/// A program at a point under construction ([`Problem::program_at`]).
+#[derive(Clone)]
+pub(crate) struct Program<'a> {
+    lp: Lp,
+    h: &'a [f64],
+    x: &'a [Vec<f64>; 3],
+    trust: Option<f64>,
+    /// The jerk rows' scale ([`Problem::build`]).
+    k_j: f64,
+    /// Cuts added so far.
+    cuts: usize,
+}
+
+impl Program<'_> {
+    /// Cuts added so far.
+    pub(crate) fn cuts(&self) -> usize {
+        self.cuts
+    }
+
+    /// Adds the rows of `cuts`.
+    pub(crate) fn add_cuts(&mut self, p: &Problem, cuts: &[Cut]) {
+        let (h, x, trust, k_j) = (self.h, self.x, self.trust, self.k_j);
+        let lp = &mut self.lp;
+        let nv = p.nv();
+        let nseg = p.nseg();
+        let dh0 = 3 * nv;
+        let s_col = dh0 + if trust.is_some() { nseg } else { 0 };
+        let sigma = s_col + 1;
+        let dh_col = |k: usize| trust.map(|_| dh0 + k);
+        self.cuts += cuts.len();
         for cut in cuts {
             let mut row = RowBuilder::default();
             match cut.q {
                 Limited::Torque => {
-                    let f = self.motion_forms(h, x, cut.k, cut.u);
-                    let Some(grad) = self.torque_gradient(&f, cut.j) else {
+                    let f = p.motion_forms(h, x, cut.k, cut.u);
+                    let Some(grad) = p.torque_gradient(&f, cut.j) else {
                         continue;
                     };
                     for j in 0..3 {
@@ -178,7 +236,7 @@ impl Problem {
                         Limited::Acceleration => 2,
                         _ => 3,
                     };
-                    let f = self
+                    let f = p
                         .knots
                         .functional(&x[cut.j], cut.j, cut.k, cut.u, r, h[cut.k]);
                     row.add(1.0, &f, &x[cut.j], cut.j * nv, dh_col(cut.k));
@@ -194,39 +252,46 @@ impl Problem {
                 } else if cut.q == Limited::Travel {
                     // q ≤ max and −q ≤ −min, a hair inside, elastic in σ
                     // relative to the span.
-                    let Some((lo, hi, span)) = self.travel_of(cut.j) else {
+                    let Some((lo, hi, span)) = p.travel_of(cut.j) else {
                         continue;
                     };
                     let end = if sign > 0.0 { hi } else { -lo };
                     terms.push((sigma, -span));
                     lp.at_most(&terms, end - TRAVEL_MARGIN * span - sign * row.constant);
                 } else {
-                    let lim = self.limit(cut.q);
+                    let lim = p.limit(cut.q);
                     terms.push((sigma, -lim));
                     lp.at_most(&terms, lim - sign * row.constant);
                 }
             }
         }
+    }
+
+    /// The program: its rows after the cuts'.
+    pub(crate) fn finish(self, p: &Problem) -> Lp {
+        let (h, trust) = (self.h, self.trust);
+        let mut lp = self.lp;
+        let nv = p.nv();
+        let nseg = p.nseg();
+        let dh0 = 3 * nv;
+        let s_col = dh0 + if trust.is_some() { nseg } else { 0 };
+        let sigma = s_col + 1;
         lp.at_most(&[(sigma, -1.0)], 0.0);
 
         if let Some(delta) = trust {
-            let slack = self.total_time - h.iter().sum::<f64>();
+            let slack = p.total_time - h.iter().sum::<f64>();
             let all: Vec<(usize, f64)> = (0..nseg).map(|k| (dh0 + k, 1.0)).collect();
             lp.at_most(&all, slack.max(0.0));
             for (k, &hk) in h.iter().enumerate() {
-                lp.at_most(
-                    &[(dh0 + k, 1.0)],
-                    (delta * hk).min(self.h_max - hk).max(0.0),
-                );
-                lp.at_most(
-                    &[(dh0 + k, -1.0)],
-                    (delta * hk).min(hk - self.h_min).max(0.0),
-                );
+                lp.at_most(&[(dh0 + k, 1.0)], (delta * hk).min(p.h_max - hk).max(0.0));
+                lp.at_most(&[(dh0 + k, -1.0)], (delta * hk).min(hk - p.h_min).max(0.0));
             }
         }
         lp
     }
+}
 
+impl Problem {
     /// τ_axis and ∂τ_axis/∂(q_j, q̇_j, q̈_j) at a point.
     #[allow(clippy::type_complexity)]
     fn torque_gradient(&self, f: &[[Affine; 3]; 3], axis: usize) -> Option<(f64, [[f64; 3]; 3])> {

@@ -218,8 +218,13 @@ impl Problem {
             solves: 0,
             failed: None,
         };
+        // Every round's program is the one at `cur` with more cuts: the
+        // rows before the cuts' are built once, and each cut's once.
+        let mut program = self.program_at(&cur.h, &cur.x, Some(delta), cur.jerk);
         for _ in 0..max_rounds {
-            let mut lp = self.build(&cur.h, &cur.x, cuts, Some(delta), cur.jerk);
+            let added = program.cuts();
+            program.add_cuts(self, &cuts[added..]);
+            let mut lp = program.clone().finish(self);
             // A step only needs to be good, not exact: it is judged exactly
             // (so no iterative refinement of the KKT solves either).
             lp.tolerance = 1e-8;
