@@ -21,11 +21,17 @@ inlined so that no symbol names it:
                      also calls one matching regex B (e.g. the task that runs
                      the receive side hands its items through the inbox's
                      `offer`, which keeps slots for Stop/Emergency/ClearFault).
+  --loads REGEX=ADDR  every function with a symbol (its label or an alias
+                     in the symbol table) matching REGEX loads the address
+                     ADDR into a register (movw of its low half, then movt
+                     of its high half, same register), and at least one
+                     does: the ESC1's panic, HardFault and default handlers
+                     reach TIM1's BDTR to turn the power stage off.
 Neither forbids panics (the board images are checked with --no-double only).
 
-usage: elf_check.py [--no-double] [--no-wait ROOT]... [--calls A=B]... OBJDUMP ELF [ROOT...]
+usage: elf_check.py [--no-double] [--no-wait ROOT]... [--calls A=B]... [--loads R=ADDR]... OBJDUMP ELF [ROOT...]
        elf_check.py --self-test
-(roots optional with --no-double, --no-wait or --calls)
+(roots optional with --no-double, --no-wait, --calls or --loads)
 exit 0 clean, 1 violation (with the call chain), 2 usage/tool error.
 """
 import re
@@ -45,6 +51,8 @@ FUNC = re.compile(r"^([0-9a-f]+) <(.+)>:$")
 CALL = re.compile(r"^\s*([0-9a-f]+):\s+(bl|blx|b|b\.w|b\.n)\s+(?:0x)?([0-9a-f]+)\s+<([^>]+)>")
 INDIRECT = re.compile(r"^\s*([0-9a-f]+):\s+(blx|bx)\s+(r\d+|ip|r1[0-2])\b")
 INSN = re.compile(r"^\s*([0-9a-f]+):\s+(\S+)\s*(.*)$")
+# A line of `objdump -t`: address, flags, section, size, name.
+SYM = re.compile(r"^([0-9a-f]+)\s+(.*?)\s+(\S+)\t([0-9a-f]+)\s+(?:\.hidden\s+)?(.+)$")
 TARGET = re.compile(r"(?:0x)?([0-9a-f]+)\s+<([^>]+)>")
 CONDS = "eq|ne|cs|hs|cc|lo|mi|pl|vs|vc|hi|ls|ge|lt|gt|le"
 COND_BRANCH = re.compile(rf"^(b({CONDS})(\.[wn])?|cbn?z)$")
@@ -72,7 +80,8 @@ def take(args: list[str], flag: str) -> list[str]:
 # --self-test: a handler that polls a flag (as the ESC1's current loop did
 # with blocking ADC reads); one with a backward branch that is no cycle and
 # bytes after a panic call that disassemble as a branch (as embassy's
-# set_duty); a panic's halt; and a task that hands items over without `offer`.
+# set_duty); a panic's halt; a task that hands items over without `offer`;
+# a handler that turns the power stage off and one that only halts.
 SELF_TEST = """
 08000100 <POLLING>:
  8000100:      \tpush\t{r7, lr}
@@ -100,6 +109,17 @@ SELF_TEST = """
  8000304:      \tpop\t{r7, pc}
 08000400 <Receiver4part>:
  8000400:      \tbx\tlr
+08000500 <POWER_OFF>:
+ 8000500:      \tmovw\tr0, #0x2c44
+ 8000504:      \tmovt\tr0, #0x4001
+ 8000508:      \tldr\tr1, [r0]
+ 800050a:      \tbic\tr1, r1, #0x8000
+ 800050e:      \tstr\tr1, [r0]
+ 8000510:      \tb\t0x8000510 <POWER_OFF+0x10>
+08000520 <HALT_ONLY>:
+ 8000520:      \tmovw\tr0, #0x2c44
+ 8000524:      \tmovt\tr1, #0x4001
+ 8000528:      \tb\t0x8000528 <HALT_ONLY+0x8>
 """
 
 
@@ -111,12 +131,14 @@ def self_test() -> int:
         with open(dis, "w") as f:
             f.write(SELF_TEST)
         with open(cat, "w") as f:
-            f.write('#!/bin/sh\ncat "$3"\n')
+            f.write('#!/bin/sh\n[ "$1" = -t ] && exit 0\ncat "$3"\n')  # no symbol table
         os.chmod(cat, 0o755)
         run = lambda *a: subprocess.run([sys.executable, __file__, *a, cat, dis], capture_output=True).returncode
-        got = (run("--no-wait", "POLLING"), run("--no-wait", "READY"), run("--calls", "Receiver4part=offer"))
-    ok = got == (1, 0, 1)
-    print(f"self-test {'passed' if ok else 'FAILED'}: polling, ready, task without offer -> {got}")
+        got = (run("--no-wait", "POLLING"), run("--no-wait", "READY"), run("--calls", "Receiver4part=offer"),
+               run("--loads", "^POWER_OFF$=0x40012C44"), run("--loads", "POWER_OFF|HALT_ONLY=0x40012C44"))
+    ok = got == (1, 0, 1, 0, 1)
+    print(f"self-test {'passed' if ok else 'FAILED'}: polling, ready, task without offer, "
+          f"a handler that loads the address, one that does not (other register) -> {got}")
     return 0 if ok else 1
 
 
@@ -128,10 +150,11 @@ def main() -> int:
     args = [a for a in args if a != "--no-double"]
     no_wait = take(args, "--no-wait")
     together = [c.split("=", 1) for c in take(args, "--calls")]
-    if any(len(c) != 2 for c in together):
-        print("--calls wants A=B", file=sys.stderr)
+    loads = [c.split("=", 1) for c in take(args, "--loads")]
+    if any(len(c) != 2 for c in together + loads):
+        print("--calls and --loads want A=B", file=sys.stderr)
         return 2
-    if len(args) < (2 if no_double or no_wait or together else 3):
+    if len(args) < (2 if no_double or no_wait or together or loads else 3):
         print(__doc__, file=sys.stderr)
         return 2
     objdump, elf, roots = args[0], args[1], args[2:]
@@ -249,6 +272,30 @@ def main() -> int:
         for f in callers:
             ok = any(rb.search(c) for c in calls[f])
             print(f"{'ok' if ok else 'MISSING'}: {f} calls {a}{' and ' if ok else ' but not '}{b}")
+            bad += not ok
+    if loads:
+        try:
+            table = subprocess.run([objdump, "-t", elf], check=True, capture_output=True, text=True).stdout
+        except (OSError, subprocess.CalledProcessError) as e:
+            print(f"elf_check: cannot read the symbols of {elf}: {e}", file=sys.stderr)
+            return 2
+        names: dict[int, set[str]] = {}
+        for m in map(SYM.match, table.splitlines()):
+            if m:
+                names.setdefault(int(m.group(1), 16) & ~1, set()).add(m.group(5))
+        starts = {f: a for f, insns in code.items() for a in [insns[0][0]] if insns}
+    for pattern, addr in loads:
+        rx, value = re.compile(pattern), int(addr, 0)
+        lo, hi = f"#0x{value & 0xFFFF:x}", f"#0x{value >> 16:x}"
+        hits = [f for f, a in starts.items() if rx.search(f) or any(rx.search(n) for n in names.get(a, ()))]
+        if not hits:
+            print(f"elf_check: no function matches {pattern} in {elf}", file=sys.stderr)
+            return 2
+        for f in hits:
+            low = {rest.split(",")[0] for _, op, rest in code[f] if op.startswith("movw") and rest.endswith(lo)}
+            ok = any(op.startswith("movt") and rest.split(",")[0] in low and rest.endswith(hi)
+                     for _, op, rest in code[f])
+            print(f"{'ok' if ok else 'MISSING'}: {f} loads {value:#x}")
             bad += not ok
     if no_double:
         doubles = sorted(f for f in calls if DOUBLE.match(real(f)))

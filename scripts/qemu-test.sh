@@ -106,7 +106,10 @@ cargo build --locked --release
 # task, the hand-off draining the receive FIFO) hands the item over through
 # the core's HandOff::accept (reserved slots, urgent items never dropped).
 python3 "$root/scripts/elf_check.py" --self-test
+# The panic, HardFault and default handlers turn the power stage off
+# (TIM1's BDTR, halt.rs) before they wait for the watchdog.
 python3 "$root/scripts/elf_check.py" --no-double --no-wait ADC1_2 --calls 'Receiver8on_frame=HandOff6accept' \
+    --loads 'rust_begin_unwind=0x40012C44' --loads '^_HardFault$=0x40012C44' --loads '^DefaultHandler$=0x40012C44' \
     "$objdump" target/thumbv7em-none-eabihf/release/triquint-b-g431b-esc1
 # The stack's worst case against the RAM the statics leave it: thread mode
 # (the executor's tasks) plus one handler per priority level (main.rs: the

@@ -54,7 +54,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from elf_check import COND_BRANCH, FUNC, INDIRECT, INSN, TARGET, THUNK, real, take  # noqa: E402
+from elf_check import COND_BRANCH, FUNC, INDIRECT, INSN, SYM, TARGET, THUNK, real, take  # noqa: E402
 
 # The Cortex-M4F's exception entry stacks R0-R3, R12, LR, PC, xPSR (8 words)
 # and, with the FPU in use (CONTROL.FPCA, lazy stacking reserves the space
@@ -62,7 +62,6 @@ from elf_check import COND_BRANCH, FUNC, INDIRECT, INSN, TARGET, THUNK, real, ta
 # CCR.STKALIGN (set out of reset on the M4) the frame starts 8-byte aligned,
 # which may cost 4 B of padding: 108 B per preempting level.
 EXCEPTION_FRAME = 108
-SYM = re.compile(r"^([0-9a-f]+)\s+(.*?)\s+(\S+)\t([0-9a-f]+)\s+(?:\.hidden\s+)?(.+)$")
 SECTION = re.compile(r"^\s*\d+\s+(\S+)\s+([0-9a-f]+)\s+[0-9a-f]+")
 IMM = re.compile(r"#(-?(?:0x[0-9a-f]+|\d+))")
 REGION = re.compile(r"\bRAM\s*(?:\([^)]*\))?\s*:\s*ORIGIN\s*=\s*[^,]+,\s*LENGTH\s*=\s*(0x[0-9a-fA-F]+|\d+)\s*([KM]?)")
