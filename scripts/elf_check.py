@@ -60,6 +60,14 @@ COND_BRANCH = re.compile(rf"^(b({CONDS})(\.[wn])?|cbn?z)$")
 BOUNDED_LOOPS = re.compile(r"^(fminf|fmaxf|sqrtf|fmodf|.*libm.*|__aeabi_mem\w*|mem(cpy|set|move))$")
 
 
+def symbols(table: str):
+    """The lines of `objdump -t`: (address, its Thumb bit cleared; flags;
+    size; name) each."""
+    for m in map(SYM.match, table.splitlines()):
+        if m:
+            yield int(m.group(1), 16) & ~1, m.group(2), int(m.group(4), 16), m.group(5)
+
+
 def real(name: str) -> str:
     """The routine a symbol stands for: a thunk's target, else itself."""
     return THUNK.sub("", name, count=1)
@@ -280,9 +288,8 @@ def main() -> int:
             print(f"elf_check: cannot read the symbols of {elf}: {e}", file=sys.stderr)
             return 2
         names: dict[int, set[str]] = {}
-        for m in map(SYM.match, table.splitlines()):
-            if m:
-                names.setdefault(int(m.group(1), 16) & ~1, set()).add(m.group(5))
+        for a, _, _, name in symbols(table):
+            names.setdefault(a, set()).add(name)
         starts = {f: a for f, insns in code.items() for a in [insns[0][0]] if insns}
     for pattern, addr in loads:
         rx, value = re.compile(pattern), int(addr, 0)

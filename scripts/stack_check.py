@@ -54,7 +54,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from elf_check import COND_BRANCH, FUNC, INDIRECT, INSN, SYM, TARGET, THUNK, real, take  # noqa: E402
+from elf_check import COND_BRANCH, FUNC, INDIRECT, INSN, TARGET, THUNK, real, symbols, take  # noqa: E402
 
 # The Cortex-M4F's exception entry stacks R0-R3, R12, LR, PC, xPSR (8 words)
 # and, with the FPU in use (CONTROL.FPCA, lazy stacking reserves the space
@@ -247,17 +247,13 @@ def analyse(dis: str, syms: str, thread: list[str], levels: list[list[str]], ind
             code[cur].append((int(m.group(1), 16), m.group(2), m.group(3)))
     by_name = dict(head)
     preferred: dict[int, str] = {}
-    for line in syms.splitlines():
-        m = SYM.match(line)
-        if not m:
-            continue
-        addr = int(m.group(1), 16) & ~1
-        if addr in code and not m.group(5).startswith("$"):
-            by_name.setdefault(m.group(5), addr)
-            if m.group(5) not in names[addr]:
-                names[addr].append(m.group(5))
-            if " F " in f" {m.group(2)} " and int(m.group(4), 16) and addr not in preferred:
-                preferred[addr] = m.group(5)
+    for addr, flags, size, name in symbols(syms):
+        if addr in code and not name.startswith("$"):
+            by_name.setdefault(name, addr)
+            if name not in names[addr]:
+                names[addr].append(name)
+            if " F " in f" {flags} " and size and addr not in preferred:
+                preferred[addr] = name
     label = {a: demangle(preferred.get(a, names[a][0])) for a in code}
     every = {a: names[a] + [demangle(n) for n in names[a]] for a in code}
 
@@ -556,8 +552,7 @@ def main() -> int:
         return 2
     # cortex-m-rt's own symbols for the stack's ends, where it defines them:
     # a cross-check of the room computed from memory.x and the sections.
-    ends = {m.group(5): int(m.group(1), 16) for m in map(SYM.match, syms.splitlines())
-            if m and m.group(5) in ("_stack_start", "_stack_end")}
+    ends = {name: a for a, _, _, name in symbols(syms) if name in ("_stack_start", "_stack_end")}
     extra = ""
     if len(ends) == 2 and ends["_stack_start"] - ends["_stack_end"] != rm:
         extra = f" (_stack_start - _stack_end = {ends['_stack_start'] - ends['_stack_end']} B: using the smaller)"

@@ -171,8 +171,8 @@ pub struct CheckedSegment {
 }
 
 /// A configuration ready to run, its values checked. The tick builds the
-/// robot model and derives the periods as it commits (a few hundred
-/// instructions): carried here, they would make every inbox slot larger.
+/// robot model and derives the periods as it commits: carried here, they
+/// would make every inbox slot larger.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prepared {
     pub cfg: DriveConfig,

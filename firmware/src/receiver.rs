@@ -281,9 +281,6 @@ impl Receiver {
             .map(|(_, cfg)| cfg)
     }
 
-    // Out of line: reassembling and checking a segment takes the deepest
-    // stack of the receive side, which the other frames' paths (a commit's
-    // `prepare` among them) then do not add to.
     fn part(&mut self, msg: Msg, payload: &[u8], active_crc: u32) -> Option<Item> {
         match self.segments.push(msg.kind(), payload)? {
             SegmentEvent::Pending => None,
