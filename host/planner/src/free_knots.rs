@@ -36,8 +36,8 @@
 use nalgebra::Vector3;
 use triquint_shared::kinematics::Pose;
 
-use crate::problem::{Problem, Solution};
-use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible, meets_every_limit};
+use crate::problem::{Problem, Solution, meets_every_limit};
+use crate::rounding::{FINAL_TORQUE_SAMPLES, lengthen_until_feasible};
 use crate::spline::Knots;
 use crate::time_scaling::shortest_scaling;
 

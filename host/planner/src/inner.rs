@@ -6,7 +6,7 @@
 //! program's bound equals the exact continuous-time maximum. Torque cuts are
 //! re-linearised at each new point until they hold.
 
-use crate::problem::{Limited, Problem, Solution};
+use crate::problem::{Limited, Problem, Solution, meets_every_limit};
 use crate::program::add_new_cuts;
 
 /// Relative tolerance of the cutting-plane loop.
@@ -38,6 +38,20 @@ pub(crate) enum Method {
     /// and the descent start better from the interior-point solve's central
     /// knot derivatives.
     Final,
+    /// For a min-time plan at its rounded intervals: [`Method::Final`]
+    /// whose rounds end at the first point that meets every limit. Its
+    /// objective, the total time, is fixed by the intervals here, so a
+    /// jerk lowered further below its limit buys nothing.
+    FirstFeasible,
+}
+
+/// What the cutting-plane rounds run to.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Goal {
+    /// The exact optimum (or the last round).
+    Optimum,
+    /// The first point that meets every limit (or the optimum).
+    Feasible,
 }
 
 impl Problem {
@@ -52,15 +66,16 @@ impl Problem {
         rounds: usize,
     ) -> Option<Solution> {
         match method {
-            Method::CuttingPlanes => self.cutting_planes(h, x0, rounds),
-            Method::Direct => self.direct(h, x0, rounds),
-            Method::ViaRelaxation => self.via_relaxation(h, x0, rounds),
-            Method::Final => self.final_solve(h, x0, rounds),
+            Method::CuttingPlanes => self.cutting_planes(h, x0, rounds, Goal::Optimum),
+            Method::Direct => self.direct(h, x0, rounds, Goal::Optimum),
+            Method::ViaRelaxation => self.via_relaxation(h, x0, rounds, Goal::Optimum),
+            Method::Final => self.final_solve(h, x0, rounds, Goal::Optimum),
+            Method::FirstFeasible => self.final_solve(h, x0, rounds, Goal::Feasible),
         }
     }
 
     /// [`Method::Direct`].
-    fn direct(&self, h: &[f64], x0: &[Vec<f64>; 3], rounds: usize) -> Option<Solution> {
+    fn direct(&self, h: &[f64], x0: &[Vec<f64>; 3], rounds: usize, goal: Goal) -> Option<Solution> {
         if self.jerk_only
             && self.run.cancelled().is_none()
             && let Some(x) = self.jerk_only_direct(h, x0)
@@ -69,7 +84,7 @@ impl Problem {
             // The direct solve knows jerk alone: when its optimum leaves
             // the travel, the cutting planes start from it.
             if fig.violation > 0.0 {
-                return self.cutting_planes(h, &x, rounds);
+                return self.cutting_planes(h, &x, rounds, goal);
             }
             return Some(Solution {
                 h: h.to_vec(),
@@ -80,11 +95,17 @@ impl Problem {
                 lp_solves: 0,
             });
         }
-        self.cutting_planes(h, x0, rounds)
+        self.cutting_planes(h, x0, rounds, goal)
     }
 
     /// [`Method::CuttingPlanes`].
-    fn cutting_planes(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+    fn cutting_planes(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+        goal: Goal,
+    ) -> Option<Solution> {
         let mut x = x0.clone();
         let first = self.evaluation(h, &x, self.torque_samples);
         let mut jerk = first.jerk;
@@ -118,42 +139,57 @@ impl Problem {
             // cuts are re-linearised at the new point: stop, the figures are exact.
             let relinearise = moved > 1e-9 * scale && cuts.iter().any(|c| c.q == Limited::Torque);
             let stuck = cuts.len() == before && !relinearise;
-            if exact || stuck || solves == max_rounds as u64 {
-                return Some(Solution {
-                    h: h.to_vec(),
-                    x,
-                    jerk: fig.jerk,
-                    violation: fig.violation,
-                    binding: fig.binding,
-                    lp_solves: solves,
-                });
+            let point = Solution {
+                h: h.to_vec(),
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: solves,
+            };
+            let enough = goal == Goal::Feasible && meets_every_limit(self, &point);
+            if exact || stuck || enough || solves == max_rounds as u64 {
+                return Some(point);
             }
+            x = point.x;
         }
         None
     }
 
     /// [`Method::ViaRelaxation`].
-    fn via_relaxation(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+    fn via_relaxation(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+        goal: Goal,
+    ) -> Option<Solution> {
         // The relaxation's probe keeps the interior-point solve: its knot
         // derivatives (the analytic centre of the non-binding joints') start
         // the full problem's cutting planes, and start them better than the
         // direct solve's, each joint at its own optimum (docs/planner-speed.md).
         if !self.jerk_only
-            && let Some(r) = self.relaxed().cutting_planes(h, x0, ROUNDS)
+            && let Some(r) = self.relaxed().cutting_planes(h, x0, ROUNDS, Goal::Optimum)
         {
             if let Some(sol) = self.accept_relaxed(&r) {
                 return Some(sol);
             }
-            return self.direct(h, &r.x, max_rounds).map(|s| Solution {
+            return self.direct(h, &r.x, max_rounds, goal).map(|s| Solution {
                 lp_solves: s.lp_solves + r.lp_solves,
                 ..s
             });
         }
-        self.direct(h, x0, max_rounds)
+        self.direct(h, x0, max_rounds, goal)
     }
 
-    /// [`Method::Final`].
-    fn final_solve(&self, h: &[f64], x0: &[Vec<f64>; 3], max_rounds: usize) -> Option<Solution> {
+    /// [`Method::Final`] and [`Method::FirstFeasible`].
+    fn final_solve(
+        &self,
+        h: &[f64],
+        x0: &[Vec<f64>; 3],
+        max_rounds: usize,
+        goal: Goal,
+    ) -> Option<Solution> {
         if !self.jerk_only
             && self.run.cancelled().is_none()
             && let Some(x) = self.relaxed().jerk_only_direct(h, x0)
@@ -163,7 +199,7 @@ impl Problem {
                 return Some(full);
             }
         }
-        self.via_relaxation(h, x0, max_rounds)
+        self.via_relaxation(h, x0, max_rounds, goal)
     }
 }
 
@@ -208,6 +244,44 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// At Case I's min-time point lengthened by a few microseconds and
+    /// rounded to whole ones, as the rounding does, acceleration and jerk
+    /// both bind and the final solve's rounds chase the moving extrema;
+    /// the first point that meets every limit ends them sooner, and is no
+    /// better than the optimum they run to.
+    #[test]
+    fn the_first_feasible_point_ends_the_rounds_sooner() {
+        let p = example_problem("paper-case1.toml");
+        let (s, _) = crate::min_time::min_time(&p, &crate::options::Options::default(), None)
+            .ok()
+            .unwrap();
+        let mut f = p.clone();
+        f.torque_samples = crate::rounding::FINAL_TORQUE_SAMPLES;
+        for k in 1..=40 {
+            let alpha = 1.0 + k as f64 * 1e-6;
+            let h: Vec<f64> =
+                s.h.iter()
+                    .map(|x| (x * alpha * 1e6).round() * 1e-6)
+                    .collect();
+            let x0 = crate::time_scaling::scaled_x(&s.x, alpha);
+            let optimum = f.inner(&h, &x0, Method::Final, ROUNDS).unwrap();
+            if !meets_every_limit(&f, &optimum) || optimum.lp_solves <= 2 {
+                continue;
+            }
+            let first = f.inner(&h, &x0, Method::FirstFeasible, ROUNDS).unwrap();
+            assert!(meets_every_limit(&f, &first));
+            assert!(
+                first.lp_solves < optimum.lp_solves,
+                "{} against {}",
+                first.lp_solves,
+                optimum.lp_solves
+            );
+            assert!(first.jerk >= optimum.jerk * (1.0 - 1e-9));
+            return;
+        }
+        panic!("no lengthening where the rounds run on");
     }
 
     #[test]

@@ -20,10 +20,10 @@ use crate::jerk_knots::jerk_knots;
 use crate::job::{Job, KnotPlacement, MAX_SEGMENT_S, MIN_SEGMENT_S};
 use crate::min_time::{MinTimeFailure, min_time};
 use crate::options::{Control, Observer, Options, Stage};
-use crate::problem::{Limited, Problem, Solution, feasible, knots_from, problem};
-use crate::rounding::{
-    FINAL_TORQUE_SAMPLES, fine, lengthen_until_feasible, meets_every_limit, round_within,
+use crate::problem::{
+    Limited, Problem, Solution, feasible, knots_from, meets_every_limit, problem,
 };
+use crate::rounding::{FINAL_TORQUE_SAMPLES, fine, lengthen_until_feasible, round_within};
 use crate::run_state::RunState;
 use crate::search::{SearchResult, global_from, relaxed_global};
 use crate::stats::{PathDeviation, path_deviation_within};

@@ -578,6 +578,11 @@ fn bernstein(c: &[f64; 6], h: f64) -> [f64; 6] {
     core::array::from_fn(|k| (0..=k).map(|i| BINOM[k][i] / BINOM[5][i] * a[i]).sum())
 }
 
+/// Strict acceptance of a final plan: no limit exceeded at all.
+pub(crate) fn meets_every_limit(p: &Problem, s: &Solution) -> bool {
+    s.violation == 0.0 && s.jerk <= p.limits.jerk
+}
+
 /// A solution is feasible when no limit is violated beyond rounding.
 pub(crate) fn feasible(p: &Problem, s: &Solution) -> bool {
     s.violation <= 1e-9 && s.jerk <= p.limits.jerk * (1.0 + 1e-9)

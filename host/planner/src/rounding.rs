@@ -3,7 +3,7 @@
 //! repaired until every limit holds.
 
 use crate::inner::{Method, ROUNDS};
-use crate::problem::{Problem, Solution};
+use crate::problem::{Problem, Solution, meets_every_limit};
 use crate::time_scaling::{scaled_x, within_bounds};
 
 /// Torque samples per segment in the final solve (the search uses fewer).
@@ -38,11 +38,6 @@ pub(crate) fn round_to_microseconds(h: &[f64], total_time: f64) -> Vec<f64> {
         }
     }
     us.into_iter().map(|v| v as f64 * 1e-6).collect()
-}
-
-/// Strict acceptance of a final plan: no limit exceeded at all.
-pub(crate) fn meets_every_limit(p: &Problem, s: &Solution) -> bool {
-    s.violation == 0.0 && s.jerk <= p.limits.jerk
 }
 
 /// `p` with the final solve's torque samples, at total time `total`.
@@ -101,7 +96,7 @@ pub(crate) fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solut
                 .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
                 .collect();
         let f = fine(p, h.iter().sum());
-        f.inner(&h, &scaled_x(&s.x, alpha), Method::Final, ROUNDS)
+        f.inner(&h, &scaled_x(&s.x, alpha), Method::FirstFeasible, ROUNDS)
     };
     let ok = |x: &Solution| meets_every_limit(p, x);
     let mut lo = 1.0;
