@@ -58,13 +58,14 @@ echo "| job | target | NEW: wall, peak | BASE: wall, peak | NEW / BASE, wall (CP
 echo "|---|---:|---|---|---:|---|---|"
 for row in "${rows[@]}"; do
     IFS='|' read -r name job target issue pairs base_job <<<"$row"
-    "$new" plan "$job" -o "$work/new.json" >"$work/answer" 2>&1 || true
+    status=0
+    "$new" plan "$job" -o "$work/new.json" >/dev/null 2>"$work/answer" || status=$?
     farm-bench -n "$pairs" --warmup "$([ "$pairs" -gt 1 ] && echo 1 || echo 0)" --timeout 3600 \
         --vs "$base plan ${base_job:-$job} -o $work/base.json --quiet" \
         -- "$new" plan "$job" -o "$work/new.json" --quiet >"$work/bench" 2>&1
-    python3 - "$name" "$target" "$issue" "$work/bench" "$work/answer" <<'PY'
-import re, sys
-name, target, issue, bench, answer = sys.argv[1:]
+    python3 - "$name" "$target" "$issue" "$work/bench" "$status" "$work/new.json" "$work/answer" <<'PY'
+import json, re, sys
+name, target, issue, bench, status, out, answer = sys.argv[1:]
 med = {}
 exits = {}
 for line in open(bench):
@@ -74,12 +75,14 @@ for line in open(bench):
     m = re.match(r"^(A|B|A/B) (wall s|cpu s|peak MiB|wall|cpu)\s+\S+\s+(\S+)", line)
     if m:
         med[(m.group(1), m.group(2))] = float(m.group(3))
-text = open(answer).read().strip().splitlines()
-said = text[-1] if text else ""
-said = re.sub(r"^triquint: (error: )?", "", said)
-m = re.search(r"(T = [0-9.]+ s).*?(max \|jerk\| [0-9.e-]+ m/s³)", said)
-short = re.search(r"shortest total time that meets every limit is ([0-9.]+ s)", said)
-said = f"{m.group(1)}, {m.group(2)}" if m else (f"infeasible, shortest {short.group(1)}" if short else said[:60])
+# The plan file as scripts/planner-scaling.sh reads it; else the error.
+if status == "0":
+    d = json.load(open(out))
+    said = f"T = {d['total_time_s']:.6f} s, max |jerk| {max(d['max_abs']['jerk']):.6g} m/s³"
+else:
+    text = " ".join(open(answer).read().split())
+    short = re.search(r"shortest total time that meets every limit is ([0-9.]+ s)", text)
+    said = f"infeasible, shortest {short.group(1)}" if short else f"exit {status}: {text[:60]}"
 if exits.get("A") != exits.get("B"):
     said += f" (BASE exit {exits.get('B')})"
 ratio = med.get(("A/B", "wall"))
@@ -108,14 +111,18 @@ for job in "$case2" "$(ls "$work"/curve-0.25/*-100.toml)" "$(ls "$work"/curve-0.
     "$(ls "$work"/curve-0.8/*-1000.toml)" "$(ls "$work"/walk/*-1000.toml)"; do
     free="$work/free.toml"
     sed 's/^objective = .*/objective = "min-max-jerk"\nknots = "free"/' "$job" >"$free"
-    /usr/bin/time -f "%e %U %S %M" -o "$work/time" "$new" plan "$free" -o "$work/free.json" >"$work/answer" 2>&1 || true
-    python3 - "$job" "$work/time" "$work/answer" <<'PY'
-import os, re, sys
-job, tfile, answer = sys.argv[1:]
+    status=0
+    /usr/bin/time -f "%e %U %S %M" -o "$work/time" "$new" plan "$free" -o "$work/free.json" \
+        >/dev/null 2>"$work/answer" || status=$?
+    python3 - "$job" "$work/time" "$status" "$work/free.json" "$work/answer" <<'PY'
+import json, os, sys
+job, tfile, status, out, answer = sys.argv[1:]
 wall, user, sys_, rss = open(tfile).read().split()[-4:]
-said = open(answer).read().strip().splitlines()[-1]
-m = re.search(r"planned (\d+) segments.*?max \|jerk\| ([0-9.e-]+ m/s³)", said)
-said = f"{m.group(1)} segments, max |jerk| {m.group(2)}" if m else said[:80]
+if status == "0":
+    d = json.load(open(out))
+    said = f"{len(d['intervals_s'])} segments, max |jerk| {max(d['max_abs']['jerk']):.6g} m/s³"
+else:
+    said = f"exit {status}: " + " ".join(open(answer).read().split())[:80]
 print(f"| {os.path.basename(os.path.dirname(job))}/{os.path.basename(job)} | {float(wall):.3g} | "
       f"{float(user) + float(sys_):.3g} | {int(rss) / 1024:.0f} | {said} |")
 PY
