@@ -6,7 +6,7 @@
 //! program's bound equals the exact continuous-time maximum. Torque cuts are
 //! re-linearised at each new point until they hold.
 
-use crate::problem::{Limited, Problem, Solution, meets_every_limit};
+use crate::problem::{Cut, Limited, Problem, Solution, meets_every_limit};
 use crate::program::add_new_cuts;
 
 /// Relative tolerance of the cutting-plane loop.
@@ -17,6 +17,9 @@ pub(crate) const ROUNDS: usize = 25;
 /// point method delivers on these degenerate problems (most solves then end
 /// "almost solved", less accurate than this).
 const INNER_TOL: f64 = 1e-9;
+/// Relative margin over the jerk limit past which a program's optimum
+/// proves a point infeasible, well above the solves' accuracy.
+const CERTAIN: f64 = 1e-7;
 
 /// How an inner solve is done. Each gives the exact optimum when it
 /// succeeds; they differ in cost, and in which optimal knot derivatives
@@ -147,13 +150,25 @@ impl Problem {
                 binding: fig.binding,
                 lp_solves: solves,
             };
-            let enough = goal == Goal::Feasible && meets_every_limit(self, &point);
+            let enough = goal == Goal::Feasible
+                && (meets_every_limit(self, &point)
+                    || self.beyond_every_limit(s_lp, sigma_lp, &cuts));
             if exact || stuck || enough || solves == max_rounds as u64 {
                 return Some(point);
             }
             x = point.x;
         }
         None
+    }
+
+    /// Whether a program's optimum (jerk bound `s_lp`, violation
+    /// `sigma_lp`) proves that no point at its intervals meets every limit:
+    /// without torque cuts (linearised, so not a relaxation) the program
+    /// only relaxes the problem, and a point meeting every limit would cost
+    /// it at most the jerk limit.
+    fn beyond_every_limit(&self, s_lp: f64, sigma_lp: f64, cuts: &[Cut]) -> bool {
+        !cuts.iter().any(|c| c.q == Limited::Torque)
+            && s_lp + self.weight * sigma_lp > self.limits.jerk * (1.0 + CERTAIN)
     }
 
     /// [`Method::ViaRelaxation`].
@@ -246,6 +261,15 @@ mod tests {
         }
     }
 
+    /// Case I's problem and its min-time point (before the rounding).
+    fn case1_min_time() -> (Problem, Solution) {
+        let p = example_problem("paper-case1.toml");
+        let (s, _) = crate::min_time::min_time(&p, &crate::options::Options::default(), None)
+            .ok()
+            .unwrap();
+        (p, s)
+    }
+
     /// At Case I's min-time point lengthened by a few microseconds and
     /// rounded to whole ones, as the rounding does, acceleration and jerk
     /// both bind and the final solve's rounds chase the moving extrema;
@@ -253,10 +277,7 @@ mod tests {
     /// better than the optimum they run to.
     #[test]
     fn the_first_feasible_point_ends_the_rounds_sooner() {
-        let p = example_problem("paper-case1.toml");
-        let (s, _) = crate::min_time::min_time(&p, &crate::options::Options::default(), None)
-            .ok()
-            .unwrap();
+        let (p, s) = case1_min_time();
         let mut f = p.clone();
         f.torque_samples = crate::rounding::FINAL_TORQUE_SAMPLES;
         for k in 1..=40 {
@@ -282,6 +303,26 @@ mod tests {
             return;
         }
         panic!("no lengthening where the rounds run on");
+    }
+
+    /// Shorter than Case I's min-time point by a little, no point meets
+    /// every limit: the first round's program proves it, so the rounds
+    /// that look for a feasible point end there, where the optimum's run on.
+    #[test]
+    fn a_program_that_proves_the_intervals_infeasible_ends_the_rounds() {
+        let (p, s) = case1_min_time();
+        let h: Vec<f64> = s.h.iter().map(|x| x * (1.0 - 1e-3)).collect();
+        let x0 = crate::time_scaling::scaled_x(&s.x, 1.0 - 1e-3);
+        let optimum = p.inner(&h, &x0, Method::Final, ROUNDS).unwrap();
+        let first = p.inner(&h, &x0, Method::FirstFeasible, ROUNDS).unwrap();
+        assert!(!meets_every_limit(&p, &optimum));
+        assert!(!meets_every_limit(&p, &first));
+        assert!(
+            first.lp_solves < optimum.lp_solves,
+            "{} against {}",
+            first.lp_solves,
+            optimum.lp_solves
+        );
     }
 
     #[test]

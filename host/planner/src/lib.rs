@@ -74,6 +74,7 @@ mod program;
 mod rounding;
 mod run_state;
 mod search;
+mod second_order;
 mod shaper;
 pub mod shaping;
 mod spline;

@@ -34,6 +34,17 @@ struct Rows {
 }
 
 impl Rows {
+    /// A y − b of each of the first `upto` rows, appended to `out`.
+    fn residuals(&self, y: &[f64], upto: usize, out: &mut Vec<f64>) {
+        let first = out.len();
+        out.extend(self.rhs[..upto].iter().map(|b| -b));
+        for ((&r, &c), &v) in self.row.iter().zip(&self.col).zip(&self.val) {
+            if r < upto {
+                out[first + r] += v * y[c];
+            }
+        }
+    }
+
     fn push(&mut self, terms: &[(usize, f64)], rhs: f64) {
         let r = self.rhs.len();
         for &(c, v) in terms {
@@ -46,6 +57,11 @@ impl Rows {
         self.rhs.push(rhs);
     }
 }
+
+/// How many rows each block of a program holds (equalities,
+/// inequalities, cone rows): the rows a program had before more were added.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Marks([usize; 3]);
 
 /// The LP has no solution, the solver gave up, or the search was cancelled.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,6 +95,35 @@ impl Lp {
             // Clarabel's cone rows are b − A x: A = −terms, b = constant.
             let neg: Vec<(usize, f64)> = terms.iter().map(|&(c, v)| (c, -v)).collect();
             self.soc.push(&neg, constant);
+        }
+    }
+
+    /// Its rows so far, block by block.
+    pub fn marks(&self) -> Marks {
+        Marks([self.eq.rhs.len(), self.ineq.rhs.len(), self.soc.rhs.len()])
+    }
+
+    /// A y − b of the rows before `upto`, block by block (for a cone row,
+    /// minus its slack).
+    pub fn residuals(&self, y: &[f64], upto: Marks) -> Vec<f64> {
+        let mut out = Vec::with_capacity(upto.0.iter().sum());
+        for (rows, n) in [&self.eq, &self.ineq, &self.soc].into_iter().zip(upto.0) {
+            rows.residuals(y, n, &mut out);
+        }
+        out
+    }
+
+    /// Moves the right-hand side of the rows before `upto` by `shift`
+    /// (in [`Lp::residuals`]' order): b − shift.
+    pub fn shift_rhs(&mut self, upto: Marks, shift: &[f64]) {
+        let mut s = shift.iter();
+        for (rows, n) in [&mut self.eq, &mut self.ineq, &mut self.soc]
+            .into_iter()
+            .zip(upto.0)
+        {
+            for (b, d) in rows.rhs[..n].iter_mut().zip(&mut s) {
+                *b -= d;
+            }
         }
     }
 
@@ -407,6 +452,28 @@ mod tests {
             let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&kept), bits(&new), "c = {c}");
         }
+    }
+
+    /// Residuals are A y − b row by row in the solver's order, up to the
+    /// marks; shifting the right-hand side by minus them puts y on every row.
+    #[test]
+    fn residuals_and_shifted_rows_agree() {
+        let mut lp = Lp::new(3);
+        lp.equal(&[(0, 1.0), (1, 2.0)], 1.0);
+        lp.at_most(&[(2, -1.0)], 0.5);
+        lp.second_order_cone([(&[(0, 1.0)], 2.0), (&[(1, 1.0)], 0.0), (&[(2, 3.0)], 1.0)]);
+        let marks = lp.marks();
+        lp.equal(&[(2, 1.0)], 9.0);
+        lp.at_most(&[(0, 1.0)], 9.0);
+        let y = [1.0, -2.0, 4.0];
+        let r = lp.residuals(&y, marks);
+        // Cone rows hold −terms and the constant: −(y₀) − 2, −(y₁), −(3y₂) − 1.
+        assert_eq!(r, vec![-4.0, -4.5, -3.0, 2.0, -13.0]);
+        let back: Vec<f64> = r.iter().map(|v| -v).collect();
+        lp.shift_rhs(marks, &back);
+        assert!(lp.residuals(&y, marks).iter().all(|v| *v == 0.0));
+        // The rows after the marks keep their right-hand sides.
+        assert_eq!((lp.eq.rhs[1], lp.ineq.rhs[1]), (9.0, 9.0));
     }
 
     #[test]

@@ -12,7 +12,7 @@
 use nalgebra::Vector3;
 use triquint_shared::dynamics;
 
-use crate::lp::Lp;
+use crate::lp::{Lp, Marks};
 use crate::problem::{Cut, Limited, Problem, TRAVEL_MARGIN};
 use crate::spline::Affine;
 
@@ -196,6 +196,11 @@ impl Program<'_> {
     /// Cuts added so far.
     pub(crate) fn cuts(&self) -> usize {
         self.cuts
+    }
+
+    /// Its rows so far (those [`Program::finish`] adds come after them).
+    pub(crate) fn marks(&self) -> Marks {
+        self.lp.marks()
     }
 
     /// Adds the rows of `cuts`.

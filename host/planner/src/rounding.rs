@@ -105,7 +105,15 @@ pub(crate) fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solut
                 .map(|x| ((x * alpha * 1e6).round() * 1e-6).max(1e-6))
                 .collect();
         let f = fine(p, h.iter().sum());
-        f.inner(&h, &scaled_x(&s.x, alpha), Method::FirstFeasible, ROUNDS)
+        // Limits other than jerk that bind are met only to the solves'
+        // accuracy: re-solved a hair inside them (as in `round_within`).
+        let inside = with_margin(&f, ROUNDING_MARGIN);
+        inside
+            .inner(&h, &scaled_x(&s.x, alpha), Method::FirstFeasible, ROUNDS)
+            .map(|r| Solution {
+                lp_solves: r.lp_solves,
+                ..f.evaluate(&r.h, &r.x)
+            })
     };
     let ok = |x: &Solution| meets_every_limit(p, x);
     let mut lo = 1.0;
@@ -119,11 +127,13 @@ pub(crate) fn lengthen_until_feasible(p: &Problem, s: &Solution) -> Option<Solut
             break;
         }
         lo = alpha;
-        // Time scaling by r lowers jerk by r³ and v, a by r, r²; torque less.
-        let need = if exact.violation > 0.0 {
-            (1.0 + exact.violation).sqrt()
-        } else {
+        // Time scaling by r lowers jerk by r³ and v, a by r, r²; torque
+        // less. A re-solve that proved its intervals infeasible early
+        // stops at a point whose violation says little; its jerk does.
+        let need = if exact.jerk > p.limits.jerk || exact.violation == 0.0 {
             (exact.jerk / p.limits.jerk).cbrt()
+        } else {
+            (1.0 + exact.violation).sqrt()
         };
         excess = (need - 1.0).max(2.0 * excess).max(1e-6);
         alpha *= 1.0 + excess;

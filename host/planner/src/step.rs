@@ -5,7 +5,7 @@
 //! ([`Problem::time_step`]).
 
 use crate::inner::Method;
-use crate::lp::{Lp, LpFailure};
+use crate::lp::{Lp, LpFailure, Marks};
 use crate::problem::{Cut, Evaluation, Problem, Solution};
 use crate::program::add_new_cuts;
 use crate::run_state::held_solves;
@@ -25,6 +25,9 @@ pub(crate) struct TimeStep {
     /// The new point with its exact figures.
     pub(crate) point: Solution,
     pub(crate) solves: u64,
+    /// The last round's program and solution, for the second-order
+    /// correction ([`Problem::second_order_corrected`]).
+    pub(crate) program: StepPoint,
 }
 
 /// The cutting-plane rounds of one step program ([`Problem::step_rounds`]).
@@ -47,13 +50,18 @@ struct Trial {
 /// A promised gain below this share of the merit is the step LP's noise.
 const NOISE_GAIN: f64 = 1e-9;
 
-/// A solved step program: its solution, its intervals, its knot
-/// derivatives on C3 there, and their evaluation.
-struct StepPoint {
-    sol: Vec<f64>,
-    h: Vec<f64>,
-    x: [Vec<f64>; 3],
-    fig: Evaluation,
+/// A solved step program: the program, its solution, its intervals, its
+/// knot derivatives on C3 there, and their evaluation.
+pub(crate) struct StepPoint {
+    pub(crate) lp: Lp,
+    /// The program's rows before the trust region's.
+    pub(crate) marks: Marks,
+    /// The cuts it holds.
+    pub(crate) cuts: Vec<Cut>,
+    pub(crate) sol: Vec<f64>,
+    pub(crate) h: Vec<f64>,
+    pub(crate) x: [Vec<f64>; 3],
+    pub(crate) fig: Evaluation,
 }
 
 impl Problem {
@@ -224,6 +232,7 @@ impl Problem {
         for _ in 0..max_rounds {
             let added = program.cuts();
             program.add_cuts(self, &cuts[added..]);
+            let (marks, held) = (program.marks(), program.cuts());
             let mut lp = program.clone().finish(self);
             // A step only needs to be good, not exact: it is judged exactly
             // (so no iterative refinement of the KKT solves either).
@@ -243,7 +252,15 @@ impl Problem {
             let fig = self.evaluation(&h, &x, self.torque_samples);
             add_new_cuts(cuts, &fig.cuts);
             let settled = cuts.len() == before;
-            out.last = Some(StepPoint { sol, h, x, fig });
+            out.last = Some(StepPoint {
+                lp,
+                marks,
+                cuts: cuts[..held].to_vec(),
+                sol,
+                h,
+                x,
+                fig,
+            });
             if settled {
                 break;
             }
@@ -254,7 +271,7 @@ impl Problem {
     /// The point of a step program's solution `sol` from intervals `h`: the
     /// new intervals (at least h_min) and the knot derivatives projected
     /// onto C3 there.
-    fn step_point(&self, h: &[f64], sol: &[f64]) -> (Vec<f64>, [Vec<f64>; 3]) {
+    pub(crate) fn step_point(&self, h: &[f64], sol: &[f64]) -> (Vec<f64>, [Vec<f64>; 3]) {
         let dh0 = 3 * self.nv();
         let h: Vec<f64> = h
             .iter()
@@ -299,17 +316,18 @@ impl Problem {
         if let Some(failure) = rounds.failed {
             return Err(failure);
         }
-        let StepPoint { h, x, fig, .. } = rounds.last.ok_or(LpFailure::Cancelled)?;
+        let last = rounds.last.ok_or(LpFailure::Cancelled)?;
         Ok(TimeStep {
             point: Solution {
-                h,
-                x,
-                jerk: fig.jerk,
-                violation: fig.violation,
-                binding: fig.binding,
+                h: last.h.clone(),
+                x: last.x.clone(),
+                jerk: last.fig.jerk,
+                violation: last.fig.violation,
+                binding: last.fig.binding,
                 lp_solves: 0,
             },
             solves: rounds.solves,
+            program: last,
         })
     }
 }

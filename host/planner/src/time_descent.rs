@@ -22,6 +22,9 @@ const PROMISE_FLOOR: f64 = 1e-6;
 /// from the cuts the step before found, so three rounds place them as well
 /// as six from the current point's cuts alone did (docs/planner-speed.md).
 const DESCENT_ROUNDS: usize = 3;
+/// Share of a step's promise lost to time-scaling above which the step is
+/// corrected to second order ([`Problem::second_order_corrected`]).
+const SCALING_LOSS: f64 = 0.05;
 /// Consecutive steps gaining less than this (relative) end the descent.
 const STALL_GAIN: f64 = 1e-7;
 
@@ -57,7 +60,7 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         };
         solves += step.solves;
         // Its exact figures: the step's last round evaluated it.
-        let exact = step.point;
+        let exact = &step.point;
         let promised = t_cur - exact.h.iter().sum::<f64>();
         // A promised gain near the plan's microsecond rounding is not
         // worth the steps: such a tail of steps gains almost nothing
@@ -65,10 +68,24 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         if promised <= PROMISE_FLOOR * t_cur {
             break;
         }
-        let cand = shortest_scaling_cuts(&p, &exact);
-        let actual = cand
-            .as_ref()
-            .map_or(f64::NEG_INFINITY, |c| t_cur - c.0.h.iter().sum::<f64>());
+        let gain = |c: &Option<(Solution, Option<Vec<Cut>>)>| {
+            c.as_ref()
+                .map_or(f64::NEG_INFINITY, |c| t_cur - c.0.h.iter().sum::<f64>())
+        };
+        let mut cand = shortest_scaling_cuts(&p, exact);
+        let mut actual = gain(&cand);
+        // Time-scaling took back much of the promise: the second-order
+        // error of a wide step, which the corrected program mostly avoids.
+        if actual < (1.0 - SCALING_LOSS) * promised {
+            if let Ok(corrected) = p.second_order_corrected(&cur, delta, &step.program) {
+                let other = shortest_scaling_cuts(&p, &corrected);
+                if gain(&other) > actual {
+                    actual = gain(&other);
+                    cand = other;
+                }
+            }
+            solves += 1;
+        }
         let rho = actual / promised;
         if let (Some((c, c_cuts)), true) = (cand, rho > 0.1) {
             stalled = if actual < STALL_GAIN * t_cur {

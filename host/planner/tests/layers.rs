@@ -41,6 +41,7 @@ const LAYERS: &[&str] = &[
     "jerk_only",    // the jerk-only inner problem without interior point
     "inner",        // the inner solve at fixed intervals, by a method
     "step",         // the trust-region step
+    "second_order", // a descent step corrected to second order
     "time_scaling", // a shape time-scaled
     "coarse_start", // a long path's starts from its coarser path
     "search",       // the multistart search
