@@ -16,13 +16,15 @@ impl Problem {
     /// `step`'s program (at `cur`, region `delta`) solved again with each
     /// of its rows' linearisation error at the step's point (the rows
     /// rebuilt exactly at the step's intervals, with the same cuts) off its
-    /// right-hand side; the new point with its exact figures.
+    /// right-hand side; the new point with its exact figures. None when
+    /// the rows at the step's point do not match the program's (nothing
+    /// was solved).
     pub(crate) fn second_order_corrected(
         &self,
         cur: &Solution,
         delta: f64,
         step: &StepPoint,
-    ) -> Result<Solution, LpFailure> {
+    ) -> Option<Result<Solution, LpFailure>> {
         let nseg = self.nseg();
         let dh0 = 3 * self.nv();
         // The rows at the step's intervals and the LP's own knot
@@ -32,9 +34,7 @@ impl Problem {
         program.add_cuts(self, &step.cuts);
         if program.marks() != step.marks {
             // A cut's torque has no gradient at the step's point.
-            return Err(LpFailure::Status(
-                clarabel::solver::SolverStatus::NumericalError,
-            ));
+            return None;
         }
         let exact = program.finish(self);
         let mut at_step = step.sol.clone();
@@ -44,17 +44,18 @@ impl Problem {
         let error: Vec<f64> = actual.iter().zip(&model).map(|(a, m)| a - m).collect();
         let mut lp = step.lp.clone();
         lp.shift_rhs(step.marks, &error);
-        let sol = self.solve(&lp)?;
-        let (h, x) = self.step_point(&cur.h, &sol);
-        let fig = self.evaluation(&h, &x, self.torque_samples);
-        Ok(Solution {
-            h,
-            x,
-            jerk: fig.jerk,
-            violation: fig.violation,
-            binding: fig.binding,
-            lp_solves: 0,
-        })
+        Some(self.solve(&lp).map(|sol| {
+            let (h, x) = self.step_point(&cur.h, &sol);
+            let fig = self.evaluation(&h, &x, self.torque_samples);
+            Solution {
+                h,
+                x,
+                jerk: fig.jerk,
+                violation: fig.violation,
+                binding: fig.binding,
+                lp_solves: 0,
+            }
+        }))
     }
 }
 
@@ -90,6 +91,7 @@ mod tests {
             let plain = kept(&step.point);
             let corrected = kept(
                 &p.second_order_corrected(&cur, delta, &step.program)
+                    .unwrap()
                     .unwrap(),
             );
             eprintln!(

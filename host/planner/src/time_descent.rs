@@ -77,14 +77,15 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         // Time-scaling took back much of the promise: the second-order
         // error of a wide step, which the corrected program mostly avoids.
         if actual < (1.0 - SCALING_LOSS) * promised {
-            if let Ok(corrected) = p.second_order_corrected(&cur, delta, &step.program) {
+            let corrected = p.second_order_corrected(&cur, delta, &step.program);
+            solves += u64::from(corrected.is_some());
+            if let Some(Ok(corrected)) = corrected {
                 let other = shortest_scaling_cuts(&p, &corrected);
                 if gain(&other) > actual {
                     actual = gain(&other);
                     cand = other;
                 }
             }
-            solves += 1;
         }
         let rho = actual / promised;
         if let (Some((c, c_cuts)), true) = (cand, rho > 0.1) {
@@ -95,9 +96,10 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
             };
             cur = c;
             cur_cuts = c_cuts;
-            if rho > 0.75 {
-                delta = (delta * 2.0).min(0.5);
-            } else if rho < 0.25 {
+            // A step that gains about what it promised keeps its region: a
+            // wider one promises little more (the linearisation's gain sits
+            // at small steps) and overshoots on the curvature.
+            if rho < 0.25 {
                 delta *= 0.5;
             }
         } else {
