@@ -9,11 +9,12 @@
 //! little scaling.
 
 use crate::lp::LpFailure;
-use crate::problem::{Problem, Solution};
+use crate::problem::{Cut, Problem, Solution};
 use crate::step::StepPoint;
 
 impl Problem {
-    /// `step`'s program (at `cur`, region `delta`) solved again with each
+    /// `step`'s program (at `cur`, region `delta`, holding the first of
+    /// `cuts`, those its rounds were given and found) solved again with each
     /// of its rows' linearisation error at the step's point (the rows
     /// rebuilt exactly at the step's intervals, with the same cuts) off its
     /// right-hand side; the new point with its exact figures. None when
@@ -24,6 +25,7 @@ impl Problem {
         cur: &Solution,
         delta: f64,
         step: &StepPoint,
+        cuts: &[Cut],
     ) -> Option<Result<Solution, LpFailure>> {
         let nseg = self.nseg();
         let dh0 = 3 * self.nv();
@@ -31,7 +33,7 @@ impl Problem {
         // derivatives (not yet on C3 there), where h no longer moves.
         let x = self.unpack(&step.sol);
         let mut program = self.program_at(&step.h, &x, Some(delta), cur.jerk);
-        program.add_cuts(self, &step.cuts);
+        program.add_cuts(self, &cuts[..step.cuts]);
         if program.marks() != step.marks {
             // A cut's torque has no gradient at the step's point.
             return None;
@@ -90,7 +92,7 @@ mod tests {
             };
             let plain = kept(&step.point);
             let corrected = kept(
-                &p.second_order_corrected(&cur, delta, &step.program)
+                &p.second_order_corrected(&cur, delta, &step.program, &cuts)
                     .unwrap()
                     .unwrap(),
             );

@@ -56,8 +56,8 @@ pub(crate) struct StepPoint {
     pub(crate) lp: Lp,
     /// The program's rows before the trust region's.
     pub(crate) marks: Marks,
-    /// The cuts it holds.
-    pub(crate) cuts: Vec<Cut>,
+    /// How many of the rounds' cuts (the first) it holds.
+    pub(crate) cuts: usize,
     pub(crate) sol: Vec<f64>,
     pub(crate) h: Vec<f64>,
     pub(crate) x: [Vec<f64>; 3],
@@ -255,7 +255,7 @@ impl Problem {
             out.last = Some(StepPoint {
                 lp,
                 marks,
-                cuts: cuts[..held].to_vec(),
+                cuts: held,
                 sol,
                 h,
                 x,

@@ -50,7 +50,7 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         add_new_cuts(&mut cuts, &carried);
         let initial = cuts.len();
         let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS);
-        carried = cuts.split_off(initial);
+        carried = cuts[initial..].to_vec();
         let Ok(step) = step else {
             delta *= 0.25;
             if delta < 1e-7 {
@@ -77,7 +77,7 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         // Time-scaling took back much of the promise: the second-order
         // error of a wide step, which the corrected program mostly avoids.
         if actual < (1.0 - SCALING_LOSS) * promised {
-            let corrected = p.second_order_corrected(&cur, delta, &step.program);
+            let corrected = p.second_order_corrected(&cur, delta, &step.program, &cuts);
             solves += u64::from(corrected.is_some());
             if let Some(Ok(corrected)) = corrected {
                 let other = shortest_scaling_cuts(&p, &corrected);
