@@ -274,7 +274,7 @@ mod tests {
     /// rounded to whole ones, as the rounding does, acceleration and jerk
     /// both bind and the final solve's rounds chase the moving extrema;
     /// the first point that meets every limit ends them sooner, and is no
-    /// better than the optimum they run to.
+    /// better than the optimum they run to (within the gap the chase leaves).
     #[test]
     fn the_first_feasible_point_ends_the_rounds_sooner() {
         let (p, s) = case1_min_time();
@@ -299,7 +299,14 @@ mod tests {
                 first.lp_solves,
                 optimum.lp_solves
             );
-            assert!(first.jerk >= optimum.jerk * (1.0 - 1e-9));
+            // The optimum's rounds end at their last point, which wanders
+            // within the gap the chase leaves (a few 1e-7 of the jerk).
+            assert!(
+                first.jerk >= optimum.jerk * (1.0 - 1e-6),
+                "{} against {}",
+                first.jerk,
+                optimum.jerk
+            );
             return;
         }
         panic!("no lengthening where the rounds run on");

@@ -115,6 +115,11 @@ pub(crate) struct Cut {
     pub(crate) j: usize,
     pub(crate) k: usize,
     pub(crate) u: f64,
+    /// The sign of the value at the extremum, whose side alone the
+    /// program bounds (the other side's row starts at least 1 +
+    /// [`CUT_THRESHOLD`] of the limit from binding; an extremum that
+    /// reaches it is cut on its own side); 0 bounds both (travel).
+    pub(crate) side: f64,
 }
 
 /// Exact figures of a point, and where the extrema are.
@@ -346,6 +351,7 @@ impl Problem {
                             j,
                             k,
                             u,
+                            side: 0.0,
                         });
                     }
                     worst = worst.max((p - hi).max(lo - p) / span);
@@ -365,10 +371,17 @@ impl Problem {
                 let mut best: f64 = 0.0;
                 let ts = roots_in(rate, 0.0, hk);
                 for t in ts.into_iter().chain([0.0, hk]) {
-                    let v = eval(poly, t).abs();
+                    let signed = eval(poly, t);
+                    let v = signed.abs();
                     best = best.max(v);
                     if v >= CUT_THRESHOLD * lim {
-                        cuts.push(Cut { q, j, k, u: t / hk });
+                        cuts.push(Cut {
+                            q,
+                            j,
+                            k,
+                            u: t / hk,
+                            side: signed.signum(),
+                        });
                     }
                 }
                 fig.note(q, best / lim - 1.0);
@@ -404,6 +417,7 @@ impl Problem {
                         j: axis,
                         k,
                         u,
+                        side: taus[i][axis].signum(),
                     });
                 }
             }

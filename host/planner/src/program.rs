@@ -248,6 +248,9 @@ impl Program<'_> {
                 }
             }
             for sign in [1.0, -1.0] {
+                if cut.side * sign < 0.0 {
+                    continue;
+                }
                 let mut terms: Vec<(usize, f64)> =
                     row.terms.iter().map(|&(c, v)| (c, sign * v)).collect();
                 if cut.q == Limited::Jerk {
@@ -327,10 +330,9 @@ impl Problem {
 /// quantity, joint, segment and normalised time).
 pub(crate) fn add_new_cuts(cuts: &mut Vec<Cut>, found: &[Cut]) {
     for c in found {
-        if !cuts
-            .iter()
-            .any(|d| d.q == c.q && d.j == c.j && d.k == c.k && (d.u - c.u).abs() < 1e-9)
-        {
+        if !cuts.iter().any(|d| {
+            d.q == c.q && d.j == c.j && d.k == c.k && d.side == c.side && (d.u - c.u).abs() < 1e-9
+        }) {
             cuts.push(*c);
         }
     }
@@ -387,9 +389,40 @@ mod tests {
             j: 0,
             k,
             u,
+            side: 1.0,
         };
         let mut cuts = vec![cut(0, 0.5)];
         add_new_cuts(&mut cuts, &[cut(0, 0.5 + 1e-12), cut(1, 0.5), cut(1, 0.5)]);
         assert_eq!(cuts, vec![cut(0, 0.5), cut(1, 0.5)]);
+        // The other side of a cut already held is a new cut.
+        let below = Cut {
+            side: -1.0,
+            ..cut(0, 0.5)
+        };
+        add_new_cuts(&mut cuts, &[below]);
+        assert_eq!(cuts, vec![cut(0, 0.5), cut(1, 0.5), below]);
+    }
+
+    /// A cut bounds its extremum's side alone (one row); travel both.
+    #[test]
+    fn a_cut_holds_one_row_for_its_side() {
+        let p = example_problem("paper-case2.toml");
+        let h = uneven_intervals(&p);
+        let x = p.zero_x();
+        let rows = |cuts: &[Cut]| {
+            let mut program = p.program_at(&h, &x, None, 1.0);
+            program.add_cuts(&p, cuts);
+            program.finish(&p).rows()
+        };
+        let base = rows(&[]);
+        let cut = Cut {
+            q: Limited::Acceleration,
+            j: 1,
+            k: 2,
+            u: 0.25,
+            side: -1.0,
+        };
+        assert_eq!(rows(&[cut]), base + 1);
+        assert_eq!(rows(&[cut, Cut { side: 1.0, ..cut }]), base + 2);
     }
 }
