@@ -76,7 +76,7 @@ pub(crate) fn min_time(
         // It meets every limit at the relaxation's own shortest time, a
         // lower bound of this problem's: no descent can shorten it (so a
         // move where only jerk binds skips the descent's solves).
-        if total_of(&start) <= t_low * (1.0 + LOWER_BOUND_MET) {
+        if !probe.loose && total_of(&start) <= t_low * (1.0 + LOWER_BOUND_MET) {
             return Ok((start, probe));
         }
         let best = descend_time(template, &start);

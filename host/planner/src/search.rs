@@ -29,6 +29,9 @@ pub(crate) struct SearchResult {
     /// What [`relaxed_shapes`] gives for the problem (min-time descends
     /// from it; a search that ran further gives min-time other shapes).
     pub(crate) as_shapes: bool,
+    /// Its shapes were refined only as far as shapes need
+    /// ([`SHAPE_TOL`]): the best then bounds nothing exactly.
+    pub(crate) loose: bool,
 }
 
 /// SplitMix64: a tiny, portable, seeded generator (the plan must not depend
@@ -81,6 +84,17 @@ pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
 
 /// Refined starts: the best few coarse results are driven to convergence.
 const REFINE: usize = 3;
+/// Relative gain per step that ends a refinement.
+pub(crate) const REFINE_TOL: f64 = 1e-10;
+/// [`REFINE_TOL`] of a relaxation whose best can only be a shape: one that,
+/// time-scaled to its jerk limit, still breaks another limit by
+/// [`SHAPE_MARGIN`] is neither the plan nor min-time's answer, only where
+/// the full search and min-time's descent start, and those do not need
+/// it to the last digits.
+const SHAPE_TOL: f64 = 1e-6;
+/// Relative violation of a limit other than jerk that makes a relaxation's
+/// best a shape alone ([`SHAPE_TOL`]).
+const SHAPE_MARGIN: f64 = 0.01;
 /// Relative distance below which two coarse results are the same point.
 const AGREE: f64 = 1e-4;
 /// Coarse searches run in batches of this many starts.
@@ -123,7 +137,8 @@ pub(crate) fn global_from(
         // even it breaks the jerk limit no plan at this total time meets
         // it, and the full search would only confirm that. A search that
         // ended early bounds nothing.
-        if !p.jerk_only && !r.ended_early && r.best.jerk > p.limits.jerk * (1.0 + 1e-9) {
+        if !p.jerk_only && !r.ended_early && !r.loose && r.best.jerk > p.limits.jerk * (1.0 + 1e-9)
+        {
             let best = Solution {
                 lp_solves: r.best.lp_solves,
                 ..p.evaluate(&r.best.h, &r.best.x)
@@ -207,19 +222,42 @@ fn relaxed_at(
     };
     // Whether a batch whose best coarse point is `best` may end the starts
     // at a refined agreement; a Shapes search always may.
+    // Whether `s` can only be a shape: time-scaled to its jerk limit it
+    // breaks another limit by the margin (so no longer time meets only
+    // the jerk limit's bound), and it is not p's plan.
+    let only_shape = |s: &Solution| {
+        let t_jerk = s.h.iter().sum::<f64>() * (s.jerk / p.limits.jerk).cbrt();
+        let (h, x) = scaled_shape(s, t_jerk);
+        p.evaluate(&h, &x).violation > SHAPE_MARGIN && (reach == Reach::Shapes || !is_plan(s))
+    };
+    // The refinement a batch whose best coarse point is `best` may end the
+    // starts with at a refined agreement (None: it may not); a Shapes
+    // search always may.
     let went_further = Cell::new(false);
     let may_end_early = |best: &Solution| {
         let may = reach == Reach::Shapes || refined_agreement(q) || !is_plan(best);
         went_further.set(went_further.get() || !may);
-        may
+        may.then(|| {
+            if only_shape(best) {
+                SHAPE_TOL
+            } else {
+                REFINE_TOL
+            }
+        })
     };
     let mut search = searched(q, opts, &may_end_early);
     loop {
         let mut r = search.result()?;
+        // A best refined for a shape that turns out more is refined on.
+        if r.loose && !only_shape(&r.best) {
+            search.tighten();
+            continue;
+        }
         // A best point the coarse results did not show to be the plan
         // may still be: then the rest of the starts run.
-        if search.ended == Ended::RefinedAgreement && !may_end_early(&r.best) {
-            search.run(&|_| false);
+        if search.ended == Ended::RefinedAgreement && may_end_early(&r.best).is_none() {
+            search.tighten();
+            search.run(&|_| None);
             continue;
         }
         r.ended_early = search.ended == Ended::RefinedAgreement && !refined_agreement(q);
@@ -262,7 +300,7 @@ fn time_scaled(p: &Problem, target: &Problem, r: SearchResult) -> Option<SearchR
 fn searched<'a>(
     p: &'a Problem,
     opts: &'a Options,
-    refined_agreement: &dyn Fn(&Solution) -> bool,
+    refined_agreement: &dyn Fn(&Solution) -> Option<f64>,
 ) -> Multistart<'a> {
     let (starts, coarse_solves) = coarse_starts(p, |c| {
         relaxed_search(c, opts, Reach::Shapes).map(|r| (r.shapes, r.lp_solves))
@@ -312,7 +350,7 @@ pub(crate) fn multistart_with(
     refined_agreement: bool,
 ) -> Option<SearchResult> {
     let mut search = Multistart::new(p, starts.to_vec(), opts);
-    search.run(&|_| refined_agreement);
+    search.run(&|_| refined_agreement.then_some(REFINE_TOL));
     search.result()
 }
 
@@ -348,6 +386,8 @@ pub(crate) struct Multistart<'a> {
     extra_solves: u64,
     /// Solves spent re-solving shapes, by every [`Multistart::result`].
     resolves: u64,
+    /// The relative gain that ends a refinement.
+    refine_tol: f64,
 }
 
 impl<'a> Multistart<'a> {
@@ -361,6 +401,7 @@ impl<'a> Multistart<'a> {
             ended: Ended::NotRun,
             extra_solves: 0,
             resolves: 0,
+            refine_tol: REFINE_TOL,
         }
     }
 
@@ -403,12 +444,31 @@ impl<'a> Multistart<'a> {
             .copied()
             .filter(|&i| self.refined[i].is_none())
             .collect();
-        let (p, coarse) = (self.p, &self.coarse);
+        let (p, coarse, tol) = (self.p, &self.coarse, self.refine_tol);
         let done = parallel(&todo, self.opts.threads, |&i| {
-            coarse[i].as_ref().map(|s| p.local_search(s, 400, 1e-10))
+            coarse[i].as_ref().map(|s| p.local_search(s, 400, tol))
         });
         for (i, r) in todo.into_iter().zip(done) {
             self.refined[i] = r;
+        }
+    }
+
+    /// Refinements from here on to [`REFINE_TOL`], and those already
+    /// made to a looser one refined on to it.
+    fn tighten(&mut self) {
+        if self.refine_tol <= REFINE_TOL {
+            return;
+        }
+        self.refine_tol = REFINE_TOL;
+        let todo: Vec<(usize, Solution)> = (self.refined.iter().enumerate())
+            .filter_map(|(i, r)| Some((i, r.clone()?)))
+            .collect();
+        let p = self.p;
+        let done = parallel(&todo, self.opts.threads, |(_, s)| {
+            p.local_search(s, 400, REFINE_TOL)
+        });
+        for ((i, _), r) in todo.into_iter().zip(done) {
+            self.refined[i] = Some(r);
         }
     }
 
@@ -417,7 +477,7 @@ impl<'a> Multistart<'a> {
     /// refined results agree in merit). Coarse results a little apart may
     /// still reach one optimum (the
     /// `refined_agreement_keeps_the_optimum_of_every_start` test).
-    pub(crate) fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> bool) {
+    pub(crate) fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> Option<f64>) {
         let p = self.p;
         // Two coarse results agreeing end the starts for good.
         if self.ended == Ended::CoarseAgreement {
@@ -457,9 +517,14 @@ impl<'a> Multistart<'a> {
                 self.ended = Ended::CoarseAgreement;
                 return;
             }
-            if refined_agreement(best_sol)
+            if let Some(tol) = refined_agreement(best_sol)
                 && let [a, b, ..] = order[..]
             {
+                if self.refined.iter().all(Option::is_none) {
+                    self.refine_tol = tol;
+                } else if tol < self.refine_tol {
+                    self.tighten();
+                }
                 self.refine_missing(&[a, b]);
                 // The merit alone: on long paths some intervals are nearly free
                 // at the optimum, so refined results agree in merit long
@@ -552,6 +617,7 @@ impl<'a> Multistart<'a> {
             lp_solves,
             ended_early: self.ended == Ended::RefinedAgreement,
             as_shapes: false,
+            loose: self.refine_tol > REFINE_TOL,
         })
     }
 }

@@ -17,8 +17,8 @@ use crate::inner::{Method, ROUNDS};
 use crate::problem::{Problem, Solution};
 use crate::run_state::RunState;
 use crate::search::{
-    Multistart, REFERENCE_S_PER_SEGMENT, SearchResult, global, multistart_with, relaxed_global,
-    relaxed_shapes, start_points,
+    Multistart, REFERENCE_S_PER_SEGMENT, REFINE_TOL, SearchResult, global, multistart_with,
+    relaxed_global, relaxed_shapes, start_points,
 };
 use crate::{Job, Options, Plan, check, plan};
 
@@ -348,6 +348,35 @@ fn a_relaxation_that_is_the_plan_runs_every_start() {
 }
 
 #[test]
+fn a_relaxation_that_can_only_be_a_shape_is_refined_as_one() {
+    // The closed curve of 20 via-points in 5.7 s (the speed figures'
+    // verdict): time-scaled to its jerk limit the relaxation's best still
+    // breaks acceleration by more than the margin, so it only starts
+    // min-time, and its refinement stops as a shape's. The same starts
+    // refined in full cost more solves for the same jerk to 1e-5.
+    let p = job_problem(&closed_curve(20, 5.7)).unwrap();
+    let o = Options::default();
+    let r = relaxed_global(&p, &o).unwrap();
+    assert!(r.loose && r.as_shapes);
+    let t_ref = REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64;
+    let q = p.relaxed().retimed(t_ref);
+    let full = multistart_with(&q, &start_points(&q, o.starts, o.seed), &o, true).unwrap();
+    assert!(!full.loose);
+    // Jerk scales as T⁻³: the loose best at the reference time.
+    let loose_jerk = r.best.jerk * (p.total_time / t_ref).powi(3);
+    eprintln!(
+        "as a shape: {} LPs, jerk {loose_jerk}; in full: {} LPs, jerk {}",
+        r.lp_solves, full.lp_solves, full.best.jerk
+    );
+    assert!(r.lp_solves < full.lp_solves);
+    assert!((loose_jerk / full.best.jerk - 1.0).abs() < 1e-5);
+    // Where the relaxation is the plan, it is refined in full.
+    let case2 = example_problem("paper-case2.toml");
+    let r2 = relaxed_global(&case2, &o).unwrap();
+    assert!(case2.accept_relaxed(&r2.best).is_some() && !r2.loose);
+}
+
+#[test]
 fn a_relaxation_that_is_not_the_plan_ends_at_the_first_refined_agreement() {
     // The closed curve of 10 via-points in 2.7 s (the speed figures'
     // verdict): acceleration binds at the relaxation's optimum, whose
@@ -375,9 +404,9 @@ fn a_multistart_that_goes_on_keeps_every_start_of_one_run_to_the_end() {
     let o = Options::default();
     let starts = start_points(&p, o.starts, o.seed);
     let mut search = Multistart::new(&p, starts.clone(), &o);
-    search.run(&|_| true);
+    search.run(&|_| Some(REFINE_TOL));
     let early = search.result().unwrap();
-    search.run(&|_| false);
+    search.run(&|_| None);
     let resumed = search.result().unwrap();
     let all = multistart_with(&p, &starts, &o, false).unwrap();
     assert!(early.ended_early && early.starts < all.starts);
