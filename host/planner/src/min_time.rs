@@ -27,7 +27,8 @@ const LOWER_BOUND_MET: f64 = 1e-8;
 /// depend on T (jerk scales as T⁻³), so its global optimum at any T, scaled
 /// to the jerk limit, is the shortest time when nothing else binds (its
 /// search ends at the first refined agreement, so the bound is as good as
-/// the optimum that search finds). Each
+/// the optimum that search finds; a search refined only as a shape's,
+/// [`SearchResult::loose`], bounds nothing). Each
 /// refined shape of that relaxation is time-scaled until velocity,
 /// acceleration and torque hold too, then shortened by the descent on Σh
 /// ([`descend_time`], every iterate feasible); the shortest wins.

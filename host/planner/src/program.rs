@@ -327,7 +327,7 @@ impl Problem {
 }
 
 /// Appends the cuts of `found` that `cuts` does not hold yet (same
-/// quantity, joint, segment and normalised time).
+/// quantity, joint, segment, normalised time and side).
 pub(crate) fn add_new_cuts(cuts: &mut Vec<Cut>, found: &[Cut]) {
     for c in found {
         if !cuts.iter().any(|d| {

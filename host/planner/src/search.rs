@@ -1,6 +1,7 @@
 //! Global search over the intervals: deterministic multistart of the
 //! trust-region step (coarse from the starts in batches until two agree on
-//! the best point, then to convergence for the best few).
+//! the best point, then to convergence for the best few: to 1e-10, or to
+//! 1e-6 where they can only be min-time's shapes).
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
@@ -82,7 +83,8 @@ pub(crate) fn start_points(p: &Problem, n: usize, seed: u64) -> Vec<Vec<f64>> {
     out
 }
 
-/// Refined starts: the best few coarse results are driven to convergence.
+/// Refined starts: the best few coarse results are driven to convergence
+/// (to the multistart's refinement tolerance).
 const REFINE: usize = 3;
 /// Relative gain per step that ends a refinement.
 pub(crate) const REFINE_TOL: f64 = 1e-10;
@@ -220,15 +222,14 @@ fn relaxed_at(
         let (h, x) = scaled_shape(s, p.total_time);
         p.accept_relaxed(&Solution { h, x, ..s.clone() }).is_some()
     };
-    // Whether a batch whose best coarse point is `best` may end the starts
-    // at a refined agreement; a Shapes search always may.
-    // Whether `s` can only be a shape: time-scaled to its jerk limit it
-    // breaks another limit by the margin (so no longer time meets only
-    // the jerk limit's bound), and it is not p's plan.
+    // Whether `s` can only be a shape for min-time: time-scaled to its
+    // jerk limit it breaks another limit by the margin (so no time meets
+    // only the jerk limit's bound). It depends on the shape alone, not on
+    // p's time, so min-time gets the same shapes whatever time a job asks.
     let only_shape = |s: &Solution| {
         let t_jerk = s.h.iter().sum::<f64>() * (s.jerk / p.limits.jerk).cbrt();
         let (h, x) = scaled_shape(s, t_jerk);
-        p.evaluate(&h, &x).violation > SHAPE_MARGIN && (reach == Reach::Shapes || !is_plan(s))
+        p.evaluate(&h, &x).violation > SHAPE_MARGIN
     };
     // The refinement a batch whose best coarse point is `best` may end the
     // starts with at a refined agreement (None: it may not); a Shapes
@@ -248,8 +249,9 @@ fn relaxed_at(
     let mut search = searched(q, opts, &may_end_early);
     loop {
         let mut r = search.result()?;
-        // A best refined for a shape that turns out more is refined on.
-        if r.loose && !only_shape(&r.best) {
+        // A best refined for a shape that turns out more (within the
+        // margin, or p's plan: the answer) is refined on.
+        if r.loose && (!only_shape(&r.best) || (reach == Reach::Answer && is_plan(&r.best))) {
             search.tighten();
             continue;
         }
@@ -371,7 +373,8 @@ enum Ended {
 /// A multistart search of the trust-region step: coarse searches from the
 /// starts in fixed batches (the plan must not depend on the thread count)
 /// until two reach the best point so far, then the best few refined to
-/// convergence. It can stop early, at the first two refined results that
+/// convergence (to 1e-10, or to a looser tolerance its caller asks for
+/// shapes, [`Multistart::tighten`] taking them on). It can stop early, at the first two refined results that
 /// agree, and go on from there: it then runs the starts a search run on
 /// from the beginning would, and keeps every shape refined so far, so its
 /// best is at least as good as that search's.
@@ -473,8 +476,9 @@ impl<'a> Multistart<'a> {
     }
 
     /// Runs the starts not yet run, batch by batch, until two coarse
-    /// results reach the best point (or, with `refined_agreement`, two
-    /// refined results agree in merit). Coarse results a little apart may
+    /// results reach the best point (or, where `refined_agreement` of the
+    /// best coarse result gives a refinement tolerance, two results
+    /// refined to it agree in merit). Coarse results a little apart may
     /// still reach one optimum (the
     /// `refined_agreement_keeps_the_optimum_of_every_start` test).
     pub(crate) fn run(&mut self, refined_agreement: &dyn Fn(&Solution) -> Option<f64>) {

@@ -358,6 +358,11 @@ fn a_relaxation_that_can_only_be_a_shape_is_refined_as_one() {
     let o = Options::default();
     let r = relaxed_global(&p, &o).unwrap();
     assert!(r.loose && r.as_shapes);
+    // Min-time's own relaxation gives the same shapes: the verdict's
+    // shortest time is the job's at any time asked.
+    let shapes = relaxed_shapes(&p, &o).unwrap();
+    assert!(shapes.loose);
+    assert_eq!(r.best.h, shapes.best.h);
     let t_ref = REFERENCE_S_PER_SEGMENT * p.knots.segments() as f64;
     let q = p.relaxed().retimed(t_ref);
     let full = multistart_with(&q, &start_points(&q, o.starts, o.seed), &o, true).unwrap();
