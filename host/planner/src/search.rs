@@ -1,7 +1,7 @@
 //! Global search over the intervals: deterministic multistart of the
 //! trust-region step (coarse from the starts in batches until two agree on
 //! the best point, then to convergence for the best few: to 1e-10, or to
-//! 1e-6 where they can only be min-time's shapes).
+//! 1e-5 where they can only be min-time's shapes).
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
@@ -93,7 +93,7 @@ pub(crate) const REFINE_TOL: f64 = 1e-10;
 /// [`SHAPE_MARGIN`] is neither the plan nor min-time's answer, only where
 /// the full search and min-time's descent start, and those do not need
 /// it to the last digits.
-const SHAPE_TOL: f64 = 1e-6;
+const SHAPE_TOL: f64 = 1e-5;
 /// Relative violation of a limit other than jerk that makes a relaxation's
 /// best a shape alone ([`SHAPE_TOL`]).
 const SHAPE_MARGIN: f64 = 0.01;
