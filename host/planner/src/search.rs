@@ -442,17 +442,14 @@ impl<'a> Multistart<'a> {
 
     fn refine_missing(&mut self, which: &[usize]) {
         self.refined.resize(self.coarse.len(), None);
-        let todo: Vec<usize> = which
+        let todo: Vec<(usize, &Solution)> = which
             .iter()
             .copied()
             .filter(|&i| self.refined[i].is_none())
+            .filter_map(|i| Some((i, self.coarse[i].as_ref()?)))
             .collect();
-        let (p, coarse, tol) = (self.p, &self.coarse, self.refine_tol);
-        let done = parallel(&todo, self.opts.threads, |&i| {
-            coarse[i].as_ref().map(|s| p.local_search(s, 400, tol))
-        });
-        for (i, r) in todo.into_iter().zip(done) {
-            self.refined[i] = r;
+        for (i, r) in self.refine(&todo) {
+            self.refined[i] = Some(r);
         }
     }
 
@@ -463,16 +460,22 @@ impl<'a> Multistart<'a> {
             return;
         }
         self.refine_tol = REFINE_TOL;
-        let todo: Vec<(usize, Solution)> = (self.refined.iter().enumerate())
-            .filter_map(|(i, r)| Some((i, r.clone()?)))
+        let todo: Vec<(usize, &Solution)> = (self.refined.iter().enumerate())
+            .filter_map(|(i, r)| Some((i, r.as_ref()?)))
             .collect();
-        let p = self.p;
-        let done = parallel(&todo, self.opts.threads, |(_, s)| {
-            p.local_search(s, 400, REFINE_TOL)
-        });
-        for ((i, _), r) in todo.into_iter().zip(done) {
+        for (i, r) in self.refine(&todo) {
             self.refined[i] = Some(r);
         }
+    }
+
+    /// Each of `todo`'s points refined to the refinement tolerance, side
+    /// by side, with its index.
+    fn refine(&self, todo: &[(usize, &Solution)]) -> Vec<(usize, Solution)> {
+        let (p, tol) = (self.p, self.refine_tol);
+        let done = parallel(todo, self.opts.threads, |(_, s)| {
+            p.local_search(s, 400, tol)
+        });
+        todo.iter().map(|&(i, _)| i).zip(done).collect()
     }
 
     /// Runs the starts not yet run, batch by batch, until two coarse
