@@ -1,7 +1,7 @@
 //! Global search over the intervals: deterministic multistart of the
 //! trust-region step (coarse from the starts in batches until two agree on
-//! the best point, then to convergence for the best few: to 1e-10, or to
-//! 1e-5 where they can only be min-time's shapes).
+//! the best point, then to convergence for the best few: to 1e-10; where
+//! they can only be min-time's shapes, the coarse results are the shapes).
 
 // Index loops over joints and segments mirror the maths.
 #![allow(clippy::needless_range_loop)]
@@ -92,8 +92,11 @@ pub(crate) const REFINE_TOL: f64 = 1e-10;
 /// time-scaled to its jerk limit, still breaks another limit by
 /// [`SHAPE_MARGIN`] is neither the plan nor min-time's answer, only where
 /// the full search and min-time's descent start, and those do not need
-/// it to the last digits.
-const SHAPE_TOL: f64 = 1e-5;
+/// it to the last digits. The coarse searches' own tolerance: such a
+/// shape is the coarse result as it is.
+const SHAPE_TOL: f64 = COARSE_TOL;
+/// Relative gain per step that ends a coarse search.
+const COARSE_TOL: f64 = 1e-5;
 /// Relative violation of a limit other than jerk that makes a relaxation's
 /// best a shape alone ([`SHAPE_TOL`]).
 const SHAPE_MARGIN: f64 = 0.01;
@@ -472,6 +475,11 @@ impl<'a> Multistart<'a> {
     /// by side, with its index.
     fn refine(&self, todo: &[(usize, &Solution)]) -> Vec<(usize, Solution)> {
         let (p, tol) = (self.p, self.refine_tol);
+        // The coarse searches already ran to this tolerance: refining
+        // would only spend the region's shrinking again.
+        if tol >= COARSE_TOL {
+            return todo.iter().map(|&(i, s)| (i, s.clone())).collect();
+        }
         let done = parallel(todo, self.opts.threads, |(_, s)| {
             p.local_search(s, 400, tol)
         });
@@ -496,7 +504,7 @@ impl<'a> Multistart<'a> {
             let batch = &self.starts[from..(from + BATCH).min(self.starts.len())];
             let results = parallel(batch, self.opts.threads, |h| {
                 let first = p.inner(h, &p.zero_x(), Method::Direct, ROUNDS)?;
-                let sol = p.local_search(&first, 60, 1e-5);
+                let sol = p.local_search(&first, 60, COARSE_TOL);
                 if sol.violation == 0.0
                     && let Some(f) = p.shown_jerk
                 {

@@ -352,8 +352,9 @@ fn a_relaxation_that_can_only_be_a_shape_is_refined_as_one() {
     // The closed curve of 20 via-points in 5.7 s (the speed figures'
     // verdict): time-scaled to its jerk limit the relaxation's best still
     // breaks acceleration by more than the margin, so it only starts
-    // min-time, and its refinement stops as a shape's. The same starts
-    // refined in full cost more solves for the same jerk to 1e-5.
+    // min-time, and its shapes are the coarse results as they are. The
+    // same starts refined in full cost more solves for the same jerk to
+    // 1e-5.
     let p = job_problem(&closed_curve(20, 5.7)).unwrap();
     let o = Options::default();
     let r = relaxed_global(&p, &o).unwrap();
