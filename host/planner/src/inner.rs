@@ -41,10 +41,12 @@ pub(crate) enum Method {
     /// and the descent start better from the interior-point solve's central
     /// knot derivatives.
     Final,
-    /// For a min-time plan at its rounded intervals: [`Method::Final`]
-    /// whose rounds end at the first point that meets every limit. Its
-    /// objective, the total time, is fixed by the intervals here, so a
-    /// jerk lowered further below its limit buys nothing.
+    /// For a min-time plan at its rounded intervals: the relaxation's
+    /// direct solve when it meets every limit, else cutting planes from
+    /// `x0` (the min-time point's knot derivatives, whose extrema are where
+    /// the rounds end), ending at the first point that meets every limit.
+    /// Its objective, the total time, is fixed by the intervals here, so
+    /// a jerk lowered further below its limit buys nothing.
     FirstFeasible,
 }
 
@@ -213,6 +215,12 @@ impl Problem {
             if full.violation == 0.0 {
                 return Some(full);
             }
+        }
+        // A min-time point a few microseconds away has its extrema where
+        // the rounds end: its own cuts start them better than the
+        // relaxation's point does.
+        if goal == Goal::Feasible {
+            return self.cutting_planes(h, x0, max_rounds, goal);
         }
         self.via_relaxation(h, x0, max_rounds, goal)
     }
