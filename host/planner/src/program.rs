@@ -330,12 +330,18 @@ impl Problem {
 /// quantity, joint, segment, normalised time and side).
 pub(crate) fn add_new_cuts(cuts: &mut Vec<Cut>, found: &[Cut]) {
     for c in found {
-        if !cuts.iter().any(|d| {
-            d.q == c.q && d.j == c.j && d.k == c.k && d.side == c.side && (d.u - c.u).abs() < 1e-9
-        }) {
+        if !near_any(cuts, c, 1e-9) {
             cuts.push(*c);
         }
     }
+}
+
+/// Whether `cuts` holds one of `c`'s quantity, joint, segment and side
+/// within `du` of its normalised time.
+pub(crate) fn near_any(cuts: &[Cut], c: &Cut, du: f64) -> bool {
+    cuts.iter().any(|d| {
+        d.q == c.q && d.j == c.j && d.k == c.k && d.side == c.side && (d.u - c.u).abs() < du
+    })
 }
 
 #[cfg(test)]
@@ -401,6 +407,11 @@ mod tests {
         };
         add_new_cuts(&mut cuts, &[below]);
         assert_eq!(cuts, vec![cut(0, 0.5), cut(1, 0.5), below]);
+        // Near: the same limit, joint, segment and side within the distance.
+        assert!(near_any(&cuts, &cut(1, 0.5005), 1e-3));
+        assert!(!near_any(&cuts, &cut(1, 0.502), 1e-3));
+        assert!(!near_any(&cuts, &cut(2, 0.5), 1e-3));
+        assert!(!near_any(&[below], &cut(0, 0.5), 1e-3));
     }
 
     /// A cut bounds its extremum's side alone (one row); travel both.

@@ -11,9 +11,12 @@
 //! extrema move little from step to step, so fewer rounds place them.
 
 use crate::problem::{Cut, Problem, Solution};
-use crate::program::add_new_cuts;
+use crate::program::{add_new_cuts, near_any};
 use crate::time_scaling::shortest_scaling_cuts;
 
+/// Normalised time within which a cut the last step's rounds found is
+/// left out beside another of the same limit, joint, segment and side.
+const CARRIED_APART: f64 = 1e-3;
 /// Steps at most.
 const MAX_STEPS: usize = 80;
 /// A step promising less than this share of the time ends the descent.
@@ -47,7 +50,14 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
         let own =
             cur_cuts.get_or_insert_with(|| p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts);
         let mut cuts = own.clone();
-        add_new_cuts(&mut cuts, &carried);
+        // Near one of the point's own cuts a carried one adds a nearly
+        // parallel row: the own cut holds it.
+        let apart: Vec<Cut> = carried
+            .iter()
+            .filter(|c| !near_any(own, c, CARRIED_APART))
+            .copied()
+            .collect();
+        add_new_cuts(&mut cuts, &apart);
         let initial = cuts.len();
         let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS);
         carried = cuts[initial..].to_vec();
