@@ -83,7 +83,7 @@ mod tests {
         p.total_time = t_cur;
         for delta in [0.1, 0.2] {
             let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
-            let step = p.time_step(&cur, delta, &mut cuts, 3).unwrap();
+            let step = p.time_step(&cur, delta, &mut cuts, 3, 0.0).unwrap();
             let promised = t_cur - step.point.h.iter().sum::<f64>();
             // The share of the promise a point keeps once time-scaled.
             let kept = |point: &Solution| {

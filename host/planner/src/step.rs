@@ -191,7 +191,7 @@ impl Problem {
         // steps are rejected, the region collapses and the search crawls
         // (docs/planner-speed.md), so the step program has its own rounds.
         let mut cuts = self.evaluation(&cur.h, &cur.x, self.torque_samples).cuts;
-        let rounds = self.step_rounds(cur, delta, &mut cuts, STEP_ROUNDS, |_| {});
+        let rounds = self.step_rounds(cur, delta, &mut cuts, STEP_ROUNDS, |_| {}, |_| false);
         let nd = 3 * self.nv() + self.nseg();
         let merit = cur.merit(self.weight);
         let gain = rounds
@@ -211,8 +211,8 @@ impl Problem {
     /// `cuts`: each round's point is checked exactly and its new extrema
     /// cut (appended to `cuts`), so the step does not promise what is only
     /// true at the old extrema. With jerk alone there are no cuts: one
-    /// round. Ends at the first round that adds no cut, at `max_rounds`, or
-    /// at a failed solve.
+    /// round. Ends at the first round that adds no cut or whose new
+    /// intervals are `enough`, at `max_rounds`, or at a failed solve.
     fn step_rounds(
         &self,
         cur: &Solution,
@@ -220,6 +220,7 @@ impl Problem {
         cuts: &mut Vec<Cut>,
         max_rounds: usize,
         shape: impl Fn(&mut Lp),
+        enough: impl Fn(&[f64]) -> bool,
     ) -> StepRounds {
         let mut out = StepRounds {
             last: None,
@@ -251,7 +252,7 @@ impl Problem {
             let before = cuts.len();
             let fig = self.evaluation(&h, &x, self.torque_samples);
             add_new_cuts(cuts, &fig.cuts);
-            let settled = cuts.len() == before;
+            let settled = cuts.len() == before || enough(&h);
             out.last = Some(StepPoint {
                 lp,
                 marks,
@@ -289,12 +290,15 @@ impl Problem {
     /// elastic; returns the new intervals, the LP's knot derivatives
     /// projected onto C3 there. Its program starts from `cuts` and runs at
     /// most `max_rounds` rounds; the cuts they find are appended to `cuts`.
+    /// A round that promises at most `floor` of the time ends them: a later
+    /// round only adds rows, so it promises no more.
     pub(crate) fn time_step(
         &self,
         cur: &Solution,
         delta: f64,
         cuts: &mut Vec<Cut>,
         max_rounds: usize,
+        floor: f64,
     ) -> Result<TimeStep, LpFailure> {
         let nv = self.nv();
         let nseg = self.nseg();
@@ -302,17 +306,24 @@ impl Problem {
         let sigma = s_col + 1;
         let t: f64 = cur.h.iter().sum();
         let jerk = self.limits.jerk;
-        let rounds = self.step_rounds(cur, delta, cuts, max_rounds, |lp| {
-            // Relative time against relative violation: making up a
-            // violation ν by time-scaling costs about ν/2 of the time, so
-            // 1e3 keeps σ at 0 whenever the linearisation allows it.
-            lp.cost[s_col] = 0.0;
-            lp.cost[sigma] = 1e3;
-            for k in 0..nseg {
-                lp.cost[dh0 + k] = 1.0 / t;
-            }
-            lp.at_most(&[(s_col, 1.0), (sigma, -jerk)], jerk);
-        });
+        let rounds = self.step_rounds(
+            cur,
+            delta,
+            cuts,
+            max_rounds,
+            |lp| {
+                // Relative time against relative violation: making up a
+                // violation ν by time-scaling costs about ν/2 of the time, so
+                // 1e3 keeps σ at 0 whenever the linearisation allows it.
+                lp.cost[s_col] = 0.0;
+                lp.cost[sigma] = 1e3;
+                for k in 0..nseg {
+                    lp.cost[dh0 + k] = 1.0 / t;
+                }
+                lp.at_most(&[(s_col, 1.0), (sigma, -jerk)], jerk);
+            },
+            |h| t - h.iter().sum::<f64>() <= floor * t,
+        );
         if let Some(failure) = rounds.failed {
             return Err(failure);
         }
@@ -396,12 +407,25 @@ mod tests {
             .unwrap();
         let delta = 0.05;
         let mut cuts = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
-        let step = p.time_step(&cur, delta, &mut cuts, STEP_ROUNDS).unwrap();
+        let step = p
+            .time_step(&cur, delta, &mut cuts, STEP_ROUNDS, 0.0)
+            .unwrap();
         let before: f64 = cur.h.iter().sum();
         let after: f64 = step.point.h.iter().sum();
         assert!(after < before, "{after} ≥ {before}");
         for (a, b) in step.point.h.iter().zip(&cur.h) {
             assert!((a - b).abs() <= delta * b * (1.0 + 1e-6) + 1e-12);
         }
+        // Its rounds ran on; asked for a little more than its first round
+        // promises, that round ends them.
+        assert!(step.solves > 1);
+        let own = p.evaluation(&cur.h, &cur.x, p.torque_samples).cuts;
+        let first = p.time_step(&cur, delta, &mut own.clone(), 1, 0.0).unwrap();
+        let floor = (before - first.point.h.iter().sum::<f64>()) / before * 1.01;
+        let short = p
+            .time_step(&cur, delta, &mut own.clone(), STEP_ROUNDS, floor)
+            .unwrap();
+        assert_eq!(short.solves, 1);
+        assert_eq!(short.point.h, first.point.h);
     }
 }

@@ -59,7 +59,7 @@ pub(crate) fn descend_time(template: &Problem, start: &Solution) -> Solution {
             .collect();
         add_new_cuts(&mut cuts, &apart);
         let initial = cuts.len();
-        let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS);
+        let step = p.time_step(&cur, delta, &mut cuts, DESCENT_ROUNDS, PROMISE_FLOOR);
         carried = cuts[initial..].to_vec();
         let Ok(step) = step else {
             delta *= 0.25;
