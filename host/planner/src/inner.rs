@@ -44,7 +44,8 @@ pub(crate) enum Method {
     /// For a min-time plan at its rounded intervals: the relaxation's
     /// direct solve when it meets every limit, else cutting planes from
     /// `x0` (the min-time point's knot derivatives, whose extrema are where
-    /// the rounds end), ending at the first point that meets every limit.
+    /// the rounds end; through the relaxation when a solve there fails),
+    /// ending at the first point that meets every limit.
     /// Its objective, the total time, is fixed by the intervals here, so
     /// a jerk lowered further below its limit buys nothing.
     FirstFeasible,
@@ -218,9 +219,11 @@ impl Problem {
         }
         // A min-time point a few microseconds away has its extrema where
         // the rounds end: its own cuts start them better than the
-        // relaxation's point does.
-        if goal == Goal::Feasible {
-            return self.cutting_planes(h, x0, max_rounds, goal);
+        // relaxation's point does (which is left for a failed solve).
+        if goal == Goal::Feasible
+            && let Some(s) = self.cutting_planes(h, x0, max_rounds, goal)
+        {
+            return Some(s);
         }
         self.via_relaxation(h, x0, max_rounds, goal)
     }
