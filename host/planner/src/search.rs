@@ -30,8 +30,8 @@ pub(crate) struct SearchResult {
     /// What [`relaxed_shapes`] gives for the problem (min-time descends
     /// from it; a search that ran further gives min-time other shapes).
     pub(crate) as_shapes: bool,
-    /// Its shapes were refined only as far as shapes need
-    /// ([`SHAPE_TOL`]): the best then bounds nothing exactly.
+    /// Its shapes are only as far along as shapes need (the coarse
+    /// results, [`SHAPE_TOL`]): the best then bounds nothing exactly.
     pub(crate) loose: bool,
 }
 
@@ -376,8 +376,8 @@ enum Ended {
 /// A multistart search of the trust-region step: coarse searches from the
 /// starts in fixed batches (the plan must not depend on the thread count)
 /// until two reach the best point so far, then the best few refined to
-/// convergence (to 1e-10, or to a looser tolerance its caller asks for
-/// shapes, [`Multistart::tighten`] taking them on). It can stop early, at the first two refined results that
+/// convergence (to 1e-10; where its caller asks only for shapes, the
+/// coarse results as they are, [`Multistart::tighten`] taking them on). It can stop early, at the first two refined results that
 /// agree, and go on from there: it then runs the starts a search run on
 /// from the beginning would, and keeps every shape refined so far, so its
 /// best is at least as good as that search's.
@@ -472,11 +472,14 @@ impl<'a> Multistart<'a> {
     }
 
     /// Each of `todo`'s points refined to the refinement tolerance, side
-    /// by side, with its index.
+    /// by side, with its index; at the coarse searches' own tolerance or
+    /// looser, the points as they are.
     fn refine(&self, todo: &[(usize, &Solution)]) -> Vec<(usize, Solution)> {
         let (p, tol) = (self.p, self.refine_tol);
-        // The coarse searches already ran to this tolerance: refining
-        // would only spend the region's shrinking again.
+        // The coarse searches ran to this tolerance (or to their step
+        // cap): refining would mostly spend the region's shrinking again,
+        // for a shape that only starts min-time's descent and the full
+        // search.
         if tol >= COARSE_TOL {
             return todo.iter().map(|&(i, s)| (i, s.clone())).collect();
         }

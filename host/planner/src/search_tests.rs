@@ -348,7 +348,7 @@ fn a_relaxation_that_is_the_plan_runs_every_start() {
 }
 
 #[test]
-fn a_relaxation_that_can_only_be_a_shape_is_refined_as_one() {
+fn a_relaxation_that_can_only_be_a_shape_is_its_coarse_results() {
     // The closed curve of 20 via-points in 5.7 s (the speed figures'
     // verdict): time-scaled to its jerk limit the relaxation's best still
     // breaks acceleration by more than the margin, so it only starts

@@ -291,7 +291,8 @@ impl Problem {
     /// projected onto C3 there. Its program starts from `cuts` and runs at
     /// most `max_rounds` rounds; the cuts they find are appended to `cuts`.
     /// A round that promises at most `floor` of the time ends them: a later
-    /// round only adds rows, so it promises no more.
+    /// round only adds rows, so (while the violation σ stays at zero) it
+    /// promises no more.
     pub(crate) fn time_step(
         &self,
         cur: &Solution,

@@ -7,8 +7,9 @@
 //! ([`shortest_scaling`](crate::time_scaling::shortest_scaling)). The scaling
 //! absorbs the second-order error that stalls a plain SLP on Σh
 //! (docs/planner-speed.md), and the step is accepted on that exact time.
-//! The cuts a step's rounds find start the next step's program: the
-//! extrema move little from step to step, so fewer rounds place them.
+//! The cuts a step's rounds find start the next step's program (but those
+//! beside one of its point's own): the extrema move little from step to
+//! step, so fewer rounds place them.
 
 use crate::problem::{Cut, Problem, Solution};
 use crate::program::{add_new_cuts, near_any};
