@@ -377,10 +377,11 @@ enum Ended {
 /// starts in fixed batches (the plan must not depend on the thread count)
 /// until two reach the best point so far, then the best few refined to
 /// convergence (to 1e-10; where its caller asks only for shapes, the
-/// coarse results as they are, [`Multistart::tighten`] taking them on). It can stop early, at the first two refined results that
-/// agree, and go on from there: it then runs the starts a search run on
-/// from the beginning would, and keeps every shape refined so far, so its
-/// best is at least as good as that search's.
+/// coarse results as they are, [`Multistart::tighten`] taking them on).
+/// It can stop early, at the first two refined results that agree, and go
+/// on from there: it then runs the starts a search run on from the
+/// beginning would, and keeps every shape refined so far, so its best is
+/// at least as good as that search's.
 pub(crate) struct Multistart<'a> {
     p: &'a Problem,
     opts: &'a Options,
