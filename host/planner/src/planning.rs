@@ -73,10 +73,24 @@ pub fn plan_with(
     observer: &mut dyn Observer,
 ) -> Result<Plan, PlanError> {
     let state = Arc::new(RunState::new(opts.time_budget));
+    observed(&state, observer, || run(job, opts, &state))
+        .unwrap_or_else(|| Err(PlanError::Solver("the search thread panicked".into())))
+}
+
+/// Runs `work` on another thread while this one calls `observer` (which
+/// may cancel `state`); None when `work` panicked. The sender moves into
+/// the thread, so a panic there disconnects the channel and ends the
+/// observer's loop rather than leaving it waiting for a message that will
+/// never come.
+fn observed<R: Send>(
+    state: &RunState,
+    observer: &mut dyn Observer,
+    work: impl FnOnce() -> R + Send,
+) -> Option<R> {
     let (done, finished) = channel();
     std::thread::scope(|s| {
-        let worker = s.spawn(|| {
-            let r = run(job, opts, &state);
+        let worker = s.spawn(move || {
+            let r = work();
             let _ = done.send(());
             r
         });
@@ -85,9 +99,7 @@ pub fn plan_with(
                 state.cancel();
             }
         }
-        worker
-            .join()
-            .unwrap_or_else(|_| Err(PlanError::Solver("the search thread panicked".into())))
+        worker.join().ok()
     })
 }
 
@@ -646,7 +658,28 @@ fn assemble(job: &Job, p: &Problem, s: &Solution) -> Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Progress;
     use crate::search_tests::example_problem;
+
+    /// A search that panics ends the observed run with None (the CLI's
+    /// clear error), where the observer once waited for it forever.
+    #[test]
+    fn a_panicking_search_ends_the_observed_run() {
+        let state = RunState::new(None);
+        let mut calls = 0;
+        let mut observer = |_: &Progress| {
+            calls += 1;
+            Control::Continue
+        };
+        let r: Option<()> = observed(&state, &mut observer, || {
+            std::thread::sleep(OBSERVER_PERIOD * 2);
+            panic!("a search that breaks")
+        });
+        assert!(r.is_none());
+        assert!(calls >= 1);
+        let ok = observed(&state, &mut |_: &Progress| Control::Continue, || 7);
+        assert_eq!(ok, Some(7));
+    }
 
     /// Where travel binds, the verdict is where the closest plan leaves it.
     #[test]
