@@ -210,12 +210,14 @@ impl Lp {
         solver.solve();
         if std::env::var_os("TRIQUINT_LP_DEBUG").is_some() {
             eprintln!(
-                "lp: {} vars {} rows, {} iterations, {:.3} ms, status {:?}",
+                "lp: {} vars {} rows, {} iterations, {:.3} ms, status {:?}, KKT {} and factor {} nonzeros",
                 self.vars,
                 m,
                 solver.solution.iterations,
                 solver.solution.solve_time * 1e3,
-                solver.solution.status
+                solver.solution.status,
+                solver.info.linsolver.nnzA,
+                solver.info.linsolver.nnzL
             );
         }
         match solver.solution.status {
