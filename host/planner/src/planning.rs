@@ -662,21 +662,31 @@ mod tests {
     use crate::search_tests::example_problem;
 
     /// A search that panics ends the observed run with None (the CLI's
-    /// clear error), where the observer once waited for it forever.
+    /// clear error), where the observer once waited for it forever. Run
+    /// on its own thread, so that such a hang fails the test rather than
+    /// stalling the suite.
     #[test]
     fn a_panicking_search_ends_the_observed_run() {
-        let state = RunState::new(None);
-        let mut calls = 0;
-        let mut observer = |_: &Progress| {
-            calls += 1;
-            Control::Continue
-        };
-        let r: Option<()> = observed(&state, &mut observer, || {
-            std::thread::sleep(OBSERVER_PERIOD * 2);
-            panic!("a search that breaks")
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            let state = RunState::new(None);
+            let mut calls = 0;
+            let mut observer = |_: &Progress| {
+                calls += 1;
+                Control::Continue
+            };
+            let r: Option<()> = observed(&state, &mut observer, || {
+                std::thread::sleep(OBSERVER_PERIOD * 2);
+                panic!("a search that breaks")
+            });
+            let _ = tx.send((r.is_none(), calls));
         });
-        assert!(r.is_none());
+        let (ended_as_none, calls) = rx
+            .recv_timeout(Duration::from_secs(60))
+            .expect("the observed run ended");
+        assert!(ended_as_none);
         assert!(calls >= 1);
+        let state = RunState::new(None);
         let ok = observed(&state, &mut |_: &Progress| Control::Continue, || 7);
         assert_eq!(ok, Some(7));
     }
