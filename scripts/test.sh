@@ -32,6 +32,9 @@ cargo fmt --all --check
 step "cargo clippy -D warnings"
 cargo clippy --workspace --all-targets --locked -- -D warnings
 
+step "cargo doc -D warnings (no broken or private links in the API docs)"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked --quiet
+
 step "cargo test"
 # The fuzz targets' build (its own target directory and flags, niced) runs
 # beside the tests, which leave part of the second core idle; the fuzz step

@@ -99,7 +99,7 @@ pub struct AxisResponse {
     pub peak_torque_nm: f64,
     /// Largest |reference − encoder| during the sweep (m).
     pub max_following_error_m: f64,
-    /// The response's magnitude on a [`GRID_HZ`] grid from `from_hz`.
+    /// The response's magnitude on a `GRID_HZ` grid from `from_hz`.
     pub from_hz: f64,
     pub step_hz: f64,
     pub magnitude: Vec<f64>,

@@ -49,7 +49,7 @@ pub fn potential_energy(m: &Model<f64>, pose: &Pose<f64>) -> f64 {
 /// Cartesian mass matrix M(r): T = ½ ṙᵀ M ṙ, body by body as in
 /// [`kinetic_energy`], each body's velocity a linear map of ṙ (q̇_i = w_i·ṙ):
 /// the platform m_p·I, each strut (m_s/4)·AᵢᵀAᵢ with Aᵢ = I + e_z w_iᵀ for its
-/// centre and (I⊥/l⁴)·CᵢᵀCᵢ with Cᵢ = [d_i]×(I − e_z w_iᵀ) for its rotation,
+/// centre and (I⊥/l⁴)·CᵢᵀCᵢ with Cᵢ = \[d_i\]×(I − e_z w_iᵀ) for its rotation,
 /// each slider and rotor (m_sl + I_r·ratio²)·w_i w_iᵀ.
 pub fn mass_matrix(m: &Model<f64>, pose: &Pose<f64>) -> Matrix3<f64> {
     let mut mass = Matrix3::identity() * m.platform_mass;

@@ -43,7 +43,7 @@ pub fn eval_poly<T: Real>(k: &[T; 6], t: T) -> [T; 4] {
 /// One segment of a plan: three joints' quintic coefficients and the duration.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Quintic<T: Real> {
-    /// coeffs[j][k]: coefficient of t^k for joint j (m/s^k).
+    /// `coeffs[j][k]`: coefficient of t^k for joint j (m/s^k).
     pub coeffs: [[T; 6]; 3],
     /// Segment duration h (s).
     pub duration: T,

@@ -39,7 +39,7 @@ pub enum PointsFileError {
     /// A header-like line (no numeric field) after the first content line.
     #[error("line {line}: a header is allowed only as the first line")]
     HeaderNotFirst { line: usize },
-    /// More than [`MAX_POINTS`] points.
+    /// More than `MAX_POINTS` (a million) points.
     #[error("line {line}: more than {max} points")]
     TooMany { line: usize, max: usize },
     /// No point at all.

@@ -1,6 +1,6 @@
 //! Input shaping that stays piecewise quintic: a plan convolved with a few
 //! positive impulses (ZV, MZV, ZVD, EI, 2HUMP-EI for a frequency and damping
-//! ratio, [`crate::shaper`]), one shaper for all three joints so the joint
+//! ratio, `shaper.rs`), one shaper for all three joints so the joint
 //! path keeps its shape in time. Torque is not linear in q, and the path
 //! between via-points changes: the shaped plan records the unshaped one and
 //! the shaper (format 5), and `check` convolves again, compares, re-proves

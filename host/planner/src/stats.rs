@@ -191,7 +191,7 @@ pub fn recorded_deviation(plan: &Plan) -> Result<PathDeviation, StatsError> {
 }
 
 /// [`path_deviation`], with every sample interval whose bound is above
-/// `target_m` halved (up to [`REFINEMENTS`] times) until it is not: the
+/// `target_m` halved (up to `REFINEMENTS` times) until it is not: the
 /// bound then proves `target_m` whenever the path stays below it by more
 /// than the last halving's share.
 pub fn path_deviation_within(plan: &Plan, target_m: f64) -> Result<PathDeviation, StatsError> {

@@ -1,6 +1,6 @@
 //! Exact extrema and absolute integrals of low-degree polynomials on an interval.
 //!
-//! A polynomial is a coefficient slice `c` with p(t) = Σ_k c[k] t^k (ascending
+//! A polynomial is a coefficient slice `c` with p(t) = Σ_k `c[k]` t^k (ascending
 //! powers, the plan file's convention). Its extrema on [t0, t1] lie at the ends
 //! or at real roots of p′. Roots are found in closed form for degree ≤ 2; for
 //! higher degrees the roots of p′ split the interval into pieces on which p is

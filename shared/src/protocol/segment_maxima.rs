@@ -157,7 +157,8 @@ pub fn maxima(b: &[[f32; 6]; 3], inv_h: f32) -> [f32; 3] {
 /// The controlled and quick stop ramps (s) of a segment with piece maxima
 /// `pieces` on a drive with jerk limit `jerk_limit`, ceiling `ceiling`
 /// and override cap `cap`: the budgets from the segment's own largest
-/// |q‴|, the ramps over every joint's every piece ([`pieces_ramp`]).
+/// |q‴|, the ramps over every joint's every piece
+/// ([`pieces_ramp`](super::stop_ramp::pieces_ramp)).
 pub fn piece_ramps(
     pieces: &PieceMaxima,
     jerk_limit: f32,

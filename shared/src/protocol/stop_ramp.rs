@@ -397,10 +397,10 @@ pub fn pieces_ramp(triples: &[[f32; 3]], budgets: [f32; 2], cap: f32) -> Option<
 
 /// [`pieces_ramp`] and the ramps with which a stop along the path (to
 /// σ = 0, σ̈ bang-bang) from a constant σ ≤ 1 keeps the joint jerk within
-/// each of `budgets` for each triple: the bound on [`BANG_NODES`] from
+/// each of `budgets` for each triple: the bound on `BANG_NODES` from
 /// σ = 1, which bounds every such stop from σ₀ ≤ 1 term by term (σ ≤
 /// 1 − S, |σ̇| ≤ S′/T and |σ̈| = |S″|/T² at ρ ≥ √σ₀), and its joint
-/// acceleration within `accel_ceiling` ([`BANG_ACCEL`]; infinite where
+/// acceleration within `accel_ceiling` (`BANG_ACCEL`; infinite where
 /// no ramp keeps it there). It is not bounded by the full ramp
 /// (the quintic's): where it is longer the drives run the full ramp
 /// instead. `[full, at_unit]`.

@@ -3,9 +3,9 @@
 //!
 //! The phases, in order: heartbeats from every node (protocol version
 //! checked, faults cleared, Reset), configuration written, committed and
-//! checked ([`configure`]), clocks synchronised ([`time_sync`], all along),
-//! the first segments streamed ([`stream`]), Arm and a common Start
-//! ([`start`]), the rest streamed, then every node back at rest. What the
+//! checked (`configure`), clocks synchronised (`time_sync`, all along),
+//! the first segments streamed (`stream`), Arm and a common Start
+//! (`start`), the rest streamed, then every node back at rest. What the
 //! host knows of each node is a [`NodeView`] ([`nodes`]). This file only
 //! decodes what arrives and moves between the phases.
 

@@ -19,7 +19,7 @@ pub struct SessionOptions {
     pub response_timeout_us: u64,
     /// A set-up command (configuration, Arm) not answered within this is
     /// sent again: a configuration refused or unanswered at most
-    /// `setup_resends` times, Arm at most twice (see [`ARM_RESENDS`]).
+    /// `setup_resends` times, Arm at most twice (see `ARM_RESENDS`).
     pub setup_retry_us: u64,
     pub setup_resends: u32,
     /// After the plan's end, how long nodes may take to report Idle.
