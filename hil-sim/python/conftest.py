@@ -79,16 +79,20 @@ class Sim:
             args += ["--start", ",".join(f"{c:.6f}" for c in start)]
         args += list(extra)
         self.log = open(self.log_path, "w")
+        # Frames stamped before this (kernel receive time, wall clock) come
+        # from an earlier drive still queued on a test's open bus.
+        self.started = time.time()
         self.proc = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT)
 
     def wait_heartbeats(self, bus, nodes=(1, 2, 3), timeout=20.0):
-        """Blocks until every node in `nodes` sent a heartbeat."""
+        """Blocks until every node in `nodes` of this sim sent a heartbeat
+        (a drive that sends one reads the bus too)."""
         seen = set()
         t0 = time.monotonic()
         while time.monotonic() - t0 < timeout and seen != set(nodes):
             assert self.proc.poll() is None, open(self.log_path).read()
             m = bus.recv(0.2)
-            if m is not None and 0x701 <= m.arbitration_id <= 0x70F:
+            if m is not None and 0x701 <= m.arbitration_id <= 0x70F and m.timestamp >= self.started:
                 seen.add(m.arbitration_id - 0x700)
         assert seen == set(nodes), f"heartbeats from {sorted(seen)} only"
 
