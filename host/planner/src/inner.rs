@@ -92,14 +92,7 @@ impl Problem {
             if fig.violation > 0.0 {
                 return self.cutting_planes(h, &x, rounds, goal);
             }
-            return Some(Solution {
-                h: h.to_vec(),
-                x,
-                jerk: fig.jerk,
-                violation: fig.violation,
-                binding: fig.binding,
-                lp_solves: 0,
-            });
+            return Some(Solution::with_figures(h.to_vec(), x, &fig));
         }
         self.cutting_planes(h, x0, rounds, goal)
     }
@@ -146,12 +139,8 @@ impl Problem {
             let relinearise = moved > 1e-9 * scale && cuts.iter().any(|c| c.q == Limited::Torque);
             let stuck = cuts.len() == before && !relinearise;
             let point = Solution {
-                h: h.to_vec(),
-                x,
-                jerk: fig.jerk,
-                violation: fig.violation,
-                binding: fig.binding,
                 lp_solves: solves,
+                ..Solution::with_figures(h.to_vec(), x, &fig)
             };
             let enough = goal == Goal::Feasible
                 && (meets_every_limit(self, &point)

@@ -100,6 +100,18 @@ pub(crate) struct Solution {
 }
 
 impl Solution {
+    /// (h, x) with its exact figures `fig`, no LP solves counted yet.
+    pub(crate) fn with_figures(h: Vec<f64>, x: [Vec<f64>; 3], fig: &Evaluation) -> Solution {
+        Solution {
+            h,
+            x,
+            jerk: fig.jerk,
+            violation: fig.violation,
+            binding: fig.binding,
+            lp_solves: 0,
+        }
+    }
+
     pub(crate) fn merit(&self, weight: f64) -> f64 {
         self.jerk + weight * self.violation
     }
@@ -509,14 +521,7 @@ impl Problem {
     /// Exact figures of (h, x) under this problem's limits.
     pub(crate) fn evaluate(&self, h: &[f64], x: &[Vec<f64>; 3]) -> Solution {
         let f = self.evaluation(h, x, self.torque_samples);
-        Solution {
-            h: h.to_vec(),
-            x: x.clone(),
-            jerk: f.jerk,
-            violation: f.violation,
-            binding: f.binding,
-            lp_solves: 0,
-        }
+        Solution::with_figures(h.to_vec(), x.clone(), &f)
     }
 
     /// A solution of the relaxation as a solution of this problem, when it

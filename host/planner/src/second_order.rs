@@ -49,14 +49,7 @@ impl Problem {
         Some(self.solve(&lp).map(|sol| {
             let (h, x) = self.step_point(&cur.h, &sol);
             let fig = self.evaluation(&h, &x, self.torque_samples);
-            Solution {
-                h,
-                x,
-                jerk: fig.jerk,
-                violation: fig.violation,
-                binding: fig.binding,
-                lp_solves: 0,
-            }
+            Solution::with_figures(h, x, &fig)
         }))
     }
 }

@@ -330,14 +330,7 @@ impl Problem {
         }
         let last = rounds.last.ok_or(LpFailure::Cancelled)?;
         Ok(TimeStep {
-            point: Solution {
-                h: last.h.clone(),
-                x: last.x.clone(),
-                jerk: last.fig.jerk,
-                violation: last.fig.violation,
-                binding: last.fig.binding,
-                lp_solves: 0,
-            },
+            point: Solution::with_figures(last.h.clone(), last.x.clone(), &last.fig),
             solves: rounds.solves,
             program: last,
         })

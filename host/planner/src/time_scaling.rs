@@ -44,17 +44,7 @@ pub(crate) fn shortest_scaling_cuts(
         let h: Vec<f64> = s.h.iter().map(|x| x * alpha).collect();
         let x = scaled_x(&s.x, alpha);
         match p.feasible_evaluation(&h, &x, broken) {
-            Ok(f) => Some((
-                Solution {
-                    h,
-                    x,
-                    jerk: f.jerk,
-                    violation: f.violation,
-                    binding: f.binding,
-                    lp_solves: 0,
-                },
-                Some(f.cuts),
-            )),
+            Ok(f) => Some((Solution::with_figures(h, x, &f), Some(f.cuts))),
             Err(k) => {
                 broken = k;
                 None
